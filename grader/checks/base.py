@@ -1,0 +1,79 @@
+"""How a check is declared: a generator that yields the learner calls it needs, then judges them.
+
+    @CHECKS.check("H_jacobian", points=2)
+    def h_worked_example(ctx):
+        '''H at the lesson's point (3, 4)'''
+        got = yield call("H_jacobian", 3, 4)
+        return expect(got, [[0.6, 0.8], [-0.16, 0.12]], label="H_jacobian(3, 4)", entries=H)
+
+The docstring's first line is what the learner reads. Declaration order is report order.
+A check raises `Skip("why")` when something it depends on failed.
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass, field
+from typing import Callable, Generator
+
+import numpy as np
+
+from grader.chapters import BY_ID, ChapterInfo
+
+
+class Skip(Exception):
+    """The check cannot be judged because something it depends on failed; the message says what."""
+
+
+@dataclass(frozen=True)
+class Context:
+    """What a check may use to choose its inputs: the run's seed, drawn per check."""
+
+    seed: int
+    chapter: str
+    check_id: str
+
+    @property
+    def rng(self) -> np.random.Generator:
+        return np.random.default_rng([self.seed, zlib.crc32(f"{self.chapter}/{self.check_id}".encode())])
+
+
+CheckBody = Callable[[Context], Generator]
+
+
+@dataclass(frozen=True)
+class Check:
+    id: str
+    function: str
+    description: str
+    points: float
+    body: CheckBody
+
+
+@dataclass
+class ChapterChecks:
+    """One chapter's checks, in report order."""
+
+    info: ChapterInfo
+    checks: list[Check] = field(default_factory=list)
+
+    def check(self, function: str, points: float = 1, description: str | None = None,
+              id: str | None = None) -> Callable[[CheckBody], CheckBody]:
+        """Register a check of learner function `function` worth `points`."""
+        def register(body: CheckBody) -> CheckBody:
+            text = description or (body.__doc__ or body.__name__).strip().splitlines()[0]
+            check_id = id or body.__name__
+            if any(c.id == check_id for c in self.checks):
+                raise ValueError(f"duplicate check id {check_id} in {self.info.id}")
+            self.checks.append(Check(check_id, function, text, float(points), body))
+            return body
+        return register
+
+    @property
+    def max_score(self) -> float:
+        return sum(c.points for c in self.checks)
+
+
+def chapter_checks(chapter_id: str) -> ChapterChecks:
+    """An empty check list for one chapter, to be filled by grader/checks/chNN.py."""
+    return ChapterChecks(BY_ID[chapter_id])

@@ -1,0 +1,111 @@
+"""Chapter 6: the range-bearing measurement z = (r, bearing) and its Jacobian H."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import solutions.ch06_measurement as ref
+from grader.checks.base import Skip, chapter_checks
+from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point
+from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, value_problem
+from grader.runner import Array, call
+
+CHECKS = chapter_checks("ch06")
+
+Z = Entries("z", rows=("range", "bearing"))
+H = Entries("H", rows=("range", "bearing"), cols=("x", "y"), derivative=True)
+R = Entries("R", rows=("range", "bearing"), cols=("range", "bearing"))
+
+
+def _points(rng: np.random.Generator, n: int = 6) -> list:
+    return [planar_point(rng) for _ in range(n)]
+
+
+@CHECKS.check("range_bearing", points=1)
+def range_bearing_worked_example(ctx):
+    """range_bearing at the lesson's point (3, 4) gives (5, 0.9273)"""
+    got = yield call("range_bearing", 3, 4)
+    return expect(got, [5.0, np.arctan2(4, 3)], label="range_bearing(3, 4)", entries=Z, rtol=1e-9)
+
+
+@CHECKS.check("range_bearing", points=2)
+def range_bearing_all_quadrants(ctx):
+    """range_bearing at random points in all four quadrants (bearing is atan2, in [-pi, pi])"""
+    points = _points(ctx.rng, 8)
+    got = yield [call("range_bearing", float(x), float(y)) for x, y in points]
+    return all_of([expect(g, ref.range_bearing(x, y), label=f"range_bearing({x:.6g}, {y:.6g})",
+                          entries=Z, rtol=1e-9) for g, (x, y) in zip(got, points)])
+
+
+@CHECKS.check("H_jacobian", points=2)
+def H_worked_example(ctx):
+    """H at the lesson's point (3, 4) is [[0.6, 0.8], [-0.16, 0.12]]"""
+    got = yield call("H_jacobian", 3, 4)
+    return expect(got, [[0.6, 0.8], [-0.16, 0.12]], label="H_jacobian(3, 4)", entries=H, rtol=1e-9)
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="range_bearing", jacobian="H_jacobian", entries=H,
+    args=lambda p, extra: (float(p[0]), float(p[1])),
+    reference_forward=lambda p, extra: ref.range_bearing(p[0], p[1]),
+    reference_jacobian=lambda p, extra: ref.H_jacobian(p[0], p[1]),
+    cases=lambda rng: [(p, ()) for p in _points(rng)],
+))
+
+
+@CHECKS.check("H_jacobian", points=1)
+def H_rows_orthogonal(ctx):
+    """H H^T = diag(1, 1/r^2): the range row is a unit vector, the bearing row is orthogonal to it"""
+    points = _points(ctx.rng, 5)
+    got = yield [call("H_jacobian", float(x), float(y)) for x, y in points]
+    verdicts = []
+    for g, (x, y) in zip(got, points):
+        label = f"H_jacobian({x:.6g}, {y:.6g})"
+        problem = value_problem(g, (2, 2), label)
+        if problem:
+            raise Skip(problem)
+        h = g.as_array()
+        r2 = x * x + y * y
+        verdicts.append(compare_arrays(h @ h.T, np.diag([1.0, 1.0 / r2]), label=f"H H^T from your {label}",
+                                       entries=Entries("H H^T"), rtol=1e-6, atol=1e-9))
+    return all_of(verdicts)
+
+
+@CHECKS.check("H_jacobian", points=1)
+def H_integer_and_array_inputs(ctx):
+    """H accepts integers and numpy scalars: H_jacobian(-4, 3) and H_jacobian(np.int64(-4), 3)"""
+    got = yield [call("H_jacobian", -4, 3), call("H_jacobian", Array(-4, "int64"), 3)]
+    expected = ref.H_jacobian(-4.0, 3.0)
+    return all_of([expect(g, expected, label="H_jacobian(-4, 3)", entries=H) for g in got])
+
+
+@CHECKS.check("H_jacobian", points=1)
+def H_raises_at_origin(ctx):
+    """H_jacobian(0, 0) raises ValueError (the bearing is undefined at r = 0)"""
+    got = yield call("H_jacobian", 0.0, 0.0)
+    return expect_raises(got, "ValueError", label="H_jacobian(0, 0)", why="H is undefined at r = 0")
+
+
+@CHECKS.check("measurement_covariance", points=1)
+def covariance_worked_example(ctx):
+    """measurement_covariance(3, 4, sigma=1) is diag(1, 0.04)"""
+    got = yield call("measurement_covariance", 3, 4, 1.0)
+    return expect(got, np.diag([1.0, 0.04]), label="measurement_covariance(3, 4, 1)", entries=R)
+
+
+@CHECKS.check("measurement_covariance", points=2)
+def covariance_random_points(ctx):
+    """measurement_covariance = H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2) at random points and sigmas"""
+    rng = ctx.rng
+    cases = [(p, float(rng.uniform(0.1, 2.0))) for p in _points(rng, 6)]
+    got = yield [call("measurement_covariance", float(p[0]), float(p[1]), s) for p, s in cases]
+    return all_of([expect(g, ref.measurement_covariance(p[0], p[1], s),
+                          label=f"measurement_covariance({p[0]:.6g}, {p[1]:.6g}, {s:.6g})", entries=R)
+                   for g, (p, s) in zip(got, cases)])
+
+
+@CHECKS.check("measurement_covariance", points=1)
+def covariance_raises_at_origin(ctx):
+    """measurement_covariance(0, 0, 1) raises ValueError"""
+    got = yield call("measurement_covariance", 0.0, 0.0, 1.0)
+    return expect_raises(got, "ValueError", label="measurement_covariance(0, 0, 1)")

@@ -1,0 +1,232 @@
+"""The child side of the process boundary: import the learner's module, call it, report plain data.
+
+This file runs in a separate interpreter (`python -I -S -c ...`, see grader.runner). It imports numpy first (while
+the parent prepares its request), then reads one JSON request from stdin, points stdout/stderr at
+a capture file, and for each chapter imports the learner's module and calls the named functions on
+the arguments the parent chose. Every outcome is written to the result pipe FD as one JSON line.
+Only numbers, shapes and type names travel back: never pickle, never a learner object.
+
+Nothing here decides whether an answer is right; that happens in the parent.
+"""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import signal
+import sys
+import traceback
+
+import numpy as np
+
+# Exact numpy scalar types whose value is a real number (subclasses are rejected by `type(x) in`).
+_REAL_SCALAR_TYPES = frozenset(
+    {float, int, np.float16, np.float32, np.float64, np.longdouble,
+     np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64}
+)
+_MAX_ELEMENTS = 1_000_000
+_MAX_DEPTH = 3
+_MAX_ITEMS = 64
+
+
+def _type_name(value: object) -> str:
+    kind = type(value)
+    module = getattr(kind, "__module__", "") or ""
+    name = getattr(kind, "__qualname__", kind.__name__)
+    return name if module in ("builtins", "") else f"{module}.{name}"
+
+
+def encode(value: object, depth: int = 0) -> dict:
+    """Describe a learner's return value as plain JSON data, without calling any of its methods."""
+    kind = type(value)
+    if kind is np.ndarray:
+        if value.dtype.kind not in "fiu":
+            return {"t": "ndarray-other", "type": f"ndarray of dtype {value.dtype}"}
+        if value.size > _MAX_ELEMENTS:
+            return {"t": "too-large", "type": f"ndarray with {value.size} elements"}
+        flat = np.asarray(value, dtype=np.float64).ravel().tolist()
+        return {"t": "ndarray", "dtype": str(value.dtype), "shape": list(value.shape), "data": flat}
+    if kind in _REAL_SCALAR_TYPES:
+        try:
+            return {"t": "scalar", "type": _type_name(value), "data": float(value)}
+        except OverflowError:
+            return {"t": "scalar", "type": _type_name(value), "data": float("inf")}
+    if kind in (tuple, list):
+        if depth >= _MAX_DEPTH or len(value) > _MAX_ITEMS:
+            return {"t": "other", "type": f"{kind.__name__} of {len(value)} items"}
+        return {"t": kind.__name__, "items": [encode(item, depth + 1) for item in value]}
+    if value is None:
+        return {"t": "none", "type": "None"}
+    if kind is str:
+        return {"t": "str", "type": "str", "text": value[:80]}
+    name = _type_name(value)
+    if isinstance(value, np.ndarray):
+        name = f"{name} (an ndarray subclass)"
+    return {"t": "other", "type": name}
+
+
+def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None]:
+    """The traceback trimmed to frames in the submission's files, and the innermost such line."""
+    frames = [f for f in traceback.extract_tb(exc.__traceback__) if f.filename.startswith(root)]
+    lines = []
+    for frame in frames:
+        shown = os.path.relpath(frame.filename, root)
+        lines.append(f'  File "{shown}", line {frame.lineno}, in {frame.name}')
+        if frame.line:
+            lines.append(f"    {frame.line}")
+    text = "\n".join(lines + [f"{type(exc).__name__}: {_safe_str(exc)}"])
+    return text, (frames[-1].lineno if frames else None)
+
+
+def _safe_str(exc: BaseException) -> str:
+    try:
+        return str(exc)[:500]
+    except BaseException:  # a learner's exception whose __str__ itself fails
+        return "<message could not be shown>"
+
+
+def describe_exception(exc: BaseException, root: str) -> dict:
+    text, line = _learner_frames(exc, root)
+    return {
+        "exception": type(exc).__name__,
+        "bases": [c.__name__ for c in type(exc).__mro__][:8],
+        "not_implemented": isinstance(exc, NotImplementedError),
+        "message": _safe_str(exc),
+        "traceback": text,
+        "line": line,
+    }
+
+
+def _syntax_error(exc: SyntaxError, root: str) -> dict:
+    shown = os.path.relpath(exc.filename, root) if exc.filename else "?"
+    text = f'  File "{shown}", line {exc.lineno}\n    {(exc.text or "").rstrip()}\nSyntaxError: {exc.msg}'
+    return {"exception": type(exc).__name__, "not_implemented": False, "message": exc.msg or "",
+            "traceback": text, "line": exc.lineno}
+
+
+class _Catalogue:
+    """Callables the parent may pass by name; loaded on first use."""
+
+    def __init__(self) -> None:
+        self._table: dict | None = None
+
+    def __getitem__(self, name: str):
+        if self._table is None:
+            from grader.catalogue import CALLABLES
+            self._table = CALLABLES
+        return self._table[name]
+
+
+def decode_argument(arg, catalogue: _Catalogue):
+    """Turn the parent's JSON argument into a Python value: arrays, callables, generators."""
+    if isinstance(arg, dict):
+        if "$fn" in arg:
+            return catalogue[arg["$fn"]]
+        if "$array" in arg:
+            return np.array(arg["$array"], dtype=arg.get("dtype", "float64"))
+        if "$rng" in arg:
+            return np.random.default_rng(arg["$rng"])
+        if "$tuple" in arg:
+            return tuple(decode_argument(a, catalogue) for a in arg["$tuple"])
+        if "$float" in arg:
+            return float(arg["$float"])
+        raise ValueError(f"unknown argument form {sorted(arg)}")
+    if isinstance(arg, list):
+        return [decode_argument(a, catalogue) for a in arg]
+    return arg
+
+
+def _emit(stream, record: dict) -> None:
+    stream.write(json.dumps(record) + "\n")
+    stream.flush()
+
+
+def _redirect_output(capture_path: str | None) -> None:
+    flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
+    target = os.open(capture_path or os.devnull, flags, 0o600)
+    null_in = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(null_in, 0)
+    os.dup2(target, 1)
+    os.dup2(target, 2)
+    os.close(target)
+    os.close(null_in)
+
+
+def _apply_limits(limits: dict) -> None:
+    """Resource limits for learner code (POSIX only; a missing limit is simply not set)."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not POSIX
+        return
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # an oversized write fails instead of killing us
+    table = {
+        "address_space": resource.RLIMIT_AS,
+        "cpu_seconds": resource.RLIMIT_CPU,
+        "file_size": resource.RLIMIT_FSIZE,
+        "open_files": resource.RLIMIT_NOFILE,
+        "core": resource.RLIMIT_CORE,
+    }
+    for key, which in table.items():
+        value = limits.get(key)
+        if value is None:
+            continue
+        try:
+            resource.setrlimit(which, (value, value))
+        except (ValueError, OSError):
+            pass
+
+
+def run(request: dict, out) -> None:
+    root = os.path.realpath(request["root"])
+    sys.path.insert(0, root)
+    sys.dont_write_bytecode = True
+    catalogue = _Catalogue()
+    for chapter in request["chapters"]:
+        name = chapter["chapter"]
+        _emit(out, {"event": "import", "chapter": name})
+        try:
+            module = importlib.import_module(f'{request["package"]}.{chapter["module"]}')
+        except SyntaxError as exc:
+            _emit(out, {"event": "import-failed", "chapter": name, "error": _syntax_error(exc, root)})
+            continue
+        except BaseException as exc:  # SystemExit and KeyboardInterrupt from learner code too
+            _emit(out, {"event": "import-failed", "chapter": name, "error": describe_exception(exc, root)})
+            continue
+        _emit(out, {"event": "imported", "chapter": name})
+        for call in chapter["calls"]:
+            index = call["index"]
+            _emit(out, {"event": "call", "chapter": name, "index": index})
+            function = getattr(module, call["function"], None)
+            if not callable(function):
+                _emit(out, {"event": "missing", "chapter": name, "index": index})
+                continue
+            try:
+                args = [decode_argument(a, catalogue) for a in call.get("args", [])]
+                kwargs = {k: decode_argument(v, catalogue) for k, v in call.get("kwargs", {}).items()}
+                value = function(*args, **kwargs)
+                record = {"event": "returned", "chapter": name, "index": index, "value": encode(value)}
+            except BaseException as exc:
+                record = {"event": "raised", "chapter": name, "index": index,
+                          "error": describe_exception(exc, root)}
+            try:
+                _emit(out, record)
+            except (TypeError, ValueError, OverflowError):
+                _emit(out, {"event": "returned", "chapter": name, "index": index,
+                            "value": {"t": "other", "type": "a value that cannot be encoded"}})
+    _emit(out, {"event": "done"})
+
+
+def main(argv: list[str] | None = None) -> None:
+    argv = sys.argv[1:] if argv is None else argv
+    out = os.fdopen(int(argv[0]), "w", buffering=1)
+    request = json.loads(sys.stdin.read())
+    _redirect_output(request.get("capture"))
+    _apply_limits(request.get("limits", {}))
+    run(request, out)
+    out.close()
+    os._exit(0)  # skip learner atexit handlers and finalizers
+
+
+if __name__ == "__main__":
+    main()

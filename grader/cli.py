@@ -1,0 +1,119 @@
+"""The `grade` command: a thin click layer over grader.grading and the renderers.
+
+    grade ch06 | grade 6 | grade all       grade code (and quizzes) of chapters
+    grade list                             chapters, functions and points
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import click
+
+from grader.chapters import CHAPTERS, ChapterInfo, resolve
+from grader import launch
+from grader.runner import Session, Submission
+from grader.submission import SubmissionNotFound, locate
+
+EXIT_ALL_PASSED, EXIT_NOT_ALL_PASSED, EXIT_USAGE = 0, 1, 2
+
+
+class _DefaultToRun(click.Group):
+    """`grade ch06 ...` means `grade run ch06 ...`: anything that is not a subcommand is a chapter."""
+
+    def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+        if args and args[0] not in self.commands and args[0] not in ("--help", "-h", "--version"):
+            args = ["run", *args]
+        return super().parse_args(ctx, args)
+
+
+@click.group(cls=_DefaultToRun, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="jacobians-grader")
+def main() -> None:
+    """Grade the lesson "Jacobians & Linearization": `grade ch06`, `grade all`, `grade list`."""
+
+
+def chapters_from(names: tuple[str, ...]) -> list[ChapterInfo]:
+    """Chapter arguments ('ch06', '6', 'all') to chapters, in lesson order; BadParameter if unknown."""
+    if not names:
+        raise click.UsageError("name a chapter (ch00-ch09, 0-9) or 'all'; `grade list` shows them")
+    if any(n.lower() == "all" for n in names):
+        return list(CHAPTERS)
+    try:
+        picked = {resolve(n).id for n in names}
+    except KeyError as exc:
+        raise click.BadParameter(exc.args[0], param_hint="CHAPTER") from None
+    return [c for c in CHAPTERS if c.id in picked]
+
+
+def find_submission(directory: str | None, use_solutions: bool) -> Submission:
+    """The submission to grade: --solutions, --submission DIR, or the project around the cwd."""
+    try:
+        return locate(directory, use_solutions)
+    except SubmissionNotFound as exc:
+        if directory is not None:
+            raise click.BadParameter(str(exc), param_hint="--submission") from None
+        raise click.UsageError(str(exc)) from None
+
+
+def _use_colour(stream) -> bool:
+    return "NO_COLOR" not in os.environ and hasattr(stream, "isatty") and stream.isatty()
+
+
+def _unicode_ok(stream) -> bool:
+    try:
+        "✓✗".encode(getattr(stream, "encoding", None) or "ascii")
+        return True
+    except (UnicodeEncodeError, LookupError):
+        return False
+
+
+@main.command("run")
+@click.argument("chapters", nargs=-1, metavar="CHAPTER...")
+@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder holding exercises/ (default: the project around the current directory).")
+@click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference solutions instead.")
+@click.option("--format", "output_format", type=click.Choice(["text", "json"]), default="text",
+              show_default=True, help="Output format.")
+@click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
+@click.option("-v", "--verbose", is_flag=True, help="Show tracebacks and what your code printed.")
+def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
+                output_format: str, seed: int | None, verbose: bool) -> None:
+    """Grade CHAPTER... (ch06, 6 or all): every check with its points, and a total."""
+    picked = chapters_from(chapters)
+    submission = find_submission(submission_dir, use_solutions)
+    # the child may already run (grader.launch); else start it now, to overlap our imports below
+    session = launch.take(submission) or Session(submission)
+    try:
+        from grader.grading import DEFAULT_SEED, grade
+
+        report = grade(session, [c.id for c in picked], seed=DEFAULT_SEED if seed is None else seed)
+    finally:
+        session.close()
+    if output_format == "json":
+        from grader.render import json_report
+
+        click.echo(json_report.render(report), nl=False)
+    else:
+        from grader.render import text
+
+        stream = click.get_text_stream("stdout")
+        click.echo(text.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream),
+                               verbose=verbose), nl=False, color=_use_colour(stream))
+    sys.exit(EXIT_ALL_PASSED if report.all_passed else EXIT_NOT_ALL_PASSED)
+
+
+@main.command("list")
+def list_command() -> None:
+    """List the chapters, their functions and points."""
+    from grader import checks
+
+    for info in CHAPTERS:
+        chapter = checks.load(info.id)
+        click.echo(f"{info.id}  {info.title}  ({chapter.max_score:g} points)  exercises/{info.module}.py")
+        functions: dict[str, float] = {}
+        for check in chapter.checks:
+            functions[check.function] = functions.get(check.function, 0) + check.points
+        for function, points in functions.items():
+            click.echo(f"    {function:<28} {points:g} points")

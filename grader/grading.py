@@ -1,0 +1,182 @@
+"""Grade chapters: plan every check's calls, run them in one child session, judge in this process."""
+
+from __future__ import annotations
+
+import traceback
+from dataclasses import dataclass
+from typing import Generator
+
+from grader import checks as check_registry
+from grader.checks.base import Check, ChapterChecks, Context, Skip
+from grader.compare import Verdict
+from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.returned import Returned
+from grader.runner import Call, ChapterRequest, ChapterRun, Session
+
+DEFAULT_SEED = 20261122
+
+
+@dataclass
+class _Pending:
+    """A started check generator waiting for the values of the calls it yielded."""
+
+    name: str
+    generator: Generator | None
+    wanted: object  # the yielded structure of Calls
+    slots: list[int]  # indices into the chapter's call list, in flattening order
+    setup_error: str = ""
+
+
+def _flatten(structure: object, out: list[Call]) -> None:
+    if isinstance(structure, Call):
+        out.append(structure)
+    elif isinstance(structure, (list, tuple)):
+        for item in structure:
+            _flatten(item, out)
+    elif isinstance(structure, dict):
+        for item in structure.values():
+            _flatten(item, out)
+    else:
+        raise TypeError(f"a check yielded {type(structure).__name__}, not calls")
+
+
+def _rebuild(structure: object, values: list[Returned]) -> object:
+    """The yielded structure with every Call replaced by its Returned (consumes `values`)."""
+    if isinstance(structure, Call):
+        return values.pop(0)
+    if isinstance(structure, list):
+        return [_rebuild(s, values) for s in structure]
+    if isinstance(structure, tuple):
+        return tuple(_rebuild(s, values) for s in structure)
+    return {k: _rebuild(s, values) for k, s in structure.items()}
+
+
+def _start(name: str, body, ctx: Context, calls: list[Call]) -> _Pending:
+    generator = body(ctx)
+    try:
+        wanted = next(generator)
+        flat: list[Call] = []
+        _flatten(wanted, flat)
+    except Exception:
+        return _Pending(name, None, None, [], setup_error=traceback.format_exc(limit=-3))
+    start = len(calls)
+    calls.extend(flat)
+    return _Pending(name, generator, wanted, list(range(start, start + len(flat))))
+
+
+def _finish(pending: _Pending, run: ChapterRun) -> object:
+    """Send the returned values into the check; its return value (Verdict or dict) or an exception."""
+    values = [run.results[i] for i in pending.slots]
+    try:
+        pending.generator.send(_rebuild(pending.wanted, values))
+    except StopIteration as stop:
+        return stop.value
+    raise RuntimeError(f"check {pending.name} yielded twice; a check may yield only once")
+
+
+class ChapterPlan:
+    """Every check of one chapter started, with the calls they need collected into one request."""
+
+    def __init__(self, chapter: ChapterChecks, seed: int, plots: list | None = None) -> None:
+        self.chapter = chapter
+        self.calls: list[Call] = []
+        info = chapter.info
+        self.pending = [(check, _start(check.id, check.body, Context(seed, info.id, check.id), self.calls))
+                        for check in chapter.checks]
+        self.plot_pending = [(name, _start(name, body, Context(seed, info.id, f"plot/{name}"), self.calls))
+                             for name, body in (plots or [])]
+
+    def request(self) -> ChapterRequest:
+        return ChapterRequest(self.chapter.info.id, self.chapter.info.module, self.calls)
+
+    def judge(self, run: ChapterRun, module_file: str) -> ChapterResult:
+        info = self.chapter.info
+        result = ChapterResult(info.id, info.title)
+        if run.import_error is not None:
+            message = import_problem(run.import_error, module_file)
+            result.problems.append(message)
+            result.checks = [_result(check, Status.ERROR, 0.0, message) for check in self.chapter.checks]
+            return result
+        for check, pending in self.pending:
+            result.checks.append(_judge_one(check, pending, run))
+        for name, pending in self.plot_pending:
+            if pending.generator is None:
+                continue
+            try:
+                data = _finish(pending, run)
+            except Exception:  # a plot never breaks grading
+                continue
+            if isinstance(data, dict):
+                result.plots[name] = data
+        return result
+
+
+def _result(check: Check, status: Status, points: float, message: str, verdict: Verdict | None = None) -> CheckResult:
+    return CheckResult(
+        id=check.id, function=check.function, description=check.description, status=status,
+        points=points, max_points=check.points, message=message,
+        expected=None if verdict is None else verdict.expected,
+        got=None if verdict is None else verdict.got,
+        details={} if verdict is None else verdict.details,
+    )
+
+
+def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
+    if pending.generator is None:
+        return _result(check, Status.ERROR, 0.0, f"grader error while preparing this check:\n{pending.setup_error}")
+    try:
+        verdict = _finish(pending, run)
+    except Skip as skip:
+        return _result(check, Status.SKIP, 0.0, str(skip))
+    except Exception:
+        return _result(check, Status.ERROR, 0.0,
+                       f"grader error while judging this check:\n{traceback.format_exc(limit=-3)}")
+    if not isinstance(verdict, Verdict):
+        return _result(check, Status.ERROR, 0.0, f"grader error: check returned {type(verdict).__name__}")
+    status = Status.PASS if verdict.passed else Status.FAIL
+    return _result(check, status, check.points if verdict.passed else 0.0, verdict.message, verdict)
+
+
+def import_problem(error: dict, module_file: str) -> str:
+    """The learner-facing message for a chapter file that could not be imported."""
+    if error.get("grader"):
+        return f"{module_file} could not be graded: {error.get('message')}"
+    exception = error.get("exception", "")
+    line = f", line {error['line']}" if error.get("line") else ""
+    if exception == "SyntaxError" or exception == "IndentationError":
+        head = f"{module_file}{line}: {exception}: {error.get('message')}"
+    elif exception == "ModuleNotFoundError" and "No module named" in error.get("message", "") and not error.get("traceback", "").count("File"):
+        head = f"{module_file} was not found ({error.get('message')})"
+    elif exception in ("TimeoutError", "ProcessExit"):
+        head = f"{module_file} could not be imported: {error.get('message')}"
+    elif exception == "SystemExit":
+        head = f"{module_file}{line} called sys.exit() while being imported; remove it (or put it under if __name__ == '__main__':)"
+    else:
+        head = f"{module_file}{line} raised {exception} while being imported: {error.get('message')}"
+    trace = error.get("traceback", "")
+    return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "")
+
+
+def _plots(chapter_id: str) -> list:
+    """The plot-data gatherers of a chapter (grader/plots/chNN.py: PLOTS), if it has any."""
+    import importlib
+
+    try:
+        return importlib.import_module(f"grader.plots.{chapter_id}").PLOTS
+    except ModuleNotFoundError:
+        return []
+
+
+def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
+          with_plots: bool = False, submission_label: str | None = None) -> Report:
+    """Grade `chapter_ids` of the session's submission; learner code runs only in the session's child."""
+    plans = [ChapterPlan(check_registry.load(cid), seed, _plots(cid) if with_plots else None)
+             for cid in chapter_ids]
+    runs = session.run([plan.request() for plan in plans])
+    submission = session.submission
+    report = Report(submission_label or str(submission.root), seed=seed)
+    for plan in plans:
+        module_file = f"{submission.package}/{plan.chapter.info.module}.py"
+        report.chapters.append(plan.judge(runs[plan.chapter.info.id], module_file))
+    report.learner_output = session.output
+    return report

@@ -1,0 +1,139 @@
+"""The result model every renderer reads: check -> chapter -> report, plain dataclasses."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+
+SCHEMA_VERSION = "1.0"
+
+
+class Status(str, Enum):
+    PASS = "pass"
+    FAIL = "fail"
+    ERROR = "error"  # the chapter could not be graded, or the grader itself broke
+    SKIP = "skip"  # not run because something it depends on failed; still counts in max_points
+
+
+@dataclass
+class CheckResult:
+    """The verdict on one check: a code check or a quiz question."""
+
+    id: str
+    function: str
+    description: str
+    status: Status
+    points: float
+    max_points: float
+    message: str = ""
+    expected: object = None
+    got: object = None
+    kind: str = "code"  # "code" or "quiz"
+    details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
+
+    def to_dict(self) -> dict:
+        return {
+            "id": self.id,
+            "function": self.function,
+            "description": self.description,
+            "status": self.status.value,
+            "points": _round(self.points),
+            "max_points": _round(self.max_points),
+            "message": self.message,
+            "expected": jsonable(self.expected),
+            "got": jsonable(self.got),
+            "kind": self.kind,
+        }
+
+
+@dataclass
+class ChapterResult:
+    chapter: str
+    title: str
+    checks: list[CheckResult] = field(default_factory=list)
+    problems: list[str] = field(default_factory=list)  # chapter-level messages (import failures ...)
+    plots: dict = field(default_factory=dict)  # learner outputs kept for the report's plots
+
+    def score_of(self, kind: str | None = None) -> float:
+        return _round(sum(c.points for c in self.checks if kind in (None, c.kind)))
+
+    def max_score_of(self, kind: str | None = None) -> float:
+        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind)))
+
+    @property
+    def score(self) -> float:
+        return self.score_of()
+
+    @property
+    def max_score(self) -> float:
+        return self.max_score_of()
+
+    def to_dict(self) -> dict:
+        return {
+            "chapter": self.chapter,
+            "title": self.title,
+            "score": self.score,
+            "max_score": self.max_score,
+            "code_score": self.score_of("code"),
+            "code_max_score": self.max_score_of("code"),
+            "quiz_score": self.score_of("quiz"),
+            "quiz_max_score": self.max_score_of("quiz"),
+            "problems": list(self.problems),
+            "checks": [c.to_dict() for c in self.checks],
+        }
+
+
+@dataclass
+class Report:
+    submission: str
+    chapters: list[ChapterResult] = field(default_factory=list)
+    seed: int | None = None
+    learner_output: str = ""  # what learner code printed while graded (capped)
+
+    @property
+    def score(self) -> float:
+        return _round(sum(c.score for c in self.chapters))
+
+    @property
+    def max_score(self) -> float:
+        return _round(sum(c.max_score for c in self.chapters))
+
+    @property
+    def all_passed(self) -> bool:
+        return all(c.status == Status.PASS for ch in self.chapters for c in ch.checks) and not any(
+            ch.problems for ch in self.chapters)
+
+    def to_dict(self) -> dict:
+        return {
+            "version": SCHEMA_VERSION,
+            "submission": self.submission,
+            "seed": self.seed,
+            "score": self.score,
+            "max_score": self.max_score,
+            "chapters": [c.to_dict() for c in self.chapters],
+        }
+
+
+def _round(value: float) -> float:
+    rounded = round(float(value), 6)
+    return int(rounded) if rounded == int(rounded) else rounded
+
+
+def jsonable(value: object) -> object:
+    """Plain JSON data: arrays to nested lists, non-finite floats to the strings 'nan', 'inf'."""
+    if value is None or isinstance(value, (bool, str, int)):
+        return value
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return value
+    if hasattr(value, "tolist"):
+        return jsonable(value.tolist())
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    return str(value)

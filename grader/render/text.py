@@ -1,0 +1,61 @@
+"""The terminal renderer: one line per check with a mark and points, then chapter totals."""
+
+from __future__ import annotations
+
+import click
+
+from grader.model import CheckResult, Report, Status
+
+_MARKS = {Status.PASS: ("✓", "PASS"), Status.FAIL: ("✗", "FAIL"), Status.ERROR: ("!", "ERR "),
+          Status.SKIP: ("-", "SKIP")}
+_COLOURS = {Status.PASS: "green", Status.FAIL: "red", Status.ERROR: "magenta", Status.SKIP: "yellow"}
+
+
+def _points(value: float) -> str:
+    return f"{value:g}"
+
+
+def _mark(status: Status, unicode_ok: bool) -> str:
+    symbol, word = _MARKS[status]
+    return symbol if unicode_ok else word
+
+
+def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose: bool) -> list[str]:
+    mark = click.style(_mark(check.status, unicode_ok), fg=_COLOURS[check.status], bold=True) if colour \
+        else _mark(check.status, unicode_ok)
+    label = "quiz " if check.kind == "quiz" else ""
+    line = f"  {mark} [{_points(check.points)}/{_points(check.max_points)}] {label}{check.description}"
+    lines = [line]
+    if check.status != Status.PASS and check.message:
+        for text in check.message.splitlines():
+            lines.append(f"      {text}")
+        trace = check.details.get("traceback")
+        if trace and verbose:
+            lines.extend(f"      | {t}" for t in trace.splitlines())
+    return lines
+
+
+def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, verbose: bool = False) -> str:
+    """The whole report as text; `colour` adds ANSI styles, `unicode_ok` picks the marks."""
+    out: list[str] = []
+    for chapter in report.chapters:
+        title = f"{chapter.chapter}  {chapter.title}"
+        out.append(click.style(title, bold=True) if colour else title)
+        for problem in chapter.problems:
+            out.extend(f"  {line}" for line in problem.splitlines())
+        for kind, heading in (("code", "code"), ("quiz", "quiz")):
+            checks = [c for c in chapter.checks if c.kind == kind]
+            if not checks:
+                continue
+            if any(c.kind == "quiz" for c in chapter.checks):
+                out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}")
+            for check in checks:
+                out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose))
+        out.append(f"  {chapter.chapter} total: {_points(chapter.score)}/{_points(chapter.max_score)}")
+        out.append("")
+    if len(report.chapters) > 1:
+        out.append(f"Total: {_points(report.score)}/{_points(report.max_score)}")
+    if verbose and report.learner_output.strip():
+        out.append("What your code printed while it was graded:")
+        out.extend(f"  | {line}" for line in report.learner_output.splitlines()[:50])
+    return "\n".join(out).rstrip() + "\n"

@@ -1,0 +1,382 @@
+"""The parent side of the process boundary: start the child, send calls, collect outcomes in time.
+
+One child process serves a whole grading run: it imports numpy once, then each chapter's module
+in turn. If a chapter hangs or kills its process, the parent kills the child's whole process group,
+records what happened for that call or import, and starts a fresh child for what remains, so one
+broken chapter never stops the others.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import selectors
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from grader.returned import CRASHED, NOT_RUN, TIMEOUT, Returned, from_event
+
+GRADER_PARENT = str(Path(__file__).resolve().parents[1])
+# The child runs without site (-S, faster start) on the parent's own import path, grader last.
+_BOOT = "import sys; sys.path[:] = {!r}; from grader.child import main; main()"
+_capture_count = 0
+_CAPTURE_LIMIT = 64 * 1024
+
+
+# ----------------------------------------------------------------------------- what to call
+
+@dataclass(frozen=True)
+class Fn:
+    """A callable from grader.catalogue, passed to a learner function by name."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Rng:
+    """A fresh numpy Generator, np.random.default_rng(seed), built in the child."""
+
+    seed: int
+
+
+@dataclass(frozen=True)
+class Array:
+    """A numpy array argument of a given dtype (plain lists and tuples pass as they are)."""
+
+    values: object
+    dtype: str = "float64"
+
+
+def _encode_argument(arg: object) -> object:
+    if isinstance(arg, Fn):
+        return {"$fn": arg.name}
+    if isinstance(arg, Rng):
+        return {"$rng": int(arg.seed)}
+    if isinstance(arg, Array):
+        return {"$array": _plain(arg.values), "dtype": arg.dtype}
+    if isinstance(arg, tuple):
+        return {"$tuple": [_encode_argument(a) for a in arg]}
+    if isinstance(arg, list):
+        return [_encode_argument(a) for a in arg]
+    if isinstance(arg, float):
+        return arg if arg == arg and abs(arg) != float("inf") else {"$float": repr(arg)}
+    if isinstance(arg, (int, str, bool)) or arg is None:
+        return arg
+    if hasattr(arg, "tolist"):  # a numpy scalar or array from the check: pass as a plain array
+        return {"$array": _plain(arg), "dtype": "float64"}
+    raise TypeError(f"cannot pass {type(arg).__name__} to the child")
+
+
+def _plain(values: object) -> object:
+    return values.tolist() if hasattr(values, "tolist") else values
+
+
+@dataclass(frozen=True)
+class Call:
+    """One call of a learner function on arguments the grader chose."""
+
+    function: str
+    args: tuple = ()
+    kwargs: tuple = ()
+
+    def to_json(self, index: int) -> dict:
+        return {
+            "index": index,
+            "function": self.function,
+            "args": [_encode_argument(a) for a in self.args],
+            "kwargs": {k: _encode_argument(v) for k, v in self.kwargs},
+        }
+
+
+def call(function: str, *args: object, **kwargs: object) -> Call:
+    """Describe a call of the learner's `function(*args, **kwargs)`."""
+    return Call(function, tuple(args), tuple(sorted(kwargs.items())))
+
+
+@dataclass
+class ChapterRequest:
+    chapter: str
+    module: str
+    calls: list[Call]
+
+
+@dataclass
+class ChapterRun:
+    """What came back for one chapter: an import failure, or one Returned per call."""
+
+    chapter: str
+    import_error: dict | None = None
+    results: list[Returned | None] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Time and resource limits for learner code."""
+
+    startup_seconds: float = 60.0
+    import_seconds: float = 5.0
+    call_seconds: float = 5.0
+    chapter_seconds: float = 20.0
+    address_space: int | None = 1 << 30
+    cpu_seconds: int | None = 60
+    file_size: int | None = 16 << 20
+    open_files: int | None = 256
+
+    def rlimits(self) -> dict:
+        return {"address_space": self.address_space, "cpu_seconds": self.cpu_seconds,
+                "file_size": self.file_size, "open_files": self.open_files, "core": 0}
+
+
+@dataclass(frozen=True)
+class Submission:
+    """Where the learner's chapter files are: `root/package/chNN_*.py`."""
+
+    root: Path
+    package: str = "exercises"
+
+    def module_file(self, module: str) -> Path:
+        return self.root / self.package / f"{module}.py"
+
+
+# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox.
+CommandWrapper = Callable[[list[str], Submission], list[str]]
+
+
+def child_path() -> list[str]:
+    """The child's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
+    paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]
+    return [*paths, GRADER_PARENT]
+
+
+def _temp_dir() -> str:
+    for name in ("TMPDIR", "TEMP", "TMP"):
+        if os.path.isdir(os.environ.get(name, "")):
+            return os.environ[name]
+    return "/tmp"
+
+
+def child_environment() -> dict:
+    env = {k: os.environ[k] for k in ("PATH", "LANG", "LC_ALL", "SYSTEMROOT") if k in os.environ}
+    env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
+               PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1")
+    return env
+
+
+class _Child:
+    """One running child process and its result pipe."""
+
+    def __init__(self, submission: Submission, wrap: CommandWrapper | None) -> None:
+        global _capture_count
+        _capture_count += 1
+        read_fd, write_fd = os.pipe()
+        self.capture = os.path.join(_temp_dir(), f"grade-output-{os.getpid()}-{_capture_count}.txt")
+        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd)]
+        if wrap is not None:
+            command = wrap(command, submission)
+        self.process = subprocess.Popen(
+            command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            pass_fds=(write_fd,), start_new_session=True, env=child_environment(),
+            cwd=str(submission.root),
+        )
+        os.close(write_fd)
+        self.read_fd = read_fd
+        self.buffer = b""
+
+    def send(self, request: dict) -> None:
+        request["capture"] = self.capture
+        try:
+            self.process.stdin.write(json.dumps(request).encode())
+            self.process.stdin.close()
+        except (BrokenPipeError, OSError):
+            pass
+
+    def events(self, deadline: Callable[[], float]):
+        """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes."""
+        selector = selectors.DefaultSelector()
+        selector.register(self.read_fd, selectors.EVENT_READ)
+        try:
+            while True:
+                while b"\n" in self.buffer:
+                    line, self.buffer = self.buffer.split(b"\n", 1)
+                    try:
+                        event = json.loads(line)
+                    except ValueError:
+                        continue
+                    if isinstance(event, dict):
+                        yield event
+                remaining = deadline() - time.monotonic()
+                if remaining <= 0 or not selector.select(remaining):
+                    raise TimeoutError
+                chunk = os.read(self.read_fd, 1 << 16)
+                if not chunk:
+                    return
+                self.buffer += chunk
+        finally:
+            selector.close()
+
+    def stop(self) -> str:
+        """Kill the child's whole process group; return what learner code printed (capped)."""
+        try:
+            os.killpg(self.process.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+        self.process.wait()
+        os.close(self.read_fd)
+        try:
+            with open(self.capture, "rb") as handle:
+                text = handle.read(_CAPTURE_LIMIT).decode("utf-8", "replace")
+            os.unlink(self.capture)
+        except OSError:
+            text = ""
+        return text
+
+    def exit_description(self) -> str:
+        code = self.process.poll()
+        if code is None:
+            return "it was still running"
+        if code < 0:
+            return f"killed by signal {signal.Signals(-code).name}"
+        return f"exit status {code}"
+
+
+class Session:
+    """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
+
+    def __init__(self, submission: Submission, limits: Limits = Limits(),
+                 wrap: CommandWrapper | None = None) -> None:
+        self.submission = submission
+        self.limits = limits
+        self.wrap = wrap
+        self.output = ""
+        self._child: _Child | None = _Child(submission, wrap)
+
+    def close(self) -> None:
+        if self._child is not None:
+            self.output += self._child.stop()
+            self._child = None
+
+    def run(self, requests: list[ChapterRequest]) -> dict[str, ChapterRun]:
+        runs = {r.chapter: ChapterRun(r.chapter, results=[None] * len(r.calls)) for r in requests}
+        pending = list(requests)
+        try:
+            while pending:
+                before = _unresolved(runs)
+                pending = self._run_once(pending, runs)
+                if pending and _unresolved(runs) == before:  # no progress: do not loop forever
+                    break
+        finally:
+            self.close()
+        for run in runs.values():
+            for i, result in enumerate(run.results):
+                if result is None and run.import_error is None:
+                    function = next(r for r in requests if r.chapter == run.chapter).calls[i].function
+                    run.results[i] = Returned(NOT_RUN, function, note="no result came back from the process")
+        return runs
+
+    def _request(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> dict:
+        chapters = []
+        for req in pending:
+            calls = [c.to_json(i) for i, c in enumerate(req.calls) if runs[req.chapter].results[i] is None]
+            chapters.append({"chapter": req.chapter, "module": req.module, "calls": calls})
+        return {"root": str(self.submission.root), "package": self.submission.package,
+                "chapters": chapters, "limits": self.limits.rlimits()}
+
+    def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:
+        """Run what is pending in one child; return what still needs a fresh child."""
+        if self._child is None:
+            self._child = _Child(self.submission, self.wrap)
+        child = self._child
+        child.send(self._request(pending, runs))
+        by_name = {r.chapter: r for r in pending}
+        limits = self.limits
+        state = {"deadline": time.monotonic() + limits.startup_seconds, "chapter_end": float("inf"),
+                 "chapter": None, "index": None, "stage": "startup"}
+
+        def deadline() -> float:
+            return min(state["deadline"], state["chapter_end"])
+
+        finished = False
+        try:
+            for event in child.events(deadline):
+                kind, name = event.get("event"), event.get("chapter")
+                now = time.monotonic()
+                if kind == "done":
+                    finished = True
+                    break
+                if name not in by_name:
+                    continue
+                run, req = runs[name], by_name[name]
+                if kind == "import":
+                    state.update(chapter=name, index=None, stage="import",
+                                 deadline=now + limits.import_seconds,
+                                 chapter_end=now + limits.chapter_seconds)
+                elif kind == "import-failed":
+                    run.import_error = event.get("error") if isinstance(event.get("error"), dict) else {}
+                    state.update(stage="between", deadline=float("inf"))
+                elif kind == "imported":
+                    state.update(stage="calls", deadline=float("inf"))
+                elif kind == "call" and _valid_index(event.get("index"), req):
+                    state.update(index=event["index"], stage="call", deadline=now + limits.call_seconds)
+                elif kind in ("returned", "raised", "missing") and _valid_index(event.get("index"), req):
+                    index = event["index"]
+                    run.results[index] = from_event(req.calls[index].function, event)
+                    state.update(stage="calls", deadline=float("inf"))
+        except TimeoutError:
+            pass
+        timed_out = not finished and child.process.poll() is None
+        self.output += child.stop()
+        self._child = None
+        if finished:
+            return []
+        return self._recover(state, pending, runs, timed_out, child.exit_description())
+
+    def _recover(self, state: dict, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
+                 timed_out: bool, exit_text: str) -> list[ChapterRequest]:
+        """Record what broke the child and return the requests a fresh child should still run."""
+        name = state["chapter"]
+        if name is None:  # the child never got to learner code: nothing more can be done
+            for req in pending:
+                runs[req.chapter].import_error = {
+                    "exception": "GraderError", "message": f"the grading process failed to start ({exit_text})",
+                    "traceback": "", "line": None, "grader": True}
+            return []
+        run = runs[name]
+        req = next(r for r in pending if r.chapter == name)
+        chapter_over = time.monotonic() >= state["chapter_end"]
+        if state["stage"] == "import":
+            why = (f"importing it took longer than {self.limits.import_seconds:g} s" if timed_out
+                   else f"the process ended while importing it ({exit_text})")
+            run.import_error = {"exception": "TimeoutError" if timed_out else "ProcessExit",
+                                "message": why, "traceback": "", "line": None}
+        elif state["stage"] == "call" and state["index"] is not None:
+            function = req.calls[state["index"]].function
+            if timed_out:
+                note = f"stopped after {self.limits.call_seconds:g} s"
+                run.results[state["index"]] = Returned(TIMEOUT, function, note=note)
+            else:
+                run.results[state["index"]] = Returned(CRASHED, function, note=exit_text)
+            for i, c in enumerate(req.calls):
+                if run.results[i] is None and c.function == function:
+                    run.results[i] = Returned(NOT_RUN, function, note=f"an earlier call of {function} did not return")
+        if chapter_over or state["stage"] in ("import", "between"):
+            for i, c in enumerate(req.calls):
+                if run.results[i] is None and run.import_error is None:
+                    run.results[i] = Returned(TIMEOUT if timed_out else NOT_RUN, c.function,
+                                              note=f"the chapter's {self.limits.chapter_seconds:g} s ran out")
+        position = pending.index(req)
+        rest = [r for r in pending[position:] if runs[r.chapter].import_error is None
+                and any(x is None for x in runs[r.chapter].results)]
+        return rest
+
+
+def _unresolved(runs: dict[str, ChapterRun]) -> int:
+    return sum(r.import_error is None and x is None for r in runs.values() for x in r.results)
+
+
+def _valid_index(index: object, req: ChapterRequest) -> bool:
+    return isinstance(index, int) and 0 <= index < len(req.calls)
