@@ -70,10 +70,20 @@ def bowl_vec(p):
     return x * x + 0.5 * x * y + y * y
 
 
+def bowl_grad_vec(p):
+    x, y = _vec(p)
+    return np.array([2 * x + 0.5 * y, 0.5 * x + 2 * y])
+
+
 def saddle3_vec(p):
     """x^2 - y^2 + 3 x z + z^3 - y z: a cubic with a non-constant, non-diagonal Hessian."""
     x, y, z = _vec(p)
     return x * x - y * y + 3 * x * z + z**3 - y * z
+
+
+def saddle3_grad_vec(p):
+    x, y, z = _vec(p)
+    return np.array([2 * x + 3 * z, -2 * y - z, 3 * x + 3 * z * z - y])
 
 
 def rosenbrock_vec(p):
@@ -128,6 +138,8 @@ CALLABLES = {
     "example_f_vec": example_f_vec,
     "example_grad_vec": example_grad_vec,
     "bowl_vec": bowl_vec,
+    "bowl_grad_vec": bowl_grad_vec,
     "saddle3_vec": saddle3_vec,
+    "saddle3_grad_vec": saddle3_grad_vec,
     "rosenbrock_vec": rosenbrock_vec,
 }
