@@ -1,0 +1,56 @@
+"""Shared fixtures: the repository root on sys.path, and submissions built from real files."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+if str(REPO) not in sys.path:
+    sys.path.insert(0, str(REPO))
+
+
+def build_submission(root: Path, replacements: dict[str, str] | None = None) -> Path:
+    """A submission at root/exercises: the reference solutions, with whole modules replaced.
+
+    `replacements` maps a module name ('ch06_measurement') to the full source of that file.
+    Imports of `solutions.` become `exercises.`, as a learner's files would have them.
+    """
+    package = root / "exercises"
+    package.mkdir(parents=True, exist_ok=True)
+    for source in sorted((REPO / "solutions").glob("*.py")):
+        text = re.sub(r"\bsolutions\.", "exercises.", source.read_text())
+        (package / source.name).write_text(text)
+    for module, text in (replacements or {}).items():
+        (package / f"{module}.py").write_text(textwrap.dedent(text))
+    return root
+
+
+def replace_function(module: str, function: str, new_source: str) -> str:
+    """The reference module's source with one top-level function replaced by `new_source`."""
+    text = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / f"{module}.py").read_text())
+    pattern = re.compile(rf"^def {function}\(.*?(?=^\S)", re.S | re.M)
+    if not pattern.search(text + "\n#end\n"):
+        raise KeyError(f"{function} not found in {module}")
+    return pattern.sub(textwrap.dedent(new_source).strip() + "\n\n\n", text + "\n#end\n", count=1)
+
+
+@pytest.fixture
+def repo_root() -> Path:
+    return REPO
+
+
+@pytest.fixture
+def submission_factory(tmp_path):
+    """Build a submission under tmp_path from {module: source}; returns its root."""
+    counter = iter(range(1000))
+
+    def make(replacements: dict[str, str] | None = None) -> Path:
+        return build_submission(tmp_path / f"sub{next(counter)}", replacements)
+
+    return make

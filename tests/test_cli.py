@@ -1,0 +1,150 @@
+"""The `grade` command through click's CliRunner and as a real subprocess."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from grader.chapters import CHAPTERS
+from grader.cli import main
+
+CHECK_KEYS = {"id", "function", "description", "status", "points", "max_points", "message", "expected", "got"}
+
+
+@pytest.fixture
+def runner():
+    return CliRunner()
+
+
+def test_every_command_has_help(runner):
+    result = runner.invoke(main, ["--help"])
+    assert result.exit_code == 0
+    for name, command in main.commands.items():
+        assert command.help, f"command {name} has no help text"
+        sub = runner.invoke(main, [name, "--help"])
+        assert sub.exit_code == 0 and "Usage:" in sub.output
+
+
+def test_list_names_every_chapter_file_and_points(runner):
+    result = runner.invoke(main, ["list"])
+    assert result.exit_code == 0
+    for info in CHAPTERS:
+        assert f"exercises/{info.module}.py" in result.output
+    assert "H_jacobian" in result.output and "points" in result.output
+
+
+@pytest.mark.parametrize("args", [["ch99"], ["run", "12"], ["chapter6"], []])
+def test_usage_errors_exit_2(runner, args):
+    result = runner.invoke(main, args)
+    assert result.exit_code == 2, result.output
+
+
+def test_solutions_full_marks_exit_0_and_json_schema(runner):
+    result = runner.invoke(main, ["6", "--solutions", "--format", "json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    assert {"version", "submission", "score", "max_score", "chapters"} <= set(data)
+    assert data["score"] == data["max_score"] > 0
+    (chapter,) = data["chapters"]
+    assert {"chapter", "title", "score", "max_score", "checks"} <= set(chapter)
+    assert chapter["chapter"] == "ch06"
+    for check in chapter["checks"]:
+        assert CHECK_KEYS <= set(check)
+        assert check["status"] == "pass"
+
+
+def test_stubs_score_zero_with_not_implemented_and_exit_1(runner, repo_root, monkeypatch):
+    monkeypatch.chdir(repo_root / "exercises")  # found by walking up to the project
+    result = runner.invoke(main, ["ch06", "--format", "json"])
+    assert result.exit_code == 1
+    data = json.loads(result.output)
+    code = [c for c in data["chapters"][0]["checks"] if c.get("kind", "code") == "code"]
+    assert all(c["status"] == "fail" and c["points"] == 0 for c in code)
+    assert all("not implemented yet" in c["message"] for c in code)
+
+
+def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, repo_root):
+    result = runner.invoke(main, ["ch06", "--submission", str(repo_root)])
+    assert result.exit_code == 1
+    lines = result.output.splitlines()
+    assert lines[0].startswith("ch06")
+    assert any(line.strip().startswith("✗ [0/2] H at the lesson's point (3, 4)") for line in lines)
+    assert "ch06 total: 0/" in result.output
+    assert "\x1b[" not in result.output
+
+
+def test_seed_changes_random_inputs_but_not_the_verdict(runner):
+    outputs = []
+    for seed in ("1", "2"):
+        result = runner.invoke(main, ["ch06", "--solutions", "--format", "json", "--seed", seed])
+        assert result.exit_code == 0
+        outputs.append(json.loads(result.output))
+    assert outputs[0]["seed"] == 1 and outputs[1]["seed"] == 2
+    random_check = "H_jacobian_random_points"
+    got = [next(c for c in o["chapters"][0]["checks"] if c["id"] == random_check)["got"] for o in outputs]
+    assert got[0] != got[1]
+
+
+def _run(args, cwd, env_extra=None):
+    env = dict(os.environ)
+    env.pop("NO_COLOR", None)
+    env.update(env_extra or {})
+    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_real_subprocess_all_solutions_full_marks(repo_root):
+    proc = _run(["all", "--solutions", "--format", "json"], repo_root)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    data = json.loads(proc.stdout)
+    assert [c["chapter"] for c in data["chapters"]] == [c.id for c in CHAPTERS]
+    assert data["score"] == data["max_score"]
+    for chapter in data["chapters"]:
+        assert chapter["score"] == chapter["max_score"] > 0, chapter["chapter"]
+
+
+def test_real_subprocess_stubs_zero_and_no_error(repo_root):
+    proc = _run(["all", "--format", "json"], repo_root)
+    assert proc.returncode == 1
+    data = json.loads(proc.stdout)
+    statuses = {c["status"] for ch in data["chapters"] for c in ch["checks"]}
+    assert data["score"] == 0 and "error" not in statuses and "pass" not in statuses
+
+
+def test_real_subprocess_usage_error_goes_to_stderr_with_exit_2(repo_root):
+    proc = _run(["ch42"], repo_root)
+    assert proc.returncode == 2
+    assert "unknown chapter" in proc.stderr and proc.stdout == ""
+
+
+def test_no_color_is_respected_even_on_a_terminal(repo_root):
+    """Run under a pseudo-terminal: colour by default, none with NO_COLOR."""
+    pty = pytest.importorskip("pty")
+    outputs = {}
+    for label, extra in (("colour", {}), ("plain", {"NO_COLOR": "1"})):
+        env = dict(os.environ)
+        env.pop("NO_COLOR", None)
+        env.update(extra)
+        master, slave = pty.openpty()
+        proc = subprocess.Popen([sys.executable, "-m", "grader", "ch06", "--solutions"], cwd=repo_root,
+                                env=env, stdout=slave, stderr=slave)
+        os.close(slave)
+        chunks = []
+        while True:
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:
+                break
+            if not chunk:
+                break
+            chunks.append(chunk)
+        proc.wait(timeout=60)
+        os.close(master)
+        outputs[label] = b"".join(chunks).decode()
+    assert "\x1b[" in outputs["colour"]
+    assert "\x1b[" not in outputs["plain"] and "ch06 total" in outputs["plain"]

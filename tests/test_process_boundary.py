@@ -1,0 +1,170 @@
+"""The process boundary: learner code runs only in the child; broken chapters never stop the rest."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import pytest
+
+from grader.grading import grade
+from grader.model import Status
+from grader.runner import Limits, Session, Submission
+
+FAST = Limits(import_seconds=2.0, call_seconds=2.0, chapter_seconds=8.0)
+
+
+def _grade(root, chapters, limits=FAST):
+    return grade(Session(Submission(root, "exercises"), limits), chapters)
+
+
+def _by_id(chapter):
+    return {c.id: c for c in chapter.checks}
+
+
+def test_syntax_error_is_reported_with_file_and_line_and_other_chapters_are_graded(submission_factory):
+    root = submission_factory({"ch06_measurement": "import numpy as np\n\ndef range_bearing(x, y)\n    return 1\n"})
+    report = _grade(root, ["ch03", "ch06"])
+    ch03, ch06 = report.chapters
+    assert ch03.score == ch03.max_score > 0
+    assert ch06.score == 0
+    assert "exercises/ch06_measurement.py, line 3" in ch06.problems[0]
+    assert "SyntaxError" in ch06.problems[0]
+    assert {c.status for c in ch06.checks} == {Status.ERROR}
+
+
+def test_endless_loop_at_import_times_out_and_the_next_chapter_is_graded(submission_factory):
+    root = submission_factory({"ch03_jacobian": "while True:\n    pass\n"})
+    started = time.monotonic()
+    report = _grade(root, ["ch03", "ch06"])
+    assert time.monotonic() - started < 15
+    ch03, ch06 = report.chapters
+    assert "could not be imported" in ch03.problems[0] and "longer than 2 s" in ch03.problems[0]
+    assert ch06.score == ch06.max_score
+
+
+@pytest.mark.parametrize("exit_code", ["import sys\nsys.exit(0)\n", "raise SystemExit('bye')\n"])
+def test_sys_exit_at_import_is_reported(submission_factory, exit_code):
+    root = submission_factory({"ch06_measurement": exit_code})
+    report = _grade(root, ["ch06", "ch03"])
+    ch06, ch03 = report.chapters
+    assert "sys.exit()" in ch06.problems[0]
+    assert ch03.score == ch03.max_score
+
+
+def test_exception_at_import_names_the_line(submission_factory):
+    root = submission_factory({"ch06_measurement": "import numpy as np\nx = 1 / 0\n"})
+    ch06 = _grade(root, ["ch06"]).chapters[0]
+    assert "ch06_measurement.py, line 2 raised ZeroDivisionError" in ch06.problems[0]
+
+
+def test_os_exit_inside_one_function_costs_only_that_function(submission_factory):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "measurement_covariance",
+                              "def measurement_covariance(x, y, sigma):\n    import os\n    os._exit(3)\n")
+    root = submission_factory({"ch06_measurement": source})
+    ch06 = _grade(root, ["ch06"]).chapters[0]
+    checks = _by_id(ch06)
+    assert checks["covariance_worked_example"].status == Status.FAIL
+    assert "ended abruptly" in checks["covariance_worked_example"].message
+    assert "exit status 3" in checks["covariance_worked_example"].message
+    assert checks["H_worked_example"].status == Status.PASS
+    assert checks["range_bearing_all_quadrants"].status == Status.PASS
+
+
+def test_endless_loop_in_one_function_times_out_and_the_rest_is_graded(submission_factory):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "H_jacobian",
+                              "def H_jacobian(x, y):\n    while True:\n        pass\n")
+    root = submission_factory({"ch06_measurement": source})
+    started = time.monotonic()
+    ch06 = _grade(root, ["ch06"]).chapters[0]
+    assert time.monotonic() - started < 10
+    checks = _by_id(ch06)
+    timed_out = [c for c in ch06.checks if c.function == "H_jacobian"]
+    assert all(c.status in (Status.FAIL, Status.SKIP) for c in timed_out)
+    assert any("did not return in time" in c.message for c in timed_out)
+    assert checks["range_bearing_worked_example"].status == Status.PASS
+    # the reference measurement_covariance calls H_jacobian, so it loops too and is stopped
+    assert "did not return in time" in checks["covariance_worked_example"].message
+
+
+@pytest.mark.parametrize("body, wrong_type", [
+    ("class M(np.ndarray):\n        def __eq__(self, other): return True\n"
+     "    return np.array([[0.6, 0.8], [-0.16, 0.12]]).view(M)", "ndarray subclass"),
+    ("return np.matrix([[0.6, 0.8], [-0.16, 0.12]])", "ndarray subclass"),
+    ("class Liar:\n        def __eq__(self, other): return True\n        __array__ = None\n    return Liar()", "Liar"),
+    ("return '[[0.6, 0.8], [-0.16, 0.12]]'", "str"),
+    ("return None", "None"),
+    ("return [[0.6, 0.8], [-0.16, 0.12]]", "list"),
+    ("return np.array([[0.6, 0.8], [-0.16, 0.12]], dtype=object)", "dtype object"),
+])
+def test_wrong_types_are_never_compared(submission_factory, body, wrong_type):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "H_jacobian", f"def H_jacobian(x, y):\n    {body}\n")
+    root = submission_factory({"ch06_measurement": source})
+    checks = _by_id(_grade(root, ["ch06"]).chapters[0])
+    example = checks["H_worked_example"]
+    assert example.status == Status.FAIL
+    assert wrong_type in example.message
+
+
+def test_wrong_shape_and_nan_are_named(submission_factory):
+    from tests.conftest import replace_function
+
+    shape = replace_function("ch06_measurement", "H_jacobian",
+                             "def H_jacobian(x, y):\n    return np.array([0.6, 0.8, -0.16, 0.12])\n")
+    nan = replace_function("ch06_measurement", "H_jacobian",
+                           "def H_jacobian(x, y):\n    return np.array([[0.6, 0.8], [np.nan, 0.12]])\n")
+    shape_check = _by_id(_grade(submission_factory({"ch06_measurement": shape}), ["ch06"]).chapters[0])
+    nan_check = _by_id(_grade(submission_factory({"ch06_measurement": nan}), ["ch06"]).chapters[0])
+    assert "returned shape (4,); expected shape (2, 2)" in shape_check["H_worked_example"].message
+    assert "not finite: H[1,0] = d bearing/d x = nan" in nan_check["H_worked_example"].message
+
+
+def test_learner_traceback_is_trimmed_to_learner_frames(submission_factory):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "H_jacobian",
+                              "def H_jacobian(x, y):\n    return helper(x)\n\n\ndef helper(x):\n    return x[0]\n")
+    checks = _by_id(_grade(submission_factory({"ch06_measurement": source}), ["ch06"]).chapters[0])
+    example = checks["H_worked_example"]
+    assert "raised TypeError" in example.message
+    trace = example.details["traceback"]
+    assert 'File "exercises/ch06_measurement.py"' in trace and "in helper" in trace
+    assert "grader" not in trace and "child.py" not in trace
+
+
+def test_learner_output_does_not_reach_our_stdout(submission_factory, capfd):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "range_bearing",
+                              "def range_bearing(x, y):\n    print('HELLO FROM LEARNER')\n"
+                              "    return np.array([np.hypot(x, y), np.arctan2(y, x)])\n")
+    report = _grade(submission_factory({"ch06_measurement": source}), ["ch06"])
+    out, err = capfd.readouterr()
+    assert "HELLO FROM LEARNER" not in out + err
+    assert "HELLO FROM LEARNER" in report.learner_output
+    assert report.chapters[0].score == report.chapters[0].max_score
+
+
+def test_missing_chapter_file_is_reported_not_crashing(tmp_path):
+    (tmp_path / "exercises").mkdir()
+    (tmp_path / "exercises" / "ch06_measurement.py").write_text("raise NotImplementedError\n")
+    report = _grade(tmp_path, ["ch03", "ch06"])
+    ch03, ch06 = report.chapters
+    assert "exercises/ch03_jacobian.py was not found" in ch03.problems[0]
+    assert "raised NotImplementedError" in ch06.problems[0]
+
+
+def test_child_runs_in_another_process(submission_factory):
+    from tests.conftest import replace_function
+
+    source = replace_function("ch06_measurement", "range_bearing",
+                              "def range_bearing(x, y):\n    import os\n    return np.array([os.getpid(), 0.0])\n")
+    report = _grade(submission_factory({"ch06_measurement": source}), ["ch06"])
+    got = _by_id(report.chapters[0])["range_bearing_worked_example"].got
+    assert got[0] != os.getpid()
