@@ -1,0 +1,1 @@
+"""Reference solutions of the lesson "Jacobians & Linearization" (the grader's references)."""
