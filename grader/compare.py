@@ -120,7 +120,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: f
             where = [entries.symbol]
         return Verdict(False, f"{label} is not finite: {', '.join(where)} = {fmt(got[tuple(np.argwhere(bad_got)[0])])}.",
                        expected, got, {"wrong": np.argwhere(bad_got).tolist()})
-    diff = np.abs(got - expected)
+    diff = np.asarray(np.abs(got - expected))  # an array even for scalars (numpy returns a float64 there)
     diff[np.isnan(diff) & np.isnan(got) & np.isnan(expected)] = 0.0
     limit = atol + rtol * np.abs(expected)
     wrong = ~(diff <= limit)
