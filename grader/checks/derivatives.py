@@ -48,9 +48,14 @@ class Derivative:
     # call arguments of the learner's forward map at (point, extra), when they differ from `args`
     # (e.g. pipeline_jacobian(r, theta) checked against g_stage(polar_to_cartesian(r, theta)))
     forward_args: Callable[[np.ndarray, tuple], tuple] | None = None
+    forward_text: str = ""  # how the forward map reads in messages, when not just `forward`
 
     def forward_call(self, point: np.ndarray, extra: tuple):
         return call(self.forward, *(self.forward_args or self.args)(point, extra))
+
+    @property
+    def forward_name(self) -> str:
+        return self.forward_text or self.forward
 
     def label(self, function: str, case: Case) -> str:
         return f"{function}({', '.join(describe_argument(a) for a in self.args(*case))})"
@@ -107,7 +112,7 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
             verdicts.append(v)
         return all_of(verdicts)
 
-    vs_reference.__doc__ = f"{symbol} agrees with central differences of the reference {d.forward} at random points"
+    vs_reference.__doc__ = f"{symbol} agrees with central differences of the reference {d.forward_name} at random points"
     checks.check(d.jacobian, points, id=f"{d.jacobian}_random_points")(vs_reference)
 
     def vs_own(ctx: Context):
@@ -134,23 +139,23 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
             for r in [g["at"], *g["plus"], *g["minus"]]:
                 problem = value_problem(r, forward_out.shape, d.forward)
                 if problem:
-                    raise Skip(f"{problem} So {symbol} cannot be compared with the finite difference of your {d.forward}.")
+                    raise Skip(f"{problem} So {symbol} cannot be compared with the finite difference of your {d.forward_name}.")
             h = steps(point)
             fd = np.stack([(p.as_array() - m.as_array()) / (2 * h[j])
                            for j, (p, m) in enumerate(zip(g["plus"], g["minus"]))], axis=-1)
             v = compare_arrays(g["jac"].as_array(), fd, label=label, rtol=FD_RTOL, atol=FD_ATOL,
-                               entries=d.entries, expected_name="finite difference of your " + d.forward)
+                               entries=d.entries, expected_name="finite difference of your " + d.forward_name)
             if not v.passed:
                 own_right = np.allclose(g["at"].as_array(), forward_out, rtol=1e-9, atol=1e-12)
                 blame = (f"your {d.forward} matches the reference here, so the mistake is in {d.jacobian}"
                          if own_right else
                          f"your {d.forward} itself differs from the reference here: fix it first (see its check)")
-                v.message = (f"your {symbol} disagrees with the finite difference of your {d.forward} in "
+                v.message = (f"your {symbol} disagrees with the finite difference of your {d.forward_name} in "
                              f"{_columns_text(v.details['wrong'], d.entries)}; {blame}.\n{v.message}")
             verdicts.append(v)
         return all_of(verdicts)
 
-    vs_own.__doc__ = f"{symbol} agrees with central differences of your own {d.forward}"
+    vs_own.__doc__ = f"{symbol} agrees with central differences of your own {d.forward_name}"
     checks.check(d.jacobian, own_points, id=f"{d.jacobian}_vs_own_{d.forward}")(vs_own)
 
 
