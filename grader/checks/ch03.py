@@ -1,0 +1,113 @@
+"""Chapter 3: the polar map p(r, theta) = (r cos theta, r sin theta), its Jacobian J and det J = r.
+
+Closed forms are compared with rtol 1e-9 (atol 1e-12); J also against central differences (see
+grader/checks/derivatives.py for that tolerance). Points have r in [0.5, 5] and angles at least
+0.2 rad from every multiple of pi/4, so no entry of J is near 0 and J is never symmetric.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from grader.catalogue import polar_jac, polar_vec
+from grader.checks.base import Skip, chapter_checks
+from grader.checks.derivatives import Derivative, add_derivative_checks, angle
+from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.runner import Array, call
+
+CHECKS = chapter_checks("ch03")
+
+P = Entries("p", rows=("x", "y"))
+J = Entries("J", rows=("x", "y"), cols=("r", "theta"), derivative=True)
+SQRT3 = np.sqrt(3.0)
+
+
+def polar_point(rng: np.random.Generator) -> np.ndarray:
+    """(r, theta) with r in [0.5, 5] and theta away from the axes and diagonals."""
+    return np.array([rng.uniform(0.5, 5.0), angle(rng)])
+
+
+def _points(rng: np.random.Generator, n: int = 6) -> list:
+    return [polar_point(rng) for _ in range(n)]
+
+
+def _label(function: str, r: float, theta: float) -> str:
+    return f"{function}({fmt(r)}, {fmt(theta)})"
+
+
+@CHECKS.check("polar_to_cartesian", points=1)
+def polar_worked_example(ctx):
+    """polar_to_cartesian(4, pi/3) is (2, 3.4641)"""
+    got = yield call("polar_to_cartesian", 4, np.pi / 3)
+    return expect(got, [2.0, 2 * SQRT3], label="polar_to_cartesian(4, pi/3)", entries=P, rtol=1e-9)
+
+
+@CHECKS.check("polar_to_cartesian", points=1)
+def polar_random_points(ctx):
+    """polar_to_cartesian = (r cos theta, r sin theta) at random points in all four quadrants (theta in radians)"""
+    points = _points(ctx.rng)
+    got = yield {"float": [call("polar_to_cartesian", float(r), float(t)) for r, t in points],
+                 "int": call("polar_to_cartesian", Array(3, "int64"), 2)}
+    verdicts = [expect(g, polar_vec(p), label=_label("polar_to_cartesian", *p), entries=P, rtol=1e-9, atol=1e-12)
+                for g, p in zip(got["float"], points)]
+    verdicts.append(expect(got["int"], polar_vec((3, 2)), label="polar_to_cartesian(np.int64(3), 2)", entries=P,
+                           rtol=1e-9))
+    return all_of(verdicts)
+
+
+@CHECKS.check("polar_to_cartesian_jacobian", points=2)
+def jacobian_worked_example(ctx):
+    """J at (4, pi/3) is [[0.5, -3.4641], [0.8660, 2.0]]"""
+    got = yield call("polar_to_cartesian_jacobian", 4, np.pi / 3)
+    return expect(got, [[0.5, -2 * SQRT3], [SQRT3 / 2, 2.0]], label="polar_to_cartesian_jacobian(4, pi/3)",
+                  entries=J, rtol=1e-9)
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="polar_to_cartesian", jacobian="polar_to_cartesian_jacobian", entries=J,
+    args=lambda p, extra: (float(p[0]), float(p[1])),
+    reference_forward=lambda p, extra: polar_vec(p),
+    reference_jacobian=lambda p, extra: polar_jac(p),
+    cases=lambda rng: [(p, ()) for p in _points(rng)],
+))
+
+
+@CHECKS.check("area_scale", points=1)
+def area_scale_worked_example(ctx):
+    """area_scale(4, pi/3) is det J = 4"""
+    got = yield call("area_scale", 4, np.pi / 3)
+    return expect(got, 4.0, label="area_scale(4, pi/3)", rtol=1e-9)
+
+
+@CHECKS.check("area_scale", points=1)
+def area_scale_is_r(ctx):
+    """area_scale = det J = r at random points (signed: a negative r gives a negative det)"""
+    rng = ctx.rng
+    points = _points(rng) + [np.array([-rng.uniform(0.5, 3.0), angle(rng)])]
+    got = yield [call("area_scale", float(r), float(t)) for r, t in points]
+    return all_of([expect(g, r, label=_label("area_scale", r, t), rtol=1e-9, atol=1e-12)
+                   for g, (r, t) in zip(got, points)])
+
+
+@CHECKS.check("area_scale", points=1)
+def area_scale_is_det_of_your_jacobian(ctx):
+    """area_scale equals the determinant of your own polar_to_cartesian_jacobian"""
+    points = _points(ctx.rng, 4)
+    got = yield [{"det": call("area_scale", float(r), float(t)), "J": call("polar_to_cartesian_jacobian", float(r), float(t))}
+                 for r, t in points]
+    verdicts = []
+    for g, (r, t) in zip(got, points):
+        label = _label("area_scale", r, t)
+        problem = value_problem(g["det"], (), label)
+        if problem:
+            return fail(problem)
+        problem = value_problem(g["J"], (2, 2), _label("polar_to_cartesian_jacobian", r, t))
+        if problem:
+            raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J.")
+        own_det = float(np.linalg.det(g["J"].as_array()))
+        if not np.isclose(own_det, r, rtol=1e-9, atol=1e-12):
+            raise Skip(f"the determinant of your {_label('polar_to_cartesian_jacobian', r, t)} is {fmt(own_det)}, "
+                       f"not r = {fmt(r)}: fix J first (see its checks).")
+        verdicts.append(compare_arrays(g["det"].as_array(), own_det, label=label, rtol=1e-9, atol=1e-12,
+                                       expected_name="det of your J"))
+    return all_of(verdicts)
