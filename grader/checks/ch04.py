@@ -14,7 +14,7 @@ import numpy as np
 from grader.catalogue import CALLABLES, g_jac, g_stage_vec, polar_jac, polar_vec
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, planar_point
-from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, fmt_array, value_problem
+from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt_array, value_problem
 from grader.runner import Array, Fn, call
 
 CHECKS = chapter_checks("ch04")
