@@ -1,0 +1,1 @@
+"""Your answers to the lesson "Jacobians & Linearization": fill in each chapter's functions."""

@@ -1,0 +1,48 @@
+"""Chapter 9: choose your tool.
+
+One output and many inputs: the gradient. Many outputs: the Jacobian. Curvature of a scalar
+function: the Hessian (the Jacobian of the gradient), whose eigenvalues classify a critical point.
+No formula at hand, or checking a hand-derived one: finite differences.
+
+You may use your chapter 5 functions:
+    from exercises.ch05_finite_differences import jacobian_fd
+Run `grade ch09` to check your work.
+"""
+
+import numpy as np
+
+
+def gradient_fd(f, x, h=1e-5):
+    """Central-difference gradient of a scalar function f of a vector x.
+
+    Component j: (f(x + h e_j) - f(x - h e_j)) / (2 h). Convert x to float first (an integer
+    array plus 1e-5 stays an integer array otherwise).
+    Arguments: f a function of one vector returning a number; x a vector; h the step.
+    Returns: a numpy array of shape (n,).
+    Example: gradient_fd(lambda v: v[0]**2 + v[0]*v[1], [1, 2]) -> array([4., 1.])
+    """
+    raise NotImplementedError
+
+
+def hessian_fd(f, x, h=1e-4):
+    """The n x n Hessian of f as the Jacobian of its gradient, symmetrised.
+
+    Formula: H = jacobian_fd(lambda v: gradient_fd(f, v, h), x, h), then (H + H^T) / 2.
+    Arguments: f a scalar function of one vector; x a vector; h the step.
+    Returns: a numpy array of shape (n, n), symmetric.
+    Example: hessian_fd(lambda v: v[0]**2 + v[0]*v[1], (1, 2)) -> [[2, 1], [1, 0]]
+    """
+    raise NotImplementedError
+
+
+def classify_critical_point(hessian):
+    """Classify a critical point from its Hessian.
+
+    Symmetrise, take the eigenvalues, treat an eigenvalue as zero when its size is at most
+    1e-8 * max(1, largest size). "saddle" whenever both signs occur; otherwise "minimum" (all > 0),
+    "maximum" (all < 0) or "degenerate" (some zero).
+    Arguments: hessian an n x n array.
+    Returns: one of the strings "saddle", "minimum", "maximum", "degenerate".
+    Example: classify_critical_point([[2, 1], [1, 0]]) -> "saddle"
+    """
+    raise NotImplementedError
