@@ -12,6 +12,7 @@ Nothing here decides whether an answer is right; that happens in the parent.
 from __future__ import annotations
 
 import importlib
+import importlib.machinery
 import json
 import os
 import signal
@@ -177,6 +178,33 @@ def _apply_limits(limits: dict) -> None:
             pass
 
 
+def _pin_package(root: str, package: str) -> None:
+    """Make `package` the submission's own folder, whatever else on sys.path has that name.
+
+    Without this, an `exercises` package elsewhere on the path (the project, an editable install)
+    could shadow a submission's folder and grade the wrong files.
+    """
+    if package in sys.modules:
+        return
+    import importlib.util
+
+    folder = os.path.join(root, package)
+    init = os.path.join(folder, "__init__.py")
+    spec = importlib.util.spec_from_file_location(
+        package, init if os.path.isfile(init) else None, submodule_search_locations=[folder])
+    if spec is None:  # no __init__.py: a namespace-like package of just this folder
+        spec = importlib.machinery.ModuleSpec(package, None, is_package=True)
+        spec.submodule_search_locations = [folder]
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[package] = module
+    try:
+        if spec.loader is not None:
+            spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[package]
+        raise
+
+
 def run(request: dict, out) -> None:
     root = os.path.realpath(request["root"])
     sys.path.insert(0, root)
@@ -186,6 +214,7 @@ def run(request: dict, out) -> None:
         name = chapter["chapter"]
         _emit(out, {"event": "import", "chapter": name})
         try:
+            _pin_package(root, request["package"])
             module = importlib.import_module(f'{request["package"]}.{chapter["module"]}')
         except SyntaxError as exc:
             _emit(out, {"event": "import-failed", "chapter": name, "error": _syntax_error(exc, root)})
@@ -225,6 +254,11 @@ def main(argv: list[str] | None = None) -> None:
     _apply_limits(request.get("limits", {}))
     run(request, out)
     out.close()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BaseException:  # a learner may have replaced or closed them
+            pass
     os._exit(0)  # skip learner atexit handlers and finalizers
 
 

@@ -95,7 +95,8 @@ class ChapterPlan:
         if run.import_error is not None:
             message = import_problem(run.import_error, module_file)
             result.problems.append(message)
-            result.checks = [_result(check, Status.ERROR, 0.0, message) for check in self.chapter.checks]
+            short = f"not graded: {module_file} could not be imported (see the chapter's message)"
+            result.checks = [_result(check, Status.ERROR, 0.0, short) for check in self.chapter.checks]
             return result
         for check, pending in self.pending:
             result.checks.append(_judge_one(check, pending, run))
@@ -146,7 +147,7 @@ def import_problem(error: dict, module_file: str) -> str:
     if exception == "SyntaxError" or exception == "IndentationError":
         head = f"{module_file}{line}: {exception}: {error.get('message')}"
     elif exception == "ModuleNotFoundError" and "No module named" in error.get("message", "") and not error.get("traceback", "").count("File"):
-        head = f"{module_file} was not found ({error.get('message')})"
+        return f"{module_file} was not found ({error.get('message')})"
     elif exception in ("TimeoutError", "ProcessExit"):
         head = f"{module_file} could not be imported: {error.get('message')}"
     elif exception == "SystemExit":

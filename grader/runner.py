@@ -300,7 +300,7 @@ class Session:
         def deadline() -> float:
             return min(state["deadline"], state["chapter_end"])
 
-        finished = False
+        finished = timed_out = False
         try:
             for event in child.events(deadline):
                 kind, name = event.get("event"), event.get("chapter")
@@ -327,8 +327,12 @@ class Session:
                     run.results[index] = from_event(req.calls[index].function, event)
                     state.update(stage="calls", deadline=float("inf"))
         except TimeoutError:
-            pass
-        timed_out = not finished and child.process.poll() is None
+            timed_out = True
+        if not finished and not timed_out:  # the pipe closed: let the process finish dying
+            try:
+                child.process.wait(timeout=2)
+            except subprocess.TimeoutExpired:
+                pass
         self.output += child.stop()
         self._child = None
         if finished:
