@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import planar_point
+from grader.checks.derivatives import planar_point, vector_form
 from grader.compare import all_of, compare_arrays, expect, fail, fmt, passed, value_problem
-from grader.runner import Array, call
+from grader.runner import call
 
 CHECKS = chapter_checks("ch00")
 
@@ -37,12 +37,6 @@ def rice_moments(r: float, sigma: float) -> tuple[float, float]:
     i0, i1 = float(weights @ base), float(weights @ (base * np.cos(u)))
     mean = sigma * np.sqrt(np.pi / 2) * ((1 + 2 * t) * i0 + 2 * t * i1)
     return float(mean), float(2 * sigma * sigma + r * r - mean * mean)
-
-
-def _vector_form(values, form: str):
-    """The same vector as a tuple, a list or a numpy array (the contract allows each)."""
-    values = [float(v) for v in values]
-    return {"tuple": tuple(values), "list": values, "array": Array(values)}[form]
 
 
 def _show(values) -> str:
@@ -86,7 +80,7 @@ def superposition_gap_random_points(ctx):
         while np.hypot(*(p + q)) - np.hypot(*p) - np.hypot(*q) > -0.1:  # p, q not nearly parallel
             q = planar_point(rng)
         cases.append((p, q, form))
-    got = yield [call("superposition_gap", _vector_form(p, form), _vector_form(q, form)) for p, q, form in cases]
+    got = yield [call("superposition_gap", vector_form(p, form), vector_form(q, form)) for p, q, form in cases]
     verdicts = []
     for g, (p, q, form) in zip(got, cases):
         expected = np.hypot(*(p + q)) - np.hypot(*p) - np.hypot(*q)
@@ -126,7 +120,7 @@ def mean_shift_random_inputs(ctx):
         mean = planar_point(rng, 2.0, 4.0)
         sigma = float(rng.choice([rng.uniform(0.5, 0.8), rng.uniform(1.25, 1.6)]))  # never 1
         cases.append((mean, sigma, int(rng.integers(100_000, 200_000)), int(rng.integers(2**31)), form))
-    got = yield [call("mean_shift", _vector_form(m, form), s, n, seed) for m, s, n, seed, form in cases]
+    got = yield [call("mean_shift", vector_form(m, form), s, n, seed) for m, s, n, seed, form in cases]
     return all_of([_shift_verdict(g, m, s, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})")
                    for g, (m, s, n, seed, form) in zip(got, cases)])
 

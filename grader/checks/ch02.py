@@ -14,9 +14,9 @@ import numpy as np
 from grader.catalogue import CALLABLES, bowl_grad_vec, bowl_vec, example_f_vec, example_grad_vec
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import (FD_ATOL, FD_RTOL, Derivative, add_derivative_checks, central_difference,
-                                       planar_point)
+                                       planar_point, vector_form)
 from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, fmt_array, value_problem
-from grader.runner import Array, Fn, call
+from grader.runner import Fn, call
 
 CHECKS = chapter_checks("ch02")
 
@@ -32,14 +32,6 @@ PLANE_FUNCTIONS = (("example_f_vec", "example_grad_vec"), ("bowl_vec", "bowl_gra
 
 def _points(rng: np.random.Generator, n: int = 6) -> list:
     return [planar_point(rng) for _ in range(n)]
-
-
-def _vector_form(values: np.ndarray, form: str):
-    """The same vector as a tuple, a list, a float array or an integer array (the contract allows each)."""
-    if form == "int array":
-        return Array([int(v) for v in values], "int64")
-    values = [float(v) for v in values]
-    return {"tuple": tuple(values), "list": values, "array": Array(values)}[form]
 
 
 @CHECKS.check("example_f", points=1)
@@ -97,7 +89,7 @@ def tangent_plane_random_inputs(ctx):
         a = rng.integers(-3, 4, n).astype(float) if form_a == "int array" else rng.uniform(-2.5, 2.5, n)
         step = rng.choice([-1.0, 1.0], n) * rng.uniform(0.3, 1.2, n)
         cases.append((f, grad, a, a + step, form_a, form_x))
-    got = yield [call("tangent_plane", Fn(f), Fn(grad), _vector_form(a, fa), _vector_form(x, fx))
+    got = yield [call("tangent_plane", Fn(f), Fn(grad), vector_form(a, fa), vector_form(x, fx))
                  for f, grad, a, x, fa, fx in cases]
     verdicts = []
     for g, (f, grad, a, x, fa, fx) in zip(got, cases):

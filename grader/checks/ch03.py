@@ -11,7 +11,7 @@ import numpy as np
 
 from grader.catalogue import polar_jac, polar_vec
 from grader.checks.base import Skip, chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, angle
+from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
 from grader.runner import Array, call
 
@@ -20,11 +20,6 @@ CHECKS = chapter_checks("ch03")
 P = Entries("p", rows=("x", "y"))
 J = Entries("J", rows=("x", "y"), cols=("r", "theta"), derivative=True)
 SQRT3 = np.sqrt(3.0)
-
-
-def polar_point(rng: np.random.Generator) -> np.ndarray:
-    """(r, theta) with r in [0.5, 5] and theta away from the axes and diagonals."""
-    return np.array([rng.uniform(0.5, 5.0), angle(rng)])
 
 
 def _points(rng: np.random.Generator, n: int = 6) -> list:

@@ -13,9 +13,9 @@ import numpy as np
 
 from grader.catalogue import CALLABLES, g_jac, g_stage_vec, polar_jac, polar_vec
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, angle, planar_point
+from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, polar_point, vector_form
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt_array, value_problem
-from grader.runner import Array, Fn, call
+from grader.runner import Fn, call
 
 CHECKS = chapter_checks("ch04")
 
@@ -32,19 +32,6 @@ COMPOSITIONS = (("polar_vec", "polar_jac", "g_jac"), ("g_stage_vec", "g_jac", "p
 SLIP_GAP = 0.5
 
 
-def _vector_form(values, form: str):
-    """The same vector as a tuple, a list, a float array or an integer array (the contract allows each)."""
-    if form == "int array":
-        return Array([int(v) for v in values], "int64")
-    values = [float(v) for v in values]
-    return {"tuple": tuple(values), "list": values, "array": np.array(values)}[form]
-
-
-def polar_point(rng: np.random.Generator, r_max: float = 3.0) -> np.ndarray:
-    """(r, theta) with r in [0.5, r_max] and theta away from the axes and diagonals."""
-    return np.array([rng.uniform(0.5, r_max), angle(rng)])
-
-
 def pipeline(p) -> np.ndarray:
     return g_stage_vec(polar_vec(p))
 
@@ -58,7 +45,7 @@ def g_stage_random_points(ctx):
     """g_stage(u) = (u1^2 + u2, u1 u2) at random points, u as a tuple, list or numpy array (also of integers)"""
     rng = ctx.rng
     cases = [(planar_point(rng), form) for form in (*FORMS, "tuple", "array")] + [(np.array([-3.0, 2.0]), "int array")]
-    got = yield [call("g_stage", _vector_form(u, form)) for u, form in cases]
+    got = yield [call("g_stage", vector_form(u, form)) for u, form in cases]
     return all_of([expect(g, g_stage_vec(u), label=f"g_stage({fmt_array(u)} as a {form})", entries=G,
                           rtol=1e-9, atol=1e-12) for g, (u, form) in zip(got, cases)])
 
@@ -72,7 +59,7 @@ def g_jacobian_worked_example(ctx):
 
 add_derivative_checks(CHECKS, Derivative(
     forward="g_stage", jacobian="g_jacobian", entries=JG,
-    args=lambda p, extra: (_vector_form(p, extra[0]),),
+    args=lambda p, extra: (vector_form(p, extra[0]),),
     reference_forward=lambda p, extra: g_stage_vec(p),
     reference_jacobian=lambda p, extra: g_jac(p),
     cases=lambda rng: [(planar_point(rng), (form,)) for form in FORMS * 2],
@@ -99,7 +86,7 @@ def _compose_cases(rng: np.random.Generator, compositions: tuple) -> list:
     cases = []
     for f, jac_f, jac_g in compositions:
         for _ in range(1000):
-            x = polar_point(rng) if f == "polar_vec" else planar_point(rng, 0.8, 2.5)
+            x = polar_point(rng, 3.0) if f == "polar_vec" else planar_point(rng, 0.8, 2.5)
             if _slips_show(_candidates(f, jac_f, jac_g, x)):
                 cases.append((f, jac_f, jac_g, x, FORMS[len(cases) % len(FORMS)]))
                 break
@@ -128,7 +115,7 @@ def _compose_verdict(returned, f: str, jac_f: str, jac_g: str, x: np.ndarray, fo
 def compose_jacobian_random_inputs(ctx):
     """compose_jacobian = Jg(f(x)) @ Jf(x) for four pairs of catalogue maps at random points"""
     cases = _compose_cases(ctx.rng, COMPOSITIONS + COMPOSITIONS[:2])
-    got = yield [call("compose_jacobian", Fn(f), Fn(jf), Fn(jg), _vector_form(x, form)) for f, jf, jg, x, form in cases]
+    got = yield [call("compose_jacobian", Fn(f), Fn(jf), Fn(jg), vector_form(x, form)) for f, jf, jg, x, form in cases]
     return all_of([_compose_verdict(g, *case) for g, case in zip(got, cases)])
 
 
@@ -136,7 +123,7 @@ def compose_jacobian_random_inputs(ctx):
 def compose_jacobian_order_and_point(ctx):
     """compose_jacobian(polar, J_polar, Jg, x) is Jg(f(x)) Jf(x): not Jf Jg, and Jg taken at f(x), not at x"""
     cases = _compose_cases(ctx.rng, (("polar_vec", "polar_jac", "g_jac"),) * 3)
-    got = yield [call("compose_jacobian", Fn(f), Fn(jf), Fn(jg), _vector_form(x, form)) for f, jf, jg, x, form in cases]
+    got = yield [call("compose_jacobian", Fn(f), Fn(jf), Fn(jg), vector_form(x, form)) for f, jf, jg, x, form in cases]
     return all_of([_compose_verdict(g, *case) for g, case in zip(got, cases)])
 
 

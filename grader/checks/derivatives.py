@@ -25,7 +25,7 @@ import numpy as np
 
 from grader.checks.base import ChapterChecks, Context, Skip
 from grader.compare import Entries, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
-from grader.runner import call
+from grader.runner import Array, call
 
 STEP = 1e-5
 FD_RTOL = 1e-6
@@ -173,6 +173,19 @@ def planar_point(rng: np.random.Generator, r_min: float = 0.8, r_max: float = 4.
     r = rng.uniform(r_min, r_max)
     theta = angle(rng)
     return np.array([r * np.cos(theta), r * np.sin(theta)])
+
+
+def polar_point(rng: np.random.Generator, r_max: float = 5.0) -> np.ndarray:
+    """(r, theta) with r in [0.5, r_max] and theta away from the axes and diagonals."""
+    return np.array([rng.uniform(0.5, r_max), angle(rng)])
+
+
+def vector_form(values, form: str):
+    """One vector as the contract lets it arrive: "tuple", "list", "array" or "int array"."""
+    if form == "int array":
+        return Array([int(v) for v in values], "int64")
+    values = [float(v) for v in values]
+    return {"tuple": tuple(values), "list": values, "array": np.array(values)}[form]
 
 
 def time_step(rng: np.random.Generator) -> float:
