@@ -91,6 +91,23 @@ def rosenbrock_vec(p):
     return (1 - x) ** 2 + 100 * (y - x * x) ** 2
 
 
+def two_of_three_vec(p):
+    """(x, y, z) -> (x y + sin z, x^2 z - y): R^3 -> R^2, a non-square Jacobian."""
+    x, y, z = _vec(p)
+    return np.array([x * y + np.sin(z), x * x * z - y])
+
+
+def two_of_three_jac(p):
+    x, y, z = _vec(p)
+    return np.array([[y, x, np.cos(z)], [2 * x * z, -1.0, x * x]])
+
+
+def polar_jac_sign_slip(p):
+    """A deliberately wrong polar Jacobian: d x/d theta = +r sin theta (sign slip)."""
+    r, theta = _vec(p)
+    return np.array([[np.cos(theta), r * np.sin(theta)], [np.sin(theta), r * np.cos(theta)]])
+
+
 def cubic(x):
     return x**3 - 2 * x
 
@@ -142,4 +159,7 @@ CALLABLES = {
     "saddle3_vec": saddle3_vec,
     "saddle3_grad_vec": saddle3_grad_vec,
     "rosenbrock_vec": rosenbrock_vec,
+    "two_of_three_vec": two_of_three_vec,
+    "two_of_three_jac": two_of_three_jac,
+    "polar_jac_sign_slip": polar_jac_sign_slip,
 }
