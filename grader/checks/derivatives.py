@@ -12,7 +12,8 @@ at most h^2/6 * M3 (truncation; M3 bounds third derivatives, below 100 on the sa
 r >= 0.5 and |p| <= 6, so <= 6e-8) plus eps * max|f| / h (rounding, about 3e-10): together below
 1e-7. FD_ATOL + FD_RTOL * |expected| = 1e-6 + 1e-6*|.| leaves a margin of 10x. A sign slip,
 transpose or missing term moves an entry by at least its own size, and the point generators keep
-every entry of every derivative above 0.02 in size (tests/test_tolerances.py checks both bounds
+every nonzero entry of every derivative above MIN_ENTRY = 1e-3 in size (and a square
+Jacobian that far from symmetric) (tests/test_tolerances.py checks both bounds
 on every derivative and on such mutants), so no such error can hide under the tolerance.
 """
 
@@ -30,6 +31,9 @@ from grader.runner import Array, call
 STEP = 1e-5
 FD_RTOL = 1e-6
 FD_ATOL = 1e-6
+MIN_ENTRY = 1e-3  # every nonzero derivative entry at the sampled points is at least this large
+
+REGISTERED: list = []  # every Derivative given to add_derivative_checks (tests/test_tolerances.py)
 
 Case = tuple  # (point: np.ndarray of the differentiation variables, extra: tuple of other arguments)
 
@@ -93,6 +97,7 @@ def _columns_text(wrong: list, entries: Entries) -> str:
 def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 2,
                           own_points: float = 1) -> None:
     """Register the two finite-difference checks of derivative `d` in `checks`."""
+    REGISTERED.append(d)
     symbol = d.entries.symbol
 
     def vs_reference(ctx: Context):
