@@ -1,0 +1,221 @@
+"""Chapter 7: the motion model, its Jacobian F and covariance propagation P' = F P F^T (+ Q).
+
+Closed forms are compared with rtol 1e-9 (atol 1e-12); F also against central differences of the
+reference and of the learner's own motion_model, with respect to the state only (v, omega and dt
+are extra arguments; see grader/checks/derivatives.py). States keep theta away from multiples of
+pi/4, speeds |v| >= 0.5 and dt in [0.05, 0.5], so both heading entries of F are at least 0.005 and
+a missing dt, a sign slip or a cos/sin swap changes an entry by far more than the tolerance.
+propagate_covariance gets random non-symmetric F (and the motion model's F) and random SPD,
+non-diagonal P and Q; F is drawn so that F^T P F differs from F P F^T by at least 10% of the
+largest entry, so the transposed product cannot pass. Its output must be symmetric (to 1e-12 of its
+largest entry) and positive semi-definite (eigenvalues of its symmetric part >= -1e-12 of that),
+also for a singular F; both are computed here from the learner's own output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import solutions.ch07_dynamics as ref
+from grader.checks.base import chapter_checks
+from grader.checks.derivatives import Derivative, add_derivative_checks, angle, time_step, vector_form
+from grader.compare import Entries, all_of, expect, fail, fmt, passed, value_problem
+from grader.runner import Array, call
+
+CHECKS = chapter_checks("ch07")
+
+STATE = ("x", "y", "theta")
+NEW_STATE = ("x'", "y'", "theta'")
+S = Entries("state'", rows=NEW_STATE)
+F = Entries("F", rows=NEW_STATE, cols=STATE, derivative=True)
+RTOL, ATOL = 1e-9, 1e-12
+SYMMETRY = 1e-12
+TRANSPOSE_GAP = 0.1
+
+
+def _cov_entries(n: int) -> Entries:
+    names = STATE if n == 3 else tuple(f"s{i}" for i in range(n))
+    return Entries("P'", rows=names, cols=names)
+
+
+def _state(rng: np.random.Generator) -> np.ndarray:
+    return np.array([rng.uniform(-5, 5), rng.uniform(-5, 5), angle(rng)])
+
+
+def _controls(rng: np.random.Generator) -> tuple[float, float, float]:
+    """(v, omega, dt): |v| in [0.5, 3], |omega| in [0.2, 1.5], dt in [0.05, 0.5] (never 1)."""
+    v = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 3.0))
+    omega = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.2, 1.5))
+    return v, omega, time_step(rng)
+
+
+def _mat(m) -> str:
+    """A matrix on one line: [[1, 2], [3, 4]]."""
+    return "[" + ", ".join("[" + ", ".join(fmt(v) for v in row) + "]" for row in np.atleast_2d(np.asarray(m, dtype=float))) + "]"
+
+
+def _show(values) -> str:
+    return "(" + ", ".join(fmt(v) for v in np.asarray(values, dtype=float).ravel()) + ")"
+
+
+# ------------------------------------------------------------------------------ motion_model
+
+@CHECKS.check("motion_model", points=1)
+def motion_model_worked_example(ctx):
+    """motion_model((0, 0, pi/6), v=2, omega=0.5, dt=0.1) is (0.1732, 0.1, 0.5736)"""
+    got = yield call("motion_model", (0, 0, np.pi / 6), 2.0, 0.5, 0.1)
+    return expect(got, ref.motion_model((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1),
+                  label="motion_model((0, 0, pi/6), 2, 0.5, 0.1)", rtol=RTOL, atol=ATOL, entries=S)
+
+
+@CHECKS.check("motion_model", points=2)
+def motion_model_random_inputs(ctx):
+    """motion_model at random states, speeds, turn rates and time steps (dt != 1; tuples, lists, arrays)"""
+    rng = ctx.rng
+    cases = [(_state(rng), *_controls(rng), form) for form in ("tuple", "list", "array", "list", "tuple", "array")]
+    cases.append((np.array([2.0, -1.0, 1.0]), -1.5, 0.7, 0.25, "int array"))
+    got = yield [call("motion_model", vector_form(s, form), v, w, dt) for s, v, w, dt, form in cases]
+    return all_of([expect(g, ref.motion_model(s, v, w, dt), rtol=RTOL, atol=ATOL, entries=S,
+                          label=f"motion_model({_show(s)}, v={fmt(v)}, omega={fmt(w)}, dt={fmt(dt)})")
+                   for g, (s, v, w, dt, form) in zip(got, cases)])
+
+
+# ------------------------------------------------------------------------------ F_jacobian
+
+@CHECKS.check("F_jacobian", points=2)
+def F_worked_example(ctx):
+    """F at state (0, 0, pi/6), v=2, dt=0.1: F[0,2] = -v sin(th) dt = -0.1, F[1,2] = v cos(th) dt = 0.1732"""
+    got = yield call("F_jacobian", (0, 0, np.pi / 6), 2.0, 0.5, 0.1)
+    expected = [[1.0, 0.0, -0.1], [0.0, 1.0, 0.2 * np.cos(np.pi / 6)], [0.0, 0.0, 1.0]]
+    return expect(got, expected, label="F_jacobian((0, 0, pi/6), v=2, omega=0.5, dt=0.1)",
+                  rtol=RTOL, atol=ATOL, entries=F)
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="motion_model", jacobian="F_jacobian", entries=F,
+    args=lambda p, extra: (tuple(float(v) for v in p), *extra),
+    reference_forward=lambda p, extra: ref.motion_model(p, *extra),
+    reference_jacobian=lambda p, extra: ref.F_jacobian(p, *extra),
+    cases=lambda rng: [(_state(rng), _controls(rng)) for _ in range(6)],
+))
+
+
+@CHECKS.check("F_jacobian", points=1)
+def F_integer_and_array_states(ctx):
+    """F_jacobian takes the state as a list, a numpy array or an integer array: F_jacobian([1, -2, 2], -1.5, 0.3, 0.2)"""
+    state = [1, -2, 2]
+    got = yield [call("F_jacobian", state, -1.5, 0.3, 0.2), call("F_jacobian", Array(state, "int64"), -1.5, 0.3, 0.2),
+                 call("F_jacobian", Array([1.0, -2.0, 2.0]), -1.5, 0.3, 0.2)]
+    expected = ref.F_jacobian(np.array(state, dtype=float), -1.5, 0.3, 0.2)
+    forms = ("a list of ints", "an int64 array", "a float array")
+    return all_of([expect(g, expected, label=f"F_jacobian([1, -2, 2] as {form}, -1.5, 0.3, 0.2)",
+                          rtol=RTOL, atol=ATOL, entries=F) for g, form in zip(got, forms)])
+
+
+# ------------------------------------------------------------------------------ propagate_covariance
+
+def spd(rng: np.random.Generator, n: int, scale: float = 1.0) -> np.ndarray:
+    """A symmetric positive definite n x n matrix with clearly nonzero off-diagonal entries."""
+    a = rng.uniform(-1, 1, (n, n))
+    return scale * (a @ a.T + 0.2 * np.eye(n))
+
+
+def _transpose_sensitive_F(rng: np.random.Generator, P: np.ndarray, singular: bool = False) -> np.ndarray:
+    """A non-symmetric F with F P F^T and F^T P F at least TRANSPOSE_GAP (relative) apart."""
+    n = P.shape[0]
+    while True:
+        f = rng.uniform(-2, 2, (n, n))
+        if singular:
+            f[-1] = rng.uniform(-1, 1) * f[0] + rng.uniform(-1, 1) * f[1]
+        right, wrong = f @ P @ f.T, f.T @ P @ f
+        if np.max(np.abs(right - wrong)) >= TRANSPOSE_GAP * np.max(np.abs(right)):
+            return f
+
+
+def _label(P, F, Q=None, how: str = "") -> str:
+    n = np.asarray(P).shape[0]
+    text = f"propagate_covariance(P, F{how}) with {n}x{n} P = {_mat(P)}, F = {_mat(F)}"
+    return text + ("" if Q is None else f", Q = {_mat(Q)}")
+
+
+def _matrix(values: np.ndarray, form: str):
+    return values.tolist() if form == "list" else Array(values.tolist())
+
+
+@CHECKS.check("propagate_covariance", points=2)
+def propagate_worked_example(ctx):
+    """propagate_covariance(diag(0.04, 0.04, 0.01), F of the worked example) = [[0.0401, -0.000173, -0.001], ...]"""
+    P = np.diag([0.04, 0.04, 0.01])
+    Fm = ref.F_jacobian((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
+    got = yield [call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist())),
+                 call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist()), None)]
+    expected = Fm @ P @ Fm.T  # [[0.0401, -0.000173, -0.001], [-0.000173, 0.0403, 0.001732], [-0.001, 0.001732, 0.01]]
+    return all_of([expect(g, expected, label=f"propagate_covariance(diag(0.04, 0.04, 0.01), F{how})",
+                          rtol=RTOL, atol=ATOL, entries=_cov_entries(3))
+                   for g, how in zip(got, ("", ", None"))])
+
+
+@CHECKS.check("propagate_covariance", points=2)
+def propagate_random_matrices(ctx):
+    """propagate_covariance = F P F^T (+ Q) for random non-symmetric F and SPD non-diagonal P, Q (n = 2, 3, 4)"""
+    rng = ctx.rng
+    cases = []
+    for n, with_q, form in ((3, False, "array"), (3, True, "list"), (2, True, "array"), (4, False, "list"),
+                            (3, True, "array"), (2, False, "array")):
+        P = spd(rng, n, rng.uniform(0.05, 2.0))
+        cases.append((P, _transpose_sensitive_F(rng, P), spd(rng, n, 0.1) if with_q else None, form))
+    state, controls = _state(rng), _controls(rng)
+    P = spd(rng, 3, 0.1)
+    cases.append((P, ref.F_jacobian(state, *controls), spd(rng, 3, 0.01), "array"))  # the motion model's own F
+    got = yield [call("propagate_covariance", _matrix(P, form), _matrix(Fm, form),
+                      *(() if Q is None else (_matrix(Q, form),))) for P, Fm, Q, form in cases]
+    return all_of([expect(g, ref.propagate_covariance(P, Fm, Q), label=_label(P, Fm, Q), rtol=RTOL, atol=ATOL,
+                          entries=_cov_entries(P.shape[0])) for g, (P, Fm, Q, form) in zip(got, cases)])
+
+
+@CHECKS.check("propagate_covariance", points=1)
+def propagate_adds_q_only_when_given(ctx):
+    """propagate_covariance(P, F) and (P, F, None) give F P F^T; (P, F, Q) and (P, F, Q=Q) add Q"""
+    rng = ctx.rng
+    P = spd(rng, 3, 0.5)
+    Fm = _transpose_sensitive_F(rng, P)
+    Q = spd(rng, 3, 0.2)
+    a, f, q = Array(P.tolist()), Array(Fm.tolist()), Array(Q.tolist())
+    got = yield [call("propagate_covariance", a, f), call("propagate_covariance", a, f, None),
+                 call("propagate_covariance", a, f, Q=None), call("propagate_covariance", a, f, q),
+                 call("propagate_covariance", a, f, Q=q)]
+    plain, noisy = Fm @ P @ Fm.T, Fm @ P @ Fm.T + Q
+    hows = ("", ", None", ", Q=None", ", Q", ", Q=Q")
+    return all_of([expect(g, want, label=_label(P, Fm, Q if i >= 3 else None, how),
+                          rtol=RTOL, atol=ATOL, entries=_cov_entries(3))
+                   for i, (g, want, how) in enumerate(zip(got, (plain, plain, plain, noisy, noisy), hows))])
+
+
+@CHECKS.check("propagate_covariance", points=1)
+def propagate_result_is_symmetric_psd(ctx):
+    """F P F^T is symmetric positive semi-definite, also when F is singular (checked on your output)"""
+    rng = ctx.rng
+    cases = []
+    for n, singular in ((3, False), (3, True), (2, False), (4, True), (3, False)):
+        P = spd(rng, n, rng.uniform(0.1, 2.0))
+        cases.append((P, _transpose_sensitive_F(rng, P, singular)))
+    got = yield [call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist())) for P, Fm in cases]
+    for g, (P, Fm) in zip(got, cases):
+        label = _label(P, Fm)
+        problem = value_problem(g, P.shape, label)
+        if problem:
+            return fail(problem)
+        out = g.as_array()
+        if not np.all(np.isfinite(out)):
+            return fail(f"{label} is not finite: {_mat(out)}.", got=out)
+        size = float(np.max(np.abs(out))) or 1.0
+        asymmetry = float(np.max(np.abs(out - out.T)))
+        if asymmetry > SYMMETRY * size:
+            i, j = np.unravel_index(int(np.argmax(np.abs(out - out.T))), out.shape)
+            return fail(f"{label} is not symmetric: P'[{i},{j}] = {fmt(out[i, j])} but P'[{j},{i}] = {fmt(out[j, i])} "
+                        f"(F P F^T is always symmetric).", got=out)
+        lowest = float(np.linalg.eigvalsh(0.5 * (out + out.T)).min())
+        if lowest < -SYMMETRY * size:
+            return fail(f"{label} has a negative eigenvalue {fmt(lowest)}: F P F^T must be positive semi-definite.",
+                        got=out)
+    return passed()

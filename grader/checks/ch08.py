@@ -1,0 +1,422 @@
+"""Chapter 8: the linearization lab (Monte Carlo cloud vs linearized ellipse) and one EKF update.
+
+Sampling functions are graded statistically and for reproducibility, never against the
+reference's particular draws (a learner may draw N(mean, sigma^2 I) any correct way):
+- sample_positions: over n = 20000 draws the sample mean of each coordinate must be within
+  5 standard errors sigma/sqrt(n) of the mean, each sample variance within 5 sigma^2 sqrt(2/(n-1))
+  of sigma^2, the covariance within 5 sigma^2/sqrt(n) of 0 (sigma is never near 1, so sigma^2 for
+  sigma shows; the same noise on both coordinates shows as covariance sigma^2). Two Rng(seed) calls
+  with the same seed must give identical arrays, another seed a different one.
+- linearization_mismatch: the contract's properties (< 0.1 at (3, 4) and > 0.4 at (0.3, 0.2) with
+  sigma 0.8, n = 5000: the reference's values over 300 seeds lie in 0.0015..0.065 and 0.52..0.57),
+  the same seed twice gives the same value, and at further points (one whose cloud straddles
+  +-pi, so bearings must be unwrapped) the value must lie within 6 standard deviations of the
+  mean of the statistic, both estimated here from 120 simulated clouds of the same n.
+Closed forms (measure_samples, linearized_measurement_cov, sample_covariance, ekf_update) are
+compared with the reference formula: rtol 1e-9 (ekf_update's P_new 1e-8, as the standard and
+Joseph forms differ by rounding). sample_covariance gets n as small as 2 and 5, so dividing by n
+instead of n - 1 is off by 20% or more. ekf_update's P_new must be symmetric (to 1e-9 of its
+largest entry) and P - P_new positive semi-definite (eigenvalues >= -1e-12 of max |P|), both
+computed here from the learner's output.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import solutions.ch06_measurement as ch06
+import solutions.ch08_lab as ref
+from grader.checks.base import chapter_checks
+from grader.checks.derivatives import planar_point, vector_form
+from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, passed, value_problem
+from grader.runner import Array, Rng, call
+
+CHECKS = chapter_checks("ch08")
+
+RTOL, ATOL = 1e-9, 1e-12
+STANDARD_ERRORS = 5.0
+SPREAD = 6.0
+SIMULATED_CLOUDS = 120
+SYMMETRY = 1e-9
+MEAS = ("range", "bearing")
+S_LIN = Entries("S_lin", rows=MEAS, cols=MEAS)
+S_COV = Entries("S", rows=("column 0", "column 1"), cols=("column 0", "column 1"))
+X_NEW = Entries("x_new", rows=("x", "y"))
+P_NEW = Entries("P_new", rows=("x", "y"), cols=("x", "y"))
+
+
+def _mat(m) -> str:
+    """A matrix on one line: [[1, 2], [3, 4]]."""
+    return "[" + ", ".join("[" + ", ".join(fmt(v) for v in row) + "]" for row in np.atleast_2d(np.asarray(m, dtype=float))) + "]"
+
+
+def _show(values) -> str:
+    return "(" + ", ".join(fmt(v) for v in np.asarray(values, dtype=float).ravel()) + ")"
+
+
+def _sigma(rng: np.random.Generator) -> float:
+    """A standard deviation never near 1, so that sigma and sigma^2 differ clearly."""
+    return float(rng.choice([rng.uniform(0.3, 0.7), rng.uniform(1.4, 2.0)]))
+
+
+def _seeds(rng: np.random.Generator, k: int) -> list[int]:
+    return [int(s) for s in rng.choice(2**31, size=k, replace=False)]
+
+
+def _measure_entries(n: int) -> Entries:
+    return Entries("z", rows=tuple(f"sample {i}" for i in range(n)), cols=MEAS)
+
+
+# ------------------------------------------------------------------------------ sample_positions
+
+@CHECKS.check("sample_positions", points=1)
+def sample_positions_shape_and_reproducible(ctx):
+    """sample_positions returns n x 2 draws from the rng it is given: the same seed gives the same array"""
+    rng = ctx.rng
+    mean, sigma, n = planar_point(rng), _sigma(rng), int(rng.integers(20, 60))
+    seed, other = _seeds(rng, 2)
+    args = (tuple(float(v) for v in mean), sigma, n)
+    got = yield [call("sample_positions", *args, Rng(s)) for s in (seed, seed, other)]
+    label = f"sample_positions({_show(mean)}, {fmt(sigma)}, {n}, np.random.default_rng({{}}))"
+    for g, s in zip(got, (seed, seed, other)):
+        problem = value_problem(g, (n, 2), label.format(s))
+        if problem:
+            return fail(problem)
+    first, again, different = (g.as_array() for g in got)
+    if not np.array_equal(first, again):
+        return fail(f"{label.format(seed)} gave different samples in two calls with generators of the same seed: "
+                    "draw them from the rng argument (e.g. rng.standard_normal), not from np.random or a new generator.")
+    if np.array_equal(first, different):
+        return fail(f"{label.format(seed)} and {label.format(other)} gave the same samples: draw them from the rng "
+                    "argument, not from a generator you create yourself.")
+    return passed()
+
+
+@CHECKS.check("sample_positions", points=1)
+def sample_positions_statistics(ctx):
+    """sample_positions draws have mean `mean` and covariance sigma^2 I (n = 20000, within 5 standard errors)"""
+    rng = ctx.rng
+    n = 20000
+    cases = [(planar_point(rng, 1.0, 6.0), _sigma(rng), seed, form)
+             for seed, form in zip(_seeds(rng, 3), ("tuple", "list", "array"))]
+    got = yield [call("sample_positions", vector_form(m, form), s, n, Rng(seed)) for m, s, seed, form in cases]
+    verdicts = []
+    for g, (mean, sigma, seed, form) in zip(got, cases):
+        label = f"sample_positions({_show(mean)}, {fmt(sigma)}, {n}, np.random.default_rng({seed}))"
+        problem = value_problem(g, (n, 2), label)
+        if problem:
+            return fail(problem)
+        samples = g.as_array()
+        cov = np.cov(samples.T)
+        var = sigma * sigma
+        tests = [("mean x", samples[:, 0].mean(), mean[0], sigma / np.sqrt(n)),
+                 ("mean y", samples[:, 1].mean(), mean[1], sigma / np.sqrt(n)),
+                 ("variance of x", cov[0, 0], var, var * np.sqrt(2 / (n - 1))),
+                 ("variance of y", cov[1, 1], var, var * np.sqrt(2 / (n - 1))),
+                 ("covariance of x and y", cov[0, 1], 0.0, var / np.sqrt(n))]
+        for what, value, want, error in tests:
+            verdicts.append(compare_arrays(value, want, label=f"{label}: sample {what} (sigma^2 = {fmt(var)}; statistical, "
+                                                              f"{STANDARD_ERRORS:g} standard errors)",
+                                           rtol=0.0, atol=float(STANDARD_ERRORS * error)))
+    return all_of(verdicts)
+
+
+# ------------------------------------------------------------------------------ measure_samples
+
+def _cloud(rng: np.random.Generator, center, sigma: float, n: int) -> np.ndarray:
+    return np.asarray(center, dtype=float) + sigma * rng.standard_normal((n, 2))
+
+
+def _measure_verdict(returned, samples: np.ndarray, ref_bearing: float, label: str):
+    expected = ref.measure_samples(samples, ref_bearing)
+    verdict = expect(returned, expected, label=label, rtol=RTOL, atol=ATOL, entries=_measure_entries(len(samples)))
+    if not verdict.passed and returned.as_array() is not None and returned.as_array().shape == expected.shape:
+        got = returned.as_array()
+        raw = np.arctan2(samples[:, 1], samples[:, 0])
+        if np.allclose(got[:, 1], raw, rtol=RTOL, atol=1e-9) and not np.allclose(raw, expected[:, 1]):
+            verdict.message += ("\n  (these are the raw atan2 bearings: move each by whole turns, "
+                                "b + 2 pi round((ref_bearing - b) / 2 pi), to lie within pi of ref_bearing)")
+    return verdict
+
+
+@CHECKS.check("measure_samples", points=1)
+def measure_samples_worked_example(ctx):
+    """measure_samples([[3, 4], [-1, -0.01]], 3.1) is [[5, 0.9273], [1.00005, 3.1516]]"""
+    samples = np.array([[3.0, 4.0], [-1.0, -0.01]])
+    got = yield call("measure_samples", [[3, 4], [-1, -0.01]], 3.1)
+    return _measure_verdict(got, samples, 3.1, "measure_samples([[3, 4], [-1, -0.01]], 3.1)")
+
+
+@CHECKS.check("measure_samples", points=2)
+def measure_samples_unwraps_around_ref_bearing(ctx):
+    """measure_samples keeps a cloud in one piece around ref_bearing: clouds straddling +-pi, ref_bearing off by 2 pi"""
+    rng = ctx.rng
+    cases = []
+    for i in range(2):  # ordinary clouds, ref_bearing the bearing of their centre
+        center = planar_point(rng, 2.0, 5.0)
+        cases.append((_cloud(rng, center, 0.4, 12), float(np.arctan2(center[1], center[0])), "ordinary cloud"))
+    for side in (1.0, -1.0):  # clouds around the negative x axis, ref_bearing near +pi or -pi
+        center = np.array([-rng.uniform(2.0, 4.0), side * rng.uniform(0.05, 0.2)])
+        cloud = _cloud(rng, center, 0.5, 16)
+        cloud[0, 1], cloud[1, 1] = abs(cloud[0, 1]) + 0.05, -abs(cloud[1, 1]) - 0.05  # both sides of the axis
+        cases.append((cloud, float(np.arctan2(center[1], center[0])), "cloud straddling +-pi"))
+    center = planar_point(rng, 2.0, 5.0)  # ref_bearing a whole turn away: bearings move by 2 pi
+    cases.append((_cloud(rng, center, 0.3, 10), float(np.arctan2(center[1], center[0]) + rng.choice([-2, 2]) * np.pi),
+                  "ref_bearing one turn away"))
+    got = yield [call("measure_samples", Array(s.tolist()) if i % 2 == 0 else s.tolist(), b)
+                 for i, (s, b, _) in enumerate(cases)]
+    return all_of([_measure_verdict(g, s, b, f"measure_samples({len(s)} samples around {_show(s.mean(axis=0))}, "
+                                             f"ref_bearing={fmt(b)}) ({what})")
+                   for g, (s, b, what) in zip(got, cases)])
+
+
+# ------------------------------------------------------------------------------ linearized_measurement_cov
+
+@CHECKS.check("linearized_measurement_cov", points=1)
+def linearized_cov_worked_example(ctx):
+    """linearized_measurement_cov(3, 4, sigma=0.8) is diag(0.64, 0.0256)"""
+    got = yield call("linearized_measurement_cov", 3, 4, 0.8)
+    return expect(got, np.diag([0.64, 0.0256]), label="linearized_measurement_cov(3, 4, 0.8)", rtol=RTOL, atol=ATOL,
+                  entries=S_LIN)
+
+
+@CHECKS.check("linearized_measurement_cov", points=1)
+def linearized_cov_random_points(ctx):
+    """linearized_measurement_cov = H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2) at random points and sigmas"""
+    rng = ctx.rng
+    cases = [(float(x), float(y), _sigma(rng)) for x, y in (planar_point(rng) for _ in range(5))]
+    cases.append((-2, 5, 1.5))
+    got = yield [call("linearized_measurement_cov", x, y, s) for x, y, s in cases]
+    return all_of([expect(g, ref.linearized_measurement_cov(x, y, s), rtol=RTOL, atol=ATOL, entries=S_LIN,
+                          label=f"linearized_measurement_cov({fmt(x)}, {fmt(y)}, {fmt(s)})")
+                   for g, (x, y, s) in zip(got, cases)])
+
+
+# ------------------------------------------------------------------------------ sample_covariance
+
+@CHECKS.check("sample_covariance", points=2)
+def sample_covariance_matches_np_cov(ctx):
+    """sample_covariance equals np.cov(z.T): unbiased (divide by n - 1), for n = 2, 5, 7 and 300 correlated samples"""
+    rng = ctx.rng
+    cases = []
+    for n in (5, 2, 7, 300, 5):
+        mix = np.array([[1.0, 0.0], [rng.uniform(0.4, 0.9), rng.uniform(0.2, 0.5)]]) * rng.uniform(0.5, 3.0)
+        z = rng.uniform(-5, 5, 2) + rng.standard_normal((n, 2)) @ mix.T
+        cases.append(z)
+    got = yield [call("sample_covariance", Array(z.tolist()) if i != 2 else z.tolist()) for i, z in enumerate(cases)]
+    verdicts = []
+    for i, (g, z) in enumerate(zip(got, cases)):
+        label = f"sample_covariance({len(z)} x 2 {'list' if i == 2 else 'array'} z with mean {_show(z.mean(axis=0))})"
+        v = expect(g, np.cov(z.T), label=label, rtol=RTOL, atol=ATOL, entries=S_COV)
+        n = len(z)
+        if not v.passed and v.got is not None and np.shape(v.got) == (2, 2) and np.allclose(v.got, np.cov(z.T) * (n - 1) / n):
+            v.message += f"\n  (that is the biased covariance: divide by n - 1 = {n - 1}, not by n = {n})"
+        verdicts.append(v)
+    return all_of(verdicts)
+
+
+# ------------------------------------------------------------------------------ linearization_mismatch
+
+def mismatch_distribution(x: float, y: float, sigma: float, n: int, rng: np.random.Generator,
+                          clouds: int = SIMULATED_CLOUDS) -> tuple[float, float]:
+    """Mean and standard deviation of the mismatch statistic over simulated clouds of n samples."""
+    points = np.array([x, y]) + sigma * rng.standard_normal((clouds, n, 2))
+    bearings = np.arctan2(points[..., 1], points[..., 0])
+    ref_bearing = np.arctan2(y, x)
+    bearings = bearings + 2 * np.pi * np.round((ref_bearing - bearings) / (2 * np.pi))
+    z = np.stack([np.hypot(points[..., 0], points[..., 1]), bearings], axis=-1)
+    centred = z - z.mean(axis=1, keepdims=True)
+    s_mc = centred.transpose(0, 2, 1) @ centred / (n - 1)
+    s_lin = ref.linearized_measurement_cov(x, y, sigma)
+    values = np.linalg.norm(s_mc - s_lin, axis=(1, 2)) / np.linalg.norm(s_lin)
+    return float(values.mean()), float(values.std(ddof=1))
+
+
+@CHECKS.check("linearization_mismatch", points=2)
+def mismatch_far_small_near_large(ctx):
+    """linearization_mismatch with sigma 0.8, n 5000: < 0.1 at (3, 4) (the ellipse fits), > 0.4 at (0.3, 0.2) (it fails)"""
+    seeds = _seeds(ctx.rng, 4)
+    cases = [(3, 4, s, "<", 0.1) for s in seeds[:2]] + [(0.3, 0.2, s, ">", 0.4) for s in seeds[2:]]
+    got = yield [call("linearization_mismatch", x, y, 0.8, 5000, s) for x, y, s, _, _ in cases]
+    for g, (x, y, s, side, bound) in zip(got, cases):
+        label = f"linearization_mismatch({fmt(x)}, {fmt(y)}, 0.8, 5000, seed={s})"
+        problem = value_problem(g, (), label)
+        if problem:
+            return fail(problem)
+        value = float(g.as_array())
+        if not np.isfinite(value) or not (value < bound if side == "<" else value > bound):
+            why = ("far from the sensor the linearized ellipse should describe the cloud" if side == "<" else
+                   "this close to the sensor the bearing is too nonlinear for the ellipse")
+            return fail(f"{label} = {fmt(value)}; expected {side} {bound:g} ({why}).", got=value)
+    return passed()
+
+
+@CHECKS.check("linearization_mismatch", points=1)
+def mismatch_reproducible(ctx):
+    """linearization_mismatch draws from np.random.default_rng(seed): the same seed gives the same value, another seed another"""
+    seed, other = _seeds(ctx.rng, 2)
+    args = (2.0, -1.5, 0.6, 2000)
+    got = yield [call("linearization_mismatch", *args, s) for s in (seed, seed, other)]
+    label = "linearization_mismatch(2, -1.5, 0.6, 2000, seed={})"
+    for g, s in zip(got, (seed, seed, other)):
+        problem = value_problem(g, (), label.format(s))
+        if problem:
+            return fail(problem)
+    first, again, different = (float(g.as_array()) for g in got)
+    if first != again:
+        return fail(f"{label.format(seed)} gave {first!r}, then {again!r} with the same seed: draw the samples from "
+                    "np.random.default_rng(seed).", expected=first, got=again)
+    if first == different:
+        return fail(f"{label.format(seed)} and seed={other} both gave {first!r}: the seed must choose the samples.",
+                    got=different)
+    return passed()
+
+
+@CHECKS.check("linearization_mismatch", points=1)
+def mismatch_matches_simulation(ctx):
+    """linearization_mismatch is within 6 standard deviations of its simulated mean, also for a cloud straddling +-pi"""
+    rng = ctx.rng
+    cases = [(-float(rng.uniform(2.5, 3.5)), float(rng.choice([-1, 1]) * rng.uniform(0.1, 0.3)), 0.8, 5000),
+             (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 0.5, 6000),
+             (*(float(v) for v in planar_point(rng, 0.5, 0.8)), 0.8, 5000)]
+    seeds = _seeds(rng, len(cases))
+    got = yield [call("linearization_mismatch", x, y, s, n, seed) for (x, y, s, n), seed in zip(cases, seeds)]
+    verdicts = []
+    for g, (x, y, s, n), seed in zip(got, cases, seeds):
+        label = f"linearization_mismatch({fmt(x)}, {fmt(y)}, {fmt(s)}, {n}, seed={seed})"
+        problem = value_problem(g, (), label)
+        if problem:
+            return fail(problem)
+        mean, spread = mismatch_distribution(x, y, s, n, rng)
+        v = compare_arrays(g.as_array(), mean, label=f"{label} (statistical: the mean over {SIMULATED_CLOUDS} simulated "
+                                                     f"clouds +- {SPREAD:g} standard deviations {fmt(spread)})",
+                           rtol=0.0, atol=SPREAD * spread)
+        if not v.passed and np.hypot(x, y) > 2 and abs(np.arctan2(y, x)) > 2.5:
+            v.message += "\n  (this cloud straddles +-pi: are the bearings unwrapped around atan2(y, x)?)"
+        verdicts.append(v)
+    return all_of(verdicts)
+
+
+# ------------------------------------------------------------------------------ ekf_update
+
+def spd2(rng: np.random.Generator, scales: tuple[float, float], correlation: float) -> np.ndarray:
+    """A 2 x 2 covariance with standard deviations `scales` and the given correlation."""
+    d = np.diag(scales)
+    return d @ np.array([[1.0, correlation], [correlation, 1.0]]) @ d
+
+
+def _ekf_case(rng: np.random.Generator, x: np.ndarray, z_point: np.ndarray | None = None):
+    P = spd2(rng, tuple(rng.uniform(0.15, 0.6, 2)), float(rng.choice([-1, 1]) * rng.uniform(0.3, 0.7)))
+    R = spd2(rng, (float(rng.uniform(0.05, 0.2)), float(rng.uniform(0.01, 0.05))),
+             float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.5)))
+    if z_point is None:
+        z_point = x + rng.uniform(-0.4, 0.4, 2)
+    z = ch06.range_bearing(*z_point) + np.array([rng.normal(0, 0.05), rng.normal(0, 0.01)])
+    return x, P, z, R
+
+
+def _ekf_call(x, P, z, R, form: str = "array"):
+    if form == "list":
+        return call("ekf_update", [float(v) for v in x], P.tolist(), [float(v) for v in z], R.tolist())
+    return call("ekf_update", vector_form(x, "tuple" if form == "tuple" else "array"), Array(P.tolist()),
+                vector_form(z, "tuple" if form == "tuple" else "array"), Array(R.tolist()))
+
+
+def _ekf_label(x, P, z, R) -> str:
+    return f"ekf_update(x={_show(x)}, P={_mat(P)}, z={_show(z)}, R={_mat(R)})"
+
+
+def ekf_parts(returned, label: str):
+    """(x_new, P_new) as Returned values, or a failed Verdict saying why the result is not such a pair."""
+    if not returned.ok:
+        return fail(returned.problem())
+    items = returned.items()
+    if items is None or len(items) != 2:
+        what = returned.type_name if items is None else f"{returned.encoded['t']} of {len(items)} items"
+        return fail(f"{label} returned {what}; expected the tuple (x_new, P_new).")
+    return items
+
+
+def _ekf_verdict(returned, case, label: str):
+    parts = ekf_parts(returned, label)
+    if not isinstance(parts, list):
+        return parts
+    x_new, P_new = ref.ekf_update(*case)
+    scale = float(np.max(np.abs(case[1])))
+    x_verdict = expect(parts[0], x_new, label=f"x_new of {label}", rtol=RTOL, atol=ATOL, entries=X_NEW)
+    if not x_verdict.passed:
+        return x_verdict
+    return expect(parts[1], P_new, label=f"P_new of {label}", rtol=1e-8, atol=1e-12 * scale, entries=P_NEW)
+
+
+@CHECKS.check("ekf_update", points=2)
+def ekf_update_random_states(ctx):
+    """ekf_update (x_new, P_new) for the stub's example and random states, covariances and measurements"""
+    rng = ctx.rng
+    cases = [(np.array([3.0, 4.0]), 0.1 * np.eye(2), np.array([5.1, 0.93]), np.diag([0.01, 0.001]))]
+    cases += [_ekf_case(rng, planar_point(rng, 1.0, 4.5)) for _ in range(5)]
+    forms = ["list", "array", "tuple", "list", "array", "tuple"]
+    got = yield [_ekf_call(*case, form) for case, form in zip(cases, forms)]
+    return all_of([_ekf_verdict(g, case, _ekf_label(*case)) for g, case in zip(got, cases)])
+
+
+@CHECKS.check("ekf_update", points=1)
+def ekf_update_wraps_bearing_innovation(ctx):
+    """ekf_update wraps the bearing innovation to [-pi, pi): a state and a measurement on either side of +-pi"""
+    rng = ctx.rng
+    cases = []
+    for side in (1.0, -1.0, 1.0):
+        x = np.array([-rng.uniform(2.0, 4.0), side * rng.uniform(0.05, 0.2)])  # bearing near +pi or -pi
+        z_point = np.array([x[0] + rng.uniform(-0.2, 0.2), -side * rng.uniform(0.1, 0.3)])  # across the axis
+        case = _ekf_case(rng, x, z_point)
+        case[2][1] = np.arctan2(z_point[1], z_point[0])  # the bearing exactly as atan2 gives it: the other sign
+        cases.append(case)
+    got = yield [_ekf_call(*case) for case in cases]
+    verdicts = []
+    for g, case in zip(got, cases):
+        v = _ekf_verdict(g, case, _ekf_label(*case))
+        if not v.passed and "x_new" in v.message:
+            v.message += ("\n  (the predicted bearing and the measured one are on either side of +-pi: wrap the "
+                          "innovation z - h to [-pi, pi))")
+        verdicts.append(v)
+    return all_of(verdicts)
+
+
+@CHECKS.check("ekf_update", points=1)
+def ekf_update_shrinks_covariance(ctx):
+    """ekf_update's P_new is symmetric and no larger than P: P - P_new is positive semi-definite (checked on your output)"""
+    rng = ctx.rng
+    cases = [_ekf_case(rng, planar_point(rng, 1.0, 4.5)) for _ in range(5)]
+    got = yield [_ekf_call(*case) for case in cases]
+    for g, case in zip(got, cases):
+        label = _ekf_label(*case)
+        parts = ekf_parts(g, label)
+        if not isinstance(parts, list):
+            return parts
+        problem = value_problem(parts[1], (2, 2), f"P_new of {label}")
+        if problem:
+            return fail(problem)
+        P_new = parts[1].as_array()
+        P = case[1]
+        scale = float(np.max(np.abs(P)))
+        if not np.all(np.isfinite(P_new)):
+            return fail(f"P_new of {label} is not finite: {_mat(P_new)}.", got=P_new)
+        if abs(P_new[0, 1] - P_new[1, 0]) > SYMMETRY * max(float(np.max(np.abs(P_new))), 1e-300):
+            return fail(f"P_new of {label} is not symmetric: P_new[0,1] = {fmt(P_new[0, 1])}, P_new[1,0] = "
+                        f"{fmt(P_new[1, 0])}.", got=P_new)
+        lowest = float(np.linalg.eigvalsh(0.5 * ((P - P_new) + (P - P_new).T)).min())
+        if lowest < -1e-12 * scale:
+            return fail(f"P_new of {label} = {_mat(P_new)} is larger than P in some direction: P - P_new has the "
+                        f"eigenvalue {fmt(lowest)} < 0 (a measurement can only shrink the uncertainty).", got=P_new)
+        if float(np.linalg.eigvalsh(0.5 * (P_new + P_new.T)).min()) < -1e-12 * scale:
+            return fail(f"P_new of {label} = {_mat(P_new)} is not positive semi-definite.", got=P_new)
+    return passed()
+
+
+@CHECKS.check("ekf_update", points=1)
+def ekf_update_raises_at_origin(ctx):
+    """ekf_update at x = (0, 0) raises ValueError (H is undefined at r = 0)"""
+    got = yield call("ekf_update", Array([0.0, 0.0]), Array(np.eye(2).tolist()), Array([1.0, 0.5]),
+                     Array(np.diag([0.01, 0.001]).tolist()))
+    return expect_raises(got, "ValueError", label="ekf_update(x=(0, 0), I, (1, 0.5), diag(0.01, 0.001))",
+                         why="H is undefined at r = 0")
