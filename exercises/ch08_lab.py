@@ -64,7 +64,7 @@ def linearization_mismatch(x, y, sigma, n, seed):
     the linearized S_lin.
     Arguments: x, y the operating point; sigma; n; seed an int.
     Returns: a float.
-    Example: sigma 0.8, n 5000: about 0.04 at (3, 4) (< 0.1), about 0.5 at (0.3, 0.2) (> 0.4)
+    Example: sigma 0.8, n 5000: about 0.02 at (3, 4) (always < 0.1), about 0.55 at (0.3, 0.2) (> 0.4)
     """
     raise NotImplementedError
 
