@@ -98,10 +98,10 @@ def test_hessian_tolerance_covers_the_reference_and_not_a_forward_outer_differen
 
 def test_mismatch_simulation_matches_the_reference_over_seeds():
     for x, y, sigma, n in [(-3.0, 0.2, 0.8, 5000), (0.5, 0.3, 0.8, 5000)]:
-        mean, spread = ch08.mismatch_distribution(x, y, sigma, n, np.random.default_rng(0))
+        mean, spread = ch08.mismatch_distribution(x, y, sigma, n)
         values = np.array([ch08_ref.linearization_mismatch(x, y, sigma, n, seed) for seed in range(40)])
         assert abs(values.mean() - mean) < 4 * spread / np.sqrt(40) + 0.1 * spread
-        assert 0.7 < values.std() / spread < 1.4
+        assert 0.6 < values.std() / spread < 1.6
         assert np.all(np.abs(values - mean) < ch08.SPREAD * spread)
 
 
