@@ -2,7 +2,7 @@
 
 Sampling functions are graded statistically and for reproducibility, never against the
 reference's particular draws (a learner may draw N(mean, sigma^2 I) any correct way):
-- sample_positions: over n = 20000 draws the sample mean of each coordinate must be within
+- sample_positions: over n = 4000 draws the sample mean of each coordinate must be within
   5 standard errors sigma/sqrt(n) of the mean, each sample variance within 5 sigma^2 sqrt(2/(n-1))
   of sigma^2, the covariance within 5 sigma^2/sqrt(n) of 0 (sigma is never near 1, so sigma^2 for
   sigma shows; the same noise on both coordinates shows as covariance sigma^2). Two Rng(seed) calls
@@ -96,9 +96,9 @@ def sample_positions_shape_and_reproducible(ctx):
 
 @CHECKS.check("sample_positions", points=1)
 def sample_positions_statistics(ctx):
-    """sample_positions draws have mean `mean` and covariance sigma^2 I (n = 20000, within 5 standard errors)"""
+    """sample_positions draws have mean `mean` and covariance sigma^2 I (n = 4000, within 5 standard errors)"""
     rng = ctx.rng
-    n = 20000
+    n = 4000
     cases = [(planar_point(rng, 1.0, 6.0), _sigma(rng), seed, form)
              for seed, form in zip(_seeds(rng, 3), ("tuple", "list", "array"))]
     got = yield [call("sample_positions", vector_form(m, form), s, n, Rng(seed)) for m, s, seed, form in cases]
