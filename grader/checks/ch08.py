@@ -11,7 +11,7 @@ reference's particular draws (a learner may draw N(mean, sigma^2 I) any correct 
   sigma 0.8, n = 5000: the reference's values over 300 seeds lie in 0.0015..0.065 and 0.52..0.57),
   the same seed twice gives the same value, and at further points (one whose cloud straddles
   +-pi, so bearings must be unwrapped) the value must lie within 6 standard deviations of the
-  mean of the statistic, both estimated here from 40 simulated clouds of the same n (cached).
+  mean of the statistic, both estimated here from 20 simulated clouds of the same n (cached).
 Closed forms (measure_samples, linearized_measurement_cov, sample_covariance, ekf_update) are
 compared with the reference formula: rtol 1e-9 (ekf_update's P_new 1e-8, as the standard and
 Joseph forms differ by rounding). sample_covariance gets n as small as 2 and 5, so dividing by n
@@ -38,7 +38,7 @@ CHECKS = chapter_checks("ch08")
 RTOL, ATOL = 1e-9, 1e-12
 STANDARD_ERRORS = 5.0
 SPREAD = 6.0
-SIMULATED_CLOUDS = 40
+SIMULATED_CLOUDS = 20
 SYMMETRY = 1e-9
 MEAS = ("range", "bearing")
 S_LIN = Entries("S_lin", rows=MEAS, cols=MEAS)
