@@ -1,24 +1,25 @@
 """Entry point of `grade`: starts the grading child before the heavier imports (click, numpy).
 
-The child's own startup (interpreter, numpy) then overlaps ours, which roughly halves the
-latency of `grade ch06`. If the guess at the submission turns out wrong, the CLI discards it.
+The child's own startup (interpreter, numpy) then overlaps ours instead of following it. If the guess at the submission turns out wrong, the CLI discards it.
 """
 
 from __future__ import annotations
 
+import os
 import sys
 
-from grader.runner import Session, Submission
+from grader.submission import Submission
 
 _OTHER_COMMANDS = {"list", "quiz", "batch", "--help", "-h", "--version"}
-_prestarted: Session | None = None
+_prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned)
 
 
-def _guess(args: list[str]) -> Session | None:
+def _guess(args: list[str]) -> tuple | None:
     if not args or args[0] in _OTHER_COMMANDS or any(a in ("--help", "-h") for a in args):
         return None
     if args[0] == "run":
         args = args[1:]
+    from grader.spawn import start_child
     from grader.submission import SubmissionNotFound, locate
 
     directory = None
@@ -28,18 +29,22 @@ def _guess(args: list[str]) -> Session | None:
         elif arg.startswith("--submission="):
             directory = arg.split("=", 1)[1]
     try:
-        return Session(locate(directory, "--solutions" in args))
+        submission = locate(directory, "--solutions" in args)
+        return submission, start_child(submission)
     except (SubmissionNotFound, OSError):
         return None
 
 
-def take(submission: Submission) -> Session | None:
-    """The prestarted session if it serves `submission`; otherwise it is stopped and None returned."""
+def take(submission: Submission, **session_options) -> "Session | None":
+    """A Session around the prestarted child if it serves `submission`; otherwise None."""
     global _prestarted
-    session, _prestarted = _prestarted, None
-    if session is None:
+    prestarted, _prestarted = _prestarted, None
+    if prestarted is None:
         return None
-    if session.submission == submission:
+    from grader.runner import Session
+
+    session = Session(prestarted[0], started=prestarted[1], **session_options)
+    if prestarted[0] == submission and not session_options.get("wrap"):
         return session
     session.close()
     return None
@@ -50,8 +55,18 @@ def main() -> None:
     _prestarted = _guess(sys.argv[1:])
     from grader.cli import main as cli_main
 
+    code: int | str | None = 0
     try:
         cli_main()
+    except SystemExit as exc:
+        code = exc.code
     finally:
-        if _prestarted is not None:
-            _prestarted.close()
+        take(Submission(None))  # stops a prestarted child nobody took
+    # Leave without the interpreter's teardown of every imported module (numpy's is slow):
+    # everything is written and every child is stopped by now.
+    if isinstance(code, str):
+        print(code, file=sys.stderr)
+        code = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code or 0)

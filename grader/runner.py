@@ -16,15 +16,12 @@ import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable
 
 from grader.returned import CRASHED, NOT_RUN, TIMEOUT, Returned, from_event
+from grader.spawn import CommandWrapper, start_child
+from grader.submission import Submission
 
-GRADER_PARENT = str(Path(__file__).resolve().parents[1])
-# The child runs without site (-S, faster start) on the parent's own import path, grader last.
-_BOOT = "import sys; sys.path[:] = {!r}; from grader.child import main; main()"
-_capture_count = 0
 _CAPTURE_LIMIT = 64 * 1024
 
 
@@ -132,59 +129,12 @@ class Limits:
                 "file_size": self.file_size, "open_files": self.open_files, "core": 0}
 
 
-@dataclass(frozen=True)
-class Submission:
-    """Where the learner's chapter files are: `root/package/chNN_*.py`."""
-
-    root: Path
-    package: str = "exercises"
-
-    def module_file(self, module: str) -> Path:
-        return self.root / self.package / f"{module}.py"
-
-
-# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox.
-CommandWrapper = Callable[[list[str], Submission], list[str]]
-
-
-def child_path() -> list[str]:
-    """The child's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
-    paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]
-    return [*paths, GRADER_PARENT]
-
-
-def _temp_dir() -> str:
-    for name in ("TMPDIR", "TEMP", "TMP"):
-        if os.path.isdir(os.environ.get(name, "")):
-            return os.environ[name]
-    return "/tmp"
-
-
-def child_environment() -> dict:
-    env = {k: os.environ[k] for k in ("PATH", "LANG", "LC_ALL", "SYSTEMROOT") if k in os.environ}
-    env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
-               PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1")
-    return env
-
-
 class _Child:
     """One running child process and its result pipe."""
 
-    def __init__(self, submission: Submission, wrap: CommandWrapper | None) -> None:
-        global _capture_count
-        _capture_count += 1
-        read_fd, write_fd = os.pipe()
-        self.capture = os.path.join(_temp_dir(), f"grade-output-{os.getpid()}-{_capture_count}.txt")
-        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd)]
-        if wrap is not None:
-            command = wrap(command, submission)
-        self.process = subprocess.Popen(
-            command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            pass_fds=(write_fd,), start_new_session=True, env=child_environment(),
-            cwd=str(submission.root),
-        )
-        os.close(write_fd)
-        self.read_fd = read_fd
+    def __init__(self, submission: Submission, wrap: CommandWrapper | None,
+                 started: tuple | None = None) -> None:
+        self.process, self.read_fd, self.capture = started or start_child(submission, wrap)
         self.buffer = b""
 
     def send(self, request: dict) -> None:
@@ -248,12 +198,13 @@ class Session:
     """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
 
     def __init__(self, submission: Submission, limits: Limits = Limits(),
-                 wrap: CommandWrapper | None = None) -> None:
+                 wrap: CommandWrapper | None = None, started: tuple | None = None) -> None:
+        """Start the child now, or adopt one grader.spawn.start_child already started (`started`)."""
         self.submission = submission
         self.limits = limits
         self.wrap = wrap
         self.output = ""
-        self._child: _Child | None = _Child(submission, wrap)
+        self._child: _Child | None = _Child(submission, wrap, started)
 
     def close(self) -> None:
         if self._child is not None:

@@ -4,8 +4,17 @@ from __future__ import annotations
 
 import importlib.util
 from pathlib import Path
+from typing import NamedTuple
 
-from grader.runner import Submission
+
+class Submission(NamedTuple):
+    """Where the learner's chapter files are: `root/package/chNN_*.py`."""
+
+    root: Path
+    package: str = "exercises"
+
+    def module_file(self, module: str) -> Path:
+        return self.root / self.package / f"{module}.py"
 
 
 class SubmissionNotFound(LookupError):
