@@ -12,13 +12,11 @@ A check raises `Skip("why")` when something it depends on failed.
 
 from __future__ import annotations
 
-import zlib
 from dataclasses import dataclass, field
 from typing import Callable, Generator
 
-import numpy as np
-
 from grader.chapters import BY_ID, ChapterInfo
+from grader.checks.draws import Draws
 
 
 class Skip(Exception):
@@ -34,8 +32,9 @@ class Context:
     check_id: str
 
     @property
-    def rng(self) -> np.random.Generator:
-        return np.random.default_rng([self.seed, zlib.crc32(f"{self.chapter}/{self.check_id}".encode())])
+    def rng(self) -> Draws:
+        """A fresh generator for this check, the same for the same seed, chapter and check."""
+        return Draws(f"{self.seed}/{self.chapter}/{self.check_id}")
 
 
 CheckBody = Callable[[Context], Generator]
