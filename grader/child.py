@@ -17,7 +17,6 @@ import json
 import os
 import signal
 import sys
-import traceback
 
 import numpy as np
 
@@ -69,6 +68,8 @@ def encode(value: object, depth: int = 0) -> dict:
 
 def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None]:
     """The traceback trimmed to frames in the submission's files, and the innermost such line."""
+    import traceback
+
     frames = [f for f in traceback.extract_tb(exc.__traceback__) if f.filename.startswith(root)]
     lines = []
     for frame in frames:

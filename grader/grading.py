@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import traceback
 from dataclasses import dataclass
 from typing import Generator
 
@@ -25,6 +24,13 @@ class _Pending:
     wanted: object  # the yielded structure of Calls
     slots: list[int]  # indices into the chapter's call list, in flattening order
     setup_error: str = ""
+
+
+def _trace() -> str:
+    """The current exception's last frames (for a grader bug: where in the grader it broke)."""
+    import traceback
+
+    return traceback.format_exc(limit=-3)
 
 
 def _flatten(structure: object, out: list[Call]) -> None:
@@ -58,7 +64,7 @@ def _start(name: str, body, ctx: Context, calls: list[Call]) -> _Pending:
         flat: list[Call] = []
         _flatten(wanted, flat)
     except Exception:
-        return _Pending(name, None, None, [], setup_error=traceback.format_exc(limit=-3))
+        return _Pending(name, None, None, [], setup_error=_trace())
     start = len(calls)
     calls.extend(flat)
     return _Pending(name, generator, wanted, list(range(start, start + len(flat))))
@@ -131,7 +137,7 @@ def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
         return _result(check, Status.SKIP, 0.0, str(skip))
     except Exception:
         return _result(check, Status.ERROR, 0.0,
-                       f"grader error while judging this check:\n{traceback.format_exc(limit=-3)}")
+                       f"grader error while judging this check:\n{_trace()}")
     if not isinstance(verdict, Verdict):
         return _result(check, Status.ERROR, 0.0, f"grader error: check returned {type(verdict).__name__}")
     status = Status.PASS if verdict.passed else Status.FAIL
