@@ -8,7 +8,7 @@ This is why the rest of the lesson linearizes.
 Run `grade ch00` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def range_reading(x, y):

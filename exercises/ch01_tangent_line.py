@@ -8,7 +8,7 @@ The grader passes you plain Python functions f, fprime, fsecond that work elemen
 arrays (for example np.sqrt and its derivatives). Run `grade ch01` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def tangent_line(f, fprime, a, x):

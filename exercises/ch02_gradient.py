@@ -7,7 +7,7 @@ to the contour (level curve) through the point.
 Run `grade ch02` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def example_f(x, y):

@@ -8,7 +8,7 @@ patch of area dr dtheta becomes area r dr dtheta.
 Run `grade ch03` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def polar_to_cartesian(r, theta):

@@ -9,7 +9,7 @@ You may use your chapter 3 functions:
 Run `grade ch04` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def g_stage(u):

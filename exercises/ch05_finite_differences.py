@@ -8,7 +8,7 @@ Jacobian with a central-difference one ("the Jacobian check") catches hand-deriv
 Run `grade ch05` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def forward_difference(f, x, h):

@@ -8,7 +8,7 @@ row scales with 1/r: the closer the drone, the more sensitive the bearing.
 Run `grade ch06` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def range_bearing(x, y):

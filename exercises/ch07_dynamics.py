@@ -8,7 +8,7 @@ uncertainty across the direction of travel, which is why F P F^T gets nonzero of
 Run `grade ch07` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def motion_model(state, v, omega, dt):

@@ -9,7 +9,7 @@ You may use your chapter 6 functions:
 Run `grade ch08` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def sample_positions(mean, sigma, n, rng):

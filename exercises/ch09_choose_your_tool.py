@@ -9,7 +9,7 @@ You may use your chapter 5 functions:
 Run `grade ch09` to check your work.
 """
 
-import numpy as np
+import numpy as np  # noqa: F401  (for you to use)
 
 
 def gradient_fd(f, x, h=1e-5):

@@ -7,8 +7,12 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import TYPE_CHECKING
 
 from grader.submission import Submission
+
+if TYPE_CHECKING:
+    from grader.runner import Session
 
 _OTHER_COMMANDS = {"list", "quiz", "batch", "--help", "-h", "--version"}
 _prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned)
@@ -35,7 +39,7 @@ def _guess(args: list[str]) -> tuple | None:
         return None
 
 
-def take(submission: Submission, **session_options) -> "Session | None":
+def take(submission: Submission, **session_options) -> Session | None:
     """A Session around the prestarted child if it serves `submission`; otherwise None."""
     global _prestarted
     prestarted, _prestarted = _prestarted, None

@@ -10,7 +10,7 @@ import pytest
 import solutions.ch08_lab as ch08_ref
 from grader import checks as check_registry
 from grader.checks import ch05, ch08, ch09
-from grader.grading import DEFAULT_SEED, grade
+from grader.grading import grade
 from grader.model import Status
 from grader.runner import Session, Submission
 from tests.conftest import replace_function
@@ -22,25 +22,6 @@ MODULES = {"ch05": "ch05_finite_differences", "ch07": "ch07_dynamics", "ch08": "
 
 def _by_id(chapter):
     return {c.id: c for c in chapter.checks}
-
-
-@pytest.mark.parametrize("seed", [DEFAULT_SEED, 1, 2])
-def test_reference_solutions_get_full_marks(repo_root, seed):
-    report = grade(Session(Submission(repo_root, "solutions")), CHAPTERS, seed=seed)
-    for chapter in report.chapters:
-        failed = [(c.id, c.message) for c in chapter.checks if c.status != Status.PASS]
-        assert not failed, f"{chapter.chapter} (seed {seed}): {failed}"
-        assert chapter.score == chapter.max_score
-
-
-def test_stubs_get_zero_and_every_check_fails_as_not_implemented(repo_root):
-    report = grade(Session(Submission(repo_root, "exercises")), CHAPTERS)
-    for chapter in report.chapters:
-        assert not chapter.problems, chapter.problems
-        assert chapter.score == 0
-        for check in chapter.checks:
-            assert check.status == Status.FAIL, (chapter.chapter, check.id, check.status, check.message)
-            assert "not implemented" in check.message, (chapter.chapter, check.id, check.message)
 
 
 def test_chapter_sizes_follow_the_guide():
