@@ -98,7 +98,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     else:
         from grader.render import text
 
-        stream = click.get_text_stream("stdout")
+        stream = sys.stdout
         click.echo(text.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream),
                                verbose=verbose), nl=False, color=_use_colour(stream))
     sys.exit(EXIT_ALL_PASSED if report.all_passed else EXIT_NOT_ALL_PASSED)
