@@ -78,9 +78,13 @@ def _unicode_ok(stream) -> bool:
               show_default=True, help="Output format.")
 @click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
 @click.option("-v", "--verbose", is_flag=True, help="Show tracebacks and what your code printed.")
+@click.option("--learner", default=None, help="Learner id for per-learner quiz numbers "
+              "(default: exercises/answers/learner.yaml, else 'anonymous').")
+@click.option("--no-quiz", is_flag=True, help="Grade the code only.")
 def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
-                output_format: str, seed: int | None, verbose: bool) -> None:
-    """Grade CHAPTER... (ch06, 6 or all): every check with its points, and a total."""
+                output_format: str, seed: int | None, verbose: bool, learner: str | None,
+                no_quiz: bool) -> None:
+    """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
     # the child may already run (grader.launch); else start it now, to overlap our imports below
@@ -91,6 +95,15 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         report = grade(session, [c.id for c in picked], seed=DEFAULT_SEED if seed is None else seed)
     finally:
         session.close()
+    if not no_quiz:
+        from grader.quiz import add_quiz_results
+
+        add_quiz_results(report, submission.root, submission.package, learner)
+    _emit(report, output_format, verbose)
+
+
+def _emit(report, output_format: str, verbose: bool) -> None:
+    """Print the report in the chosen format and exit 0 (all passed) or 1."""
     if output_format == "json":
         from grader.render import json_report
 
@@ -117,3 +130,42 @@ def list_command() -> None:
             functions[check.function] = functions.get(check.function, 0) + check.points
         for function, points in functions.items():
             click.echo(f"    {function:<28} {points:g} points")
+
+
+@main.command("quiz")
+@click.argument("chapters", nargs=-1, metavar="CHAPTER...")
+@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder holding exercises/ (default: the project around the current directory).")
+@click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference answers instead.")
+@click.option("--format", "output_format", type=click.Choice(["text", "json"]), default="text",
+              show_default=True, help="Output format.")
+@click.option("--learner", default=None, help="Learner id for per-learner quiz numbers.")
+@click.option("--show", is_flag=True, help="Print the questions (with this learner's numbers) instead of grading.")
+def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
+                 output_format: str, learner: str | None, show: bool) -> None:
+    """Grade only the quiz of CHAPTER... (answers in exercises/answers/chNN.yaml)."""
+    picked = chapters_from(chapters)
+    submission = find_submission(submission_dir, use_solutions)
+    from grader.quiz import answers_dir, learner_id, quiz_report
+
+    if show:
+        from grader.quiz import bank
+
+        who, source = learner_id(answers_dir(submission.root, submission.package), learner)
+        click.echo(f"Questions for learner {who} (from {source}); answer in "
+                   f"{submission.package}/answers/chNN.yaml\n")
+        for info in picked:
+            click.echo(f"{info.id}  {info.title}")
+            for question in bank.questions(info.id):
+                click.echo(f"  [{question.id}] ({question.kind}, {question.points:g} points)")
+                text = question.text_for(question.values_for(who, info.id))
+                click.echo("    " + text.replace("\n", "\n    "))
+                for letter, option in question.options.items():
+                    click.echo(f"      {letter}) {option}")
+                if question.answer_format:
+                    click.echo(f"    format: {question.answer_format}")
+            click.echo("")
+        return
+    report, _ = quiz_report([c.id for c in picked], submission.root, submission.package,
+                            str(submission.root), learner)
+    _emit(report, output_format, verbose=False)

@@ -89,6 +89,7 @@ class Report:
     submission: str
     chapters: list[ChapterResult] = field(default_factory=list)
     seed: int | None = None
+    learner: str | None = None  # whose quiz variants were graded, and where the id came from
     learner_output: str = ""  # what learner code printed while graded (capped)
 
     @property
@@ -109,6 +110,7 @@ class Report:
             "version": SCHEMA_VERSION,
             "submission": self.submission,
             "seed": self.seed,
+            "learner": self.learner,
             "score": self.score,
             "max_score": self.max_score,
             "chapters": [c.to_dict() for c in self.chapters],

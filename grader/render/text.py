@@ -38,6 +38,8 @@ def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose:
 def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, verbose: bool = False) -> str:
     """The whole report as text; `colour` adds ANSI styles, `unicode_ok` picks the marks."""
     out: list[str] = []
+    if report.learner and any(c.kind == "quiz" for ch in report.chapters for c in ch.checks):
+        out.append(f"Quiz answers graded for learner {report.learner}.")
     for chapter in report.chapters:
         title = f"{chapter.chapter}  {chapter.title}"
         out.append(click.style(title, bold=True) if colour else title)

@@ -1,0 +1,123 @@
+"""Question banks (quizzes/chNN.yaml) and their keys (quizzes/keys/chNN.yaml), kept apart.
+
+A question says what is asked; its key, in a separate file, says what is right, how close is close
+enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
+(seeded by learner id, chapter and question: the same on every run and machine); their key is
+computed by the reference implementation in solutions/, never stored.
+"""
+
+from __future__ import annotations
+
+import importlib
+import random
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when present: 10x faster
+QUIZ_DIR = Path(__file__).resolve().parents[2] / "quizzes"
+KINDS = ("choice", "multi", "numeric", "vector", "matrix", "symbolic")
+
+
+class BankError(ValueError):
+    """A question bank or key file that is not valid; the message names the file and line."""
+
+
+@dataclass
+class Question:
+    id: str
+    kind: str
+    prompt: str
+    points: float = 1.0
+    options: dict[str, str] = field(default_factory=dict)
+    symbols: tuple[str, ...] = ()
+    params: dict[str, list] = field(default_factory=dict)
+    shape: tuple[int, ...] = ()
+    answer_format: str = ""
+
+    def values_for(self, learner: str, chapter: str) -> dict[str, float]:
+        """This learner's numbers for a parametrised question (empty for a fixed one)."""
+        draw = random.Random(f"{learner}/{chapter}/{self.id}")  # str seeds go through SHA-512: stable
+        values = {}
+        for name, (low, high) in self.params.items():
+            while True:
+                value = round(draw.uniform(low, high), 1)
+                if abs(value) >= 0.5:
+                    values[name] = value
+                    break
+        return values
+
+    def text_for(self, values: dict[str, float]) -> str:
+        return self.prompt.format(**{k: f"{v:g}" for k, v in values.items()}) if values else self.prompt
+
+
+@dataclass
+class Key:
+    answer: object = None
+    rtol: float = 1e-3
+    atol: float = 1e-6
+    feedback: dict[str, str] = field(default_factory=dict)  # option -> why it is wrong
+    wrong: list[dict] = field(default_factory=list)  # known wrong answers: {answer | transform, feedback}
+    compute: dict | None = None  # {function: name in solutions.<module>, args: [param names], item: index}
+    explanation: str = ""
+
+    def value_for(self, module: str, values: dict[str, float]) -> object:
+        """The right answer: stored, or computed by the reference implementation for `values`."""
+        if self.compute is None:
+            return self.answer
+        reference = importlib.import_module(f"solutions.{module}")
+
+        def resolve(arg: object) -> object:
+            if isinstance(arg, list):
+                return [resolve(a) for a in arg]
+            if isinstance(arg, str) and arg.startswith("$"):  # a catalogue callable, e.g. $sqrt
+                from grader.catalogue import CALLABLES
+
+                return CALLABLES[arg[1:]]
+            return values[arg] if isinstance(arg, str) else arg
+
+        result = getattr(reference, self.compute["function"])(*[resolve(a) for a in self.compute.get("args", [])])
+        if "item" in self.compute:
+            result = result[tuple(self.compute["item"])] if isinstance(self.compute["item"], list) \
+                else result[self.compute["item"]]
+        return result
+
+
+def _load(path: Path) -> object:
+    try:
+        return yaml.load(path.read_text(encoding="utf-8"), Loader=SAFE_LOADER)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark
+        raise BankError(f"{path}: line {mark.line + 1 if mark else '?'}: {exc.problem}") from None
+
+
+def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
+    path = quiz_dir / f"{chapter}.yaml"
+    data = _load(path)
+    out = []
+    for raw in (data or {}).get("questions", []):
+        if raw.get("kind") not in KINDS:
+            raise BankError(f"{path}: question {raw.get('id')!r} has kind {raw.get('kind')!r}; one of {KINDS}")
+        out.append(Question(
+            id=str(raw["id"]), kind=raw["kind"], prompt=str(raw["prompt"]).strip(),
+            points=float(raw.get("points", 1)),
+            options={str(k): str(v) for k, v in (raw.get("options") or {}).items()},
+            symbols=tuple(raw.get("symbols", ())), params=dict(raw.get("params") or {}),
+            shape=tuple(raw.get("shape", ())), answer_format=str(raw.get("format", "")),
+        ))
+    return out
+
+
+def keys(chapter: str, quiz_dir: Path = QUIZ_DIR) -> dict[str, Key] | None:
+    """The chapter's keys, or None when the keys folder is not shipped."""
+    path = quiz_dir / "keys" / f"{chapter}.yaml"
+    if not path.exists():
+        return None
+    data = _load(path) or {}
+    return {str(qid): Key(
+        answer=raw.get("answer"), rtol=float(raw.get("rtol", 1e-3)), atol=float(raw.get("atol", 1e-6)),
+        feedback={str(k): str(v) for k, v in (raw.get("feedback") or {}).items()},
+        wrong=list(raw.get("wrong") or []), compute=raw.get("compute"),
+        explanation=str(raw.get("explanation", "")).strip(),
+    ) for qid, raw in data.items()}

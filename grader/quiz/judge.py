@@ -1,0 +1,132 @@
+"""Judge one answer against its key: a verdict with points in [0, 1] of the question's worth."""
+
+from __future__ import annotations
+
+import ast
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from grader.quiz.bank import Key, Question
+from grader.quiz.symbolic import AnswerError, check_text, number, same_expression
+
+
+@dataclass
+class Judgement:
+    fraction: float  # of the question's points
+    feedback: str
+    right: bool = False
+
+
+def _letters(value: object, question: Question) -> list[str]:
+    if isinstance(value, (list, tuple)):
+        items = [str(v) for v in value]
+    else:
+        items = re.split(r"[\s,;]+", str(value).strip())
+    letters = [item.strip().strip(").").lower() for item in items if item.strip()]
+    unknown = [letter for letter in letters if letter not in question.options]
+    if unknown or not letters:
+        raise AnswerError(f"choose from {', '.join(question.options)} (got {value!r})")
+    return letters
+
+
+def _numbers(value: object) -> list:
+    """A flat or nested list of numbers from YAML data or text like '4, 1', '[4, 1]', '(4,1)'."""
+    if isinstance(value, (list, tuple)):
+        return [_numbers(v) if isinstance(v, (list, tuple)) else number(v) for v in value]
+    text = str(value).strip()
+    if ";" in text:  # rows separated by ';'
+        return [_numbers(row) for row in text.strip("[]() ").split(";")]
+    if text.startswith(("[", "(")):
+        check_text(text.replace("[", "(").replace("]", ")"), ())  # whitelist before anything else
+        tree = ast.parse(text, mode="eval").body
+        return _numbers_of_node(tree)
+    return [number(part) for part in text.split(",") if part.strip()] if "," in text else \
+        [number(part) for part in text.split()]
+
+
+def _numbers_of_node(node: ast.AST) -> list | float:
+    if isinstance(node, (ast.List, ast.Tuple)):
+        return [_numbers_of_node(item) for item in node.elts]
+    return number(ast.unparse(node))
+
+
+def _array(value: object, shape: tuple[int, ...]) -> np.ndarray:
+    try:
+        array = np.array(_numbers(value), dtype=float)
+    except ValueError:
+        raise AnswerError("rows of different lengths") from None
+    if shape and array.shape != shape:
+        raise AnswerError(f"expected {'x'.join(map(str, shape))} numbers, got shape {array.shape}")
+    return array
+
+
+def _transformed(key: np.ndarray, transform: str) -> np.ndarray | None:
+    if transform == "transpose":
+        return key.T if key.ndim == 2 and key.shape[0] == key.shape[1] and not np.allclose(key, key.T) else None
+    if transform == "negate":
+        return -key
+    if transform == "degrees":
+        return np.degrees(key)
+    if transform == "reciprocal":
+        return 1.0 / key
+    raise ValueError(f"unknown transform {transform}")
+
+
+def judge(question: Question, key: Key, value: object, right_value: object, seed: int) -> Judgement:
+    """Raises AnswerError when the answer cannot be read."""
+    kind = question.kind
+    if kind == "choice":
+        letters = _letters(value, question)
+        if len(letters) != 1:
+            raise AnswerError("choose exactly one option")
+        if letters[0] == str(right_value).lower():
+            return Judgement(1.0, key.explanation, True)
+        return Judgement(0.0, key.feedback.get(letters[0], "not this one"))
+    if kind == "multi":
+        picked = set(_letters(value, question))
+        right = {str(v).lower() for v in right_value}
+        if picked == set(question.options):
+            return Judgement(0.0, "selecting every option earns nothing: choose the true statements")
+        hits, misses = len(picked & right), len(picked - right)
+        fraction = max(0.0, (hits - misses) / len(right))
+        notes = [f"{letter}) {key.feedback[letter]}" for letter in sorted(picked - right) if letter in key.feedback]
+        missed = sorted(right - picked)
+        if missed:
+            notes.append(f"{len(missed)} true statement(s) not selected")
+        return Judgement(fraction, "; ".join(notes) or key.explanation, picked == right)
+    if kind in ("numeric", "vector", "matrix"):
+        got = np.array(number(value)) if kind == "numeric" else _array(value, question.shape)
+        want = np.asarray(right_value, dtype=float)
+        if got.shape != want.shape:
+            raise AnswerError(f"expected {want.size} number(s), got {got.size}")
+        close = bool(np.all(np.abs(got - want) <= key.atol + key.rtol * np.abs(want)))
+        if close:
+            return Judgement(1.0, key.explanation, True)
+        for wrong in key.wrong:
+            candidate = (_transformed(want, wrong["transform"]) if "transform" in wrong
+                         else np.asarray(wrong["answer"], dtype=float))
+            if candidate is not None and candidate.shape == got.shape and \
+                    np.all(np.abs(got - candidate) <= key.atol + key.rtol * np.abs(candidate)):
+                return Judgement(0.0, wrong["feedback"])
+        return Judgement(0.0, "not within the tolerance of the right value")
+    if kind == "symbolic":
+        text = str(value)
+        if same_expression(text, str(right_value), question.symbols, seed):
+            return Judgement(1.0, key.explanation, True)
+        for wrong in key.wrong:
+            if same_expression(text, str(wrong["answer"]), question.symbols, seed):
+                return Judgement(0.0, wrong["feedback"])
+        return Judgement(0.0, "not equivalent to the right expression")
+    raise AnswerError(f"unknown question kind {kind}")
+
+
+def fmt_value(value: object) -> object:
+    """A right answer as plain data for the report (shown only once the learner got it right)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, float) and math.isfinite(value):
+        return value
+    return value
