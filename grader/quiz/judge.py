@@ -40,8 +40,7 @@ def _numbers(value: object) -> list:
     if ";" in text:  # rows separated by ';'
         return [_numbers(row) for row in text.strip("[]() ").split(";")]
     if text.startswith(("[", "(")):
-        check_text(text.replace("[", "(").replace("]", ")"), ())  # whitelist before anything else
-        tree = ast.parse(text, mode="eval").body
+        tree = check_text(text, (), lists=True).body  # whitelisted before anything else
         return _numbers_of_node(tree)
     return [number(part) for part in text.split(",") if part.strip()] if "," in text else \
         [number(part) for part in text.split()]
@@ -54,8 +53,9 @@ def _numbers_of_node(node: ast.AST) -> list | float:
 
 
 def _array(value: object, shape: tuple[int, ...]) -> np.ndarray:
+    numbers = _numbers(value)
     try:
-        array = np.array(_numbers(value), dtype=float)
+        array = np.array(numbers, dtype=float)
     except ValueError:
         raise AnswerError("rows of different lengths") from None
     if shape and array.shape != shape:

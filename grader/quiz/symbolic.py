@@ -25,9 +25,11 @@ class AnswerError(ValueError):
     """An answer that cannot be read; the message says why, in the learner's terms."""
 
 
-def _check_tree(tree: ast.AST, symbols: tuple[str, ...]) -> None:
+def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
     allowed_names = set(symbols) | set(CONSTANTS)
     for node in ast.walk(tree):
+        if lists and isinstance(node, (ast.List, ast.Tuple)):
+            continue
         if isinstance(node, (ast.Expression, ast.Load, ast.operator, ast.unaryop)):
             if isinstance(node, ast.operator) and not isinstance(node, (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow)):
                 raise AnswerError(f"the operator {type(node).__name__} is not allowed (use + - * / ^)")
@@ -65,8 +67,9 @@ def _check_tree(tree: ast.AST, symbols: tuple[str, ...]) -> None:
         raise AnswerError(f"{type(node).__name__} is not allowed in an answer")
 
 
-def check_text(text: str, symbols: tuple[str, ...] = ()) -> ast.Expression:
-    """Whitelist-check an answer's syntax tree; the tree, or AnswerError."""
+def check_text(text: str, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
+    """Whitelist-check an answer's syntax tree (with `lists`, brackets of numbers too); the tree,
+    or AnswerError."""
     if not isinstance(text, str):
         text = str(text)
     if len(text) > MAX_LENGTH:
@@ -82,7 +85,7 @@ def check_text(text: str, symbols: tuple[str, ...] = ()) -> ast.Expression:
         tree = ast.parse(source.strip(), mode="eval")
     except SyntaxError as exc:
         raise AnswerError(f"cannot read it as a formula ({exc.msg})") from None
-    _check_tree(tree, symbols)
+    _check_tree(tree, symbols, lists)
     return tree
 
 

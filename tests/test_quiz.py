@@ -1,0 +1,266 @@
+"""Quizzes: keys accepted, distractors rejected with their own feedback, answers as people write
+them, hostile input refused quickly, broken answer files reported by file and line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from grader.chapters import BY_ID, CHAPTERS
+from grader.cli import main
+from grader.model import Status
+from grader.quiz import bank, grade_quiz
+from grader.quiz.judge import judge
+from grader.quiz.symbolic import AnswerError, check_text, equivalent, number, parse
+from grader.quiz.templates import reference_answers, template
+
+ALL = [c.id for c in CHAPTERS]
+QUESTIONS = [(c, q) for c in ALL for q in bank.questions(c)]
+
+
+@pytest.fixture(autouse=True)
+def _no_shared_cache(monkeypatch, tmp_path):
+    monkeypatch.setenv("GRADER_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def _grade(tmp_path, chapter, text, learner="alice"):
+    folder = tmp_path / "answers"
+    folder.mkdir(exist_ok=True)
+    (folder / f"{chapter}.yaml").write_text(text)
+    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers")
+    return {r.function: r for r in results}, problems
+
+
+def _right(chapter, question, learner="alice"):
+    key = bank.keys(chapter)[question.id]
+    return key.value_for(BY_ID[chapter].module, question.values_for(learner, chapter))
+
+
+def test_every_chapter_has_the_lesson_question_and_a_mix_of_kinds():
+    kinds = set()
+    for chapter in ALL:
+        questions = bank.questions(chapter)
+        assert len(questions) >= 4, chapter
+        assert questions[0].kind == "choice" and 4 <= len(questions[0].options) <= 5, chapter
+        assert any(q.params for q in questions), f"{chapter} has no per-learner question"
+        kinds |= {q.kind for q in questions}
+    assert kinds == set(bank.KINDS)
+
+
+@pytest.mark.parametrize("chapter", ALL)
+def test_reference_answers_for_another_learner_score_full_marks(tmp_path, chapter):
+    results, problems = _grade(tmp_path, chapter, reference_answers(chapter, "bob"), learner="bob")
+    assert not problems
+    assert all(r.status == Status.PASS and r.points == r.max_points for r in results.values()), \
+        [(r.function, r.message) for r in results.values() if r.status != Status.PASS]
+
+
+@pytest.mark.parametrize("chapter, question", [(c, q) for c, q in QUESTIONS if q.kind in ("choice", "multi")],
+                         ids=lambda v: getattr(v, "id", v))
+def test_every_distractor_is_rejected_with_its_own_feedback(chapter, question):
+    key = bank.keys(chapter)[question.id]
+    right = key.answer if question.kind == "choice" else list(key.answer)
+    distractors = [o for o in question.options if o not in (right if isinstance(right, list) else [right])]
+    assert distractors and all(o in key.feedback for o in distractors), "every wrong option needs feedback"
+    for option in distractors:
+        answer = option if question.kind == "choice" else [right[0], option]
+        verdict = judge(question, key, answer, key.answer, seed=1)
+        assert not verdict.right
+        assert key.feedback[option] in verdict.feedback
+
+
+@pytest.mark.parametrize("chapter, question", [(c, q) for c, q in QUESTIONS if bank.keys(c)[q.id].wrong],
+                         ids=lambda v: getattr(v, "id", v))
+def test_every_known_wrong_answer_gets_its_targeted_feedback(chapter, question):
+    key = bank.keys(chapter)[question.id]
+    right = _right(chapter, question)
+    for wrong in key.wrong:
+        if "transform" in wrong:
+            from grader.quiz.judge import _transformed
+
+            candidate = _transformed(np.asarray(right, dtype=float), wrong["transform"])
+            if candidate is None:
+                continue
+            answer = candidate.tolist()
+        else:
+            answer = wrong["answer"]
+        verdict = judge(question, key, answer, right, seed=3)
+        assert not verdict.right and verdict.feedback == wrong["feedback"], (question.id, answer)
+
+
+def test_multi_select_partial_credit_and_nothing_for_selecting_everything(tmp_path):
+    results, _ = _grade(tmp_path, "ch06", "H_facts: a, b\n")
+    assert results["H_facts"].points == pytest.approx(2 / 3)
+    results, _ = _grade(tmp_path, "ch06", "H_facts: a, b, d\n")
+    assert results["H_facts"].points == pytest.approx(1 / 3)
+    assert "perpendicular" not in results["H_facts"].message and "local linearization" in results["H_facts"].message
+    results, _ = _grade(tmp_path, "ch06", "H_facts: a, b, c, d, e\n")
+    assert results["H_facts"].points == 0 and "every option" in results["H_facts"].message
+
+
+@pytest.mark.parametrize("text, value", [
+    ("4, 1", [4, 1]), ("[4, 1]", [4, 1]), ("(4,1)", [4, 1]), ("4 1", [4, 1]), ("[4, 2/2]", [4, 1]),
+])
+def test_vector_spellings(text, value):
+    from grader.quiz.judge import _array
+
+    assert _array(text, (2,)).tolist() == value
+
+
+@pytest.mark.parametrize("text, value", [("0.6", 0.6), ("3/5", 0.6), (" -0.16", -0.16), ("1e-5", 1e-5),
+                                         ("sqrt(3)/2", np.sqrt(3) / 2), ("1/64", 1 / 64), (0.25, 0.25)])
+def test_number_spellings(text, value):
+    assert number(text) == pytest.approx(value)
+
+
+@pytest.mark.parametrize("answer, key, symbols", [
+    ("1/r^2", "r**(-2)", ("r",)),
+    ("-y/(x^2+y^2)", "-y/(x**2 + y**2)", ("x", "y")),
+    ("x/sqrt(x**2+y**2)", "x*(x^2+y^2)^(-1/2)", ("x", "y")),
+    ("2*x*cos(x^2)", "2*cos(x**2)*x", ("x",)),
+    ("9 + 6*(x - 3)", "6*x - 9", ("x",)),
+    ("-v*sin(theta)*dt", "-(dt*v)*sin(theta)", ("v", "theta", "dt")),
+    ("atan2(y, x)", "atan2(y,x)", ("x", "y")),
+])
+def test_equivalent_spellings_are_accepted(answer, key, symbols):
+    assert equivalent(parse(answer, symbols), parse(key, symbols), symbols)
+
+
+@pytest.mark.parametrize("answer, key, symbols", [
+    ("x/(x^2+y^2)", "-y/(x^2+y^2)", ("x", "y")),
+    ("1/r", "1/r^2", ("r",)),
+    ("x/sqrt(x^2+y^2)", "y/sqrt(x^2+y^2)", ("x", "y")),
+    ("sqrt(x^2)", "x", ("x",)),
+    ("cos(x^2)", "2*x*cos(x^2)", ("x",)),
+])
+def test_non_equivalent_spellings_are_rejected(answer, key, symbols):
+    assert not equivalent(parse(answer, symbols), parse(key, symbols), symbols)
+
+
+@pytest.mark.parametrize("hostile, says", [
+    ("__import__('os').system('x')", "only these functions"),
+    ("x.__class__", "Attribute"),
+    ("().__class__.__bases__[0]", "is not allowed in an answer"),
+    ("x[0]", "Subscript"),
+    ("lambda: 1", "Lambda"),
+    ("2**2**2**22", "power of a power"),
+    ("x**99999", "exponents above"),
+    ("x" * 10_000, "at most 200"),
+    ("\u2212y/(x^2+y^2)", "not plain ASCII"),
+    ("-\u0443/(x^2+y^2)", "not plain ASCII"),
+    ("[c for c in x]", "not allowed"),
+    ("exec('1')", "only these functions"),
+    ("sqrt(x, key=1)", "plain arguments"),
+    ("'abc'", "no strings"),
+    ("z + 1", "unknown name 'z'"),
+])
+def test_hostile_answers_are_rejected_quickly_with_a_message(hostile, says):
+    started = time.perf_counter()
+    with pytest.raises(AnswerError) as info:
+        parse(hostile, ("x", "y"))
+    assert time.perf_counter() - started < 1.0
+    assert says in str(info.value)
+
+
+def test_hostile_answer_in_a_file_is_reported_with_file_line_and_question(tmp_path):
+    text = "bearing_near_dish: a\ndbearing_dx: \"__import__('os').system('touch pwned')\"\nH_facts: a, b, c\n"
+    results, _ = _grade(tmp_path, "ch06", text)
+    message = results["dbearing_dx"].message
+    assert "exercises/answers/ch06.yaml, line 2, question dbearing_dx" in message
+    assert results["dbearing_dx"].status == Status.FAIL
+    assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+    assert not (tmp_path / "pwned").exists()
+
+
+def test_malformed_yaml_costs_only_the_broken_answer(tmp_path):
+    text = "bearing_near_dish: a\nH_at_point: [[1, 2], [3, 4]\nH_facts: a, b, c\n"
+    results, problems = _grade(tmp_path, "ch06", text)
+    assert any("exercises/answers/ch06.yaml, line 2" in p for p in problems)
+    assert results["bearing_near_dish"].status == Status.PASS
+    assert results["H_facts"].status == Status.PASS
+    assert results["H_at_point"].message == "not answered yet"
+
+
+def test_unknown_question_id_and_unparsable_answer_name_file_and_line(tmp_path):
+    text = "bearing_near_dish: a\nbearing_near_dihs: b\nbearing_variance: one half\n"
+    results, problems = _grade(tmp_path, "ch06", text)
+    assert any("line 2: unknown question id 'bearing_near_dihs'" in p for p in problems)
+    assert "exercises/answers/ch06.yaml, line 3, question bearing_variance" in results["bearing_variance"].message
+    assert results["bearing_near_dish"].status == Status.PASS
+
+
+@pytest.mark.parametrize("chapter", ALL)
+def test_templates_list_every_question_and_score_zero_without_error(tmp_path, repo_root, chapter):
+    shipped = (repo_root / "exercises" / "answers" / f"{chapter}.yaml").read_text()
+    assert shipped == template(chapter), "regenerate the template from the bank"
+    results, problems = _grade(tmp_path, chapter, shipped)
+    assert not problems
+    assert set(results) == {q.id for q in bank.questions(chapter)}
+    assert all(r.status == Status.FAIL and r.points == 0 and r.message == "not answered yet"
+               for r in results.values())
+
+
+@pytest.mark.parametrize("chapter", ALL)
+def test_shipped_reference_answers_are_current(repo_root, chapter):
+    assert (repo_root / "solutions" / "answers" / f"{chapter}.yaml").read_text() == reference_answers(chapter)
+
+
+def test_parametrised_questions_differ_between_learners_and_are_stable():
+    question = next(q for q in bank.questions("ch06") if q.id == "H_at_point")
+    alice, bob = question.values_for("alice", "ch06"), question.values_for("bob", "ch06")
+    assert alice != bob
+    assert alice == question.values_for("alice", "ch06")
+    assert not np.allclose(_right("ch06", question, "alice"), _right("ch06", question, "bob"))
+
+
+def test_a_right_answer_for_another_learner_is_wrong(tmp_path):
+    question = next(q for q in bank.questions("ch06") if q.id == "H_at_point")
+    bobs = json.dumps(np.asarray(_right("ch06", question, "bob")).tolist())
+    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {bobs}\n", learner="alice")
+    assert results["H_at_point"].status == Status.FAIL
+    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {bobs}\n", learner="bob")
+    assert results["H_at_point"].status == Status.PASS
+
+
+def test_key_is_not_leaked_for_a_wrong_answer(tmp_path):
+    results, _ = _grade(tmp_path, "ch06", "dbearing_dx: x/(x^2+y^2)\n")
+    assert results["dbearing_dx"].expected is None
+    assert results["dbearing_dx"].message == "That is d bearing / d y; d bearing / d x is -y / r^2."
+
+
+def test_check_text_needs_no_sympy():
+    code = "import sys; from grader.quiz.symbolic import check_text; check_text('x/sqrt(x^2+y^2)', ('x','y')); " \
+           "print('sympy' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_cli_quiz_solutions_full_marks_and_show(monkeypatch):
+    runner = CliRunner()
+    result = runner.invoke(main, ["quiz", "all", "--solutions", "--format", "json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output)
+    assert data["score"] == data["max_score"] > 0
+    assert data["learner"].startswith("reference")
+    assert all(c["kind"] == "quiz" for ch in data["chapters"] for c in ch["checks"])
+    shown = runner.invoke(main, ["quiz", "ch06", "--show", "--learner", "alice"])
+    question = next(q for q in bank.questions("ch06") if q.id == "H_at_point")
+    values = question.values_for("alice", "ch06")
+    assert f"({values['x']:g}, {values['y']:g})" in shown.output
+
+
+def test_grade_chapter_shows_code_and_quiz_apart(repo_root):
+    proc = subprocess.run([sys.executable, "-m", "grader", "ch06", "--format", "json"], cwd=repo_root,
+                          capture_output=True, text=True, timeout=120)
+    data = json.loads(proc.stdout)
+    chapter = data["chapters"][0]
+    assert chapter["quiz_max_score"] > 0 and chapter["code_max_score"] > 0
+    assert chapter["max_score"] == chapter["quiz_max_score"] + chapter["code_max_score"]
+    assert {c["kind"] for c in chapter["checks"]} == {"code", "quiz"}
+    assert all("error" != c["status"] for c in chapter["checks"])
