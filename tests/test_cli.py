@@ -72,7 +72,8 @@ def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, rep
     result = runner.invoke(main, ["ch06", "--submission", str(repo_root)])
     assert result.exit_code == 1
     lines = result.output.splitlines()
-    assert lines[0].startswith("ch06")
+    assert lines[0] == "Quiz answers graded for learner anonymous (from default)."
+    assert lines[1].startswith("ch06")
     assert any(line.strip().startswith("✗ [0/2] H at the lesson's point (3, 4)") for line in lines)
     assert "ch06 total: 0/" in result.output
     assert "\x1b[" not in result.output
