@@ -81,9 +81,11 @@ def _unicode_ok(stream) -> bool:
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers "
               "(default: exercises/answers/learner.yaml, else 'anonymous').")
 @click.option("--no-quiz", is_flag=True, help="Grade the code only.")
+@click.option("--html", "html_path", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Also write a self-contained HTML report with plots made from your functions.")
 def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
                 output_format: str, seed: int | None, verbose: bool, learner: str | None,
-                no_quiz: bool) -> None:
+                no_quiz: bool, html_path: str | None) -> None:
     """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
@@ -92,14 +94,27 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     try:
         from grader.grading import DEFAULT_SEED, grade
 
-        report = grade(session, [c.id for c in picked], seed=DEFAULT_SEED if seed is None else seed)
+        report = grade(session, [c.id for c in picked], seed=DEFAULT_SEED if seed is None else seed,
+                       with_plots=html_path is not None)
     finally:
         session.close()
     if not no_quiz:
         from grader.quiz import add_quiz_results
 
         add_quiz_results(report, submission.root, submission.package, learner)
+    if html_path is not None:
+        from grader.render import html
+
+        write_atomically(html_path, html.render(report))
     _emit(report, output_format, verbose)
+
+
+def write_atomically(path: str, text: str) -> None:
+    """Write `text` to `path` through a temporary file, so a reader never sees half a file."""
+    temporary = f"{path}.{os.getpid()}.tmp"
+    with open(temporary, "w", encoding="utf-8") as handle:
+        handle.write(text)
+    os.replace(temporary, path)
 
 
 def _emit(report, output_format: str, verbose: bool) -> None:
