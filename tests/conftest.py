@@ -39,7 +39,7 @@ def replace_function(module: str, function: str, new_source: str) -> str:
     return pattern.sub(textwrap.dedent(new_source).strip() + "\n\n\n", text + "\n#end\n", count=1)
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def repo_root() -> Path:
     return REPO
 

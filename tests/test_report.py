@@ -1,0 +1,130 @@
+"""The HTML report: self-contained, complete, and rendered by a real browser (Debian's chromium)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pytest
+
+from grader.chapters import CHAPTERS
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def _grade(repo_root: Path, args: list[str], out: Path) -> dict:
+    env = dict(os.environ, GRADER_CACHE_DIR="off")
+    proc = subprocess.run([sys.executable, "-m", "grader", *args, "--format", "json", "--html", str(out)],
+                          cwd=repo_root, capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode in (0, 1), proc.stderr[-2000:]
+    assert out.exists()
+    return json.loads(proc.stdout)
+
+
+@pytest.fixture(scope="module")
+def reports(repo_root, tmp_path_factory) -> dict:
+    """Reports of the reference solutions and of the untouched stubs, with their JSON."""
+    folder = tmp_path_factory.mktemp("reports")
+    out = {}
+    for name, args in (("solutions", ["all", "--solutions"]), ("stubs", ["all", "--submission", str(repo_root)])):
+        path = folder / f"{name}.html"
+        out[name] = (path, _grade(repo_root, args, path))
+    return out
+
+
+class _Images(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.images, self.links, self.sections = [], [], []
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "img":
+            self.images.append(attrs)
+        if tag in ("a", "link", "script", "iframe"):
+            self.links.append(attrs.get("href") or attrs.get("src") or "")
+        if tag == "section" and attrs.get("class") == "chapter":
+            self.sections.append(attrs.get("id"))
+
+
+@pytest.mark.parametrize("name", ["solutions", "stubs"])
+def test_report_is_self_contained_and_complete(reports, name):
+    path, data = reports[name]
+    text = path.read_text()
+    parser = _Images()
+    parser.feed(text)
+    assert parser.sections == [c.id for c in CHAPTERS]
+    assert len(parser.images) >= len(CHAPTERS)
+    for image in parser.images:
+        assert image["src"].startswith("data:image/svg+xml;base64,")
+        assert image.get("alt"), "every image needs alt text"
+    assert not re.search(r"""(src|href)=["']?(https?:)?//""", text), "no external resources"
+    assert all(link.startswith("#") for link in parser.links)
+    assert "<script" not in text
+    assert f"{data['score']:g} / {data['max_score']:g}" in text
+
+
+def test_stub_report_shows_reference_plots_and_says_so(reports):
+    text = reports["stubs"][0].read_text()
+    assert text.count("gave no usable value") >= len(CHAPTERS)
+    assert "not implemented yet" in text
+
+
+def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
+    from tests.conftest import build_submission, replace_function
+
+    source = replace_function("ch06_measurement", "H_jacobian",
+                              "def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n"
+                              "    return np.array([[x / r, y / r], [y / r2, x / r2]])\n")
+    root = build_submission(tmp_path / "sub", {"ch06_measurement": source})
+    out = tmp_path / "r.html"
+    _grade(repo_root, ["ch06", "--submission", str(root)], out)
+    text = out.read_text()
+    assert '<td class="wrong">0.16</td>' in text
+    assert "H[1,0] = d bearing/d x: got 0.16, expected -0.16" in text
+
+
+@pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
+                    reason="Debian's chromium is not installed (apt-get install chromium)")
+@pytest.mark.parametrize("name", ["solutions", "stubs"])
+def test_report_in_a_real_browser(reports, name, tmp_path):
+    assert CHROMIUM, "CI must have chromium (.ci/run installs it)"
+    sync_api = pytest.importorskip("playwright.sync_api") if not os.environ.get("CI") else \
+        __import__("playwright.sync_api", fromlist=["sync_playwright"])
+    path, data = reports[name]
+    url = path.resolve().as_uri()
+    requests, console_errors = [], []
+    with sync_api.sync_playwright() as playwright:
+        # launch() gives the browser a fresh, empty profile of its own
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_FLAGS)
+        try:
+            page = browser.new_page(viewport={"width": 1100, "height": 900})
+            page.on("request", lambda request: requests.append(request.url))
+            page.on("console", lambda message: console_errors.append(message.text) if message.type == "error" else None)
+            page.on("pageerror", lambda error: console_errors.append(str(error)))
+            page.goto(url, wait_until="load")
+            widths = page.eval_on_selector_all("img", "images => images.map(i => i.complete ? i.naturalWidth : 0)")
+            sections = page.eval_on_selector_all("section.chapter", "s => s.map(e => e.id)")
+            total = page.inner_text("#total")
+            cells = {c.id: page.inner_text(f'[data-total="{c.id}"]') for c in CHAPTERS}
+            shot = tmp_path / f"report-{name}.png"
+            page.screenshot(path=str(shot), full_page=True)
+        finally:
+            browser.close()
+    print(f"screenshot: {shot}")
+    assert shot.stat().st_size > 10_000
+    assert len(widths) >= len(CHAPTERS) and all(w > 0 for w in widths), widths
+    assert sections == [c.id for c in CHAPTERS]
+    assert not console_errors, console_errors
+    assert all(u == url or u.startswith("data:") for u in requests), requests
+    assert total == f"{data['score']:g} / {data['max_score']:g}"
+    for chapter in data["chapters"]:
+        assert cells[chapter["chapter"]] == f"{chapter['score']:g} / {chapter['max_score']:g}"
