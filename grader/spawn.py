@@ -45,7 +45,8 @@ def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subproc
     global _capture_count
     _capture_count += 1
     read_fd, write_fd = os.pipe()
-    capture = os.path.join(temp_dir(), f"grade-output-{os.getpid()}-{_capture_count}.txt")
+    folder = getattr(wrap, "capture_dir", None) or temp_dir()  # a sandbox shares only its capture dir
+    capture = os.path.join(folder, f"grade-output-{os.getpid()}-{_capture_count}.txt")
     command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd)]
     if wrap is not None:
         command = wrap(command, submission)

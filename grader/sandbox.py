@@ -1,0 +1,110 @@
+"""Hardened isolation for learner code: the child runs inside bubblewrap when it is installed.
+
+Inside: no network, read-only root, a fresh /tmp, its own PID namespace (the sandbox's processes
+all die with it), a new session; the reference solutions, quiz keys, the project's own exercises,
+the submissions folder and the output folder are hidden (empty tmpfs over them), and only this
+learner's staged files are bound back, read-only. Run as root, learner code drops to uid/gid
+65534 (nobody) with no capabilities. Without bubblewrap it falls back to the resource limits and
+process-group kill of grader.runner alone, and says so in one line.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from pathlib import Path
+
+from grader.spawn import GRADER_PARENT, child_path
+from grader.submission import Submission
+
+NOBODY = 65534
+
+
+def _hidden_defaults() -> list[str]:
+    """Folders learner code must not see: references, keys, the project's exercises."""
+    paths = [os.path.join(GRADER_PARENT, name) for name in ("solutions", "quizzes", "exercises", ".git")]
+    try:
+        import importlib.util
+
+        spec = importlib.util.find_spec("solutions")
+        if spec and spec.submodule_search_locations:
+            paths.extend(spec.submodule_search_locations)
+    except (ImportError, ValueError):
+        pass
+    return [p for p in dict.fromkeys(paths) if os.path.isdir(p)]
+
+
+class Sandbox:
+    """A grader.runner CommandWrapper: `Session(submission, wrap=Sandbox(...))`."""
+
+    def __init__(self, hide: list[str | Path] = (), capture_dir: str | Path | None = None) -> None:
+        self.bwrap = shutil.which("bwrap")
+        self.setpriv = shutil.which("setpriv")
+        self.hide = [str(Path(p).resolve()) for p in hide] + _hidden_defaults()
+        self.capture_dir = str(capture_dir) if capture_dir else None
+        if self.capture_dir:
+            os.makedirs(self.capture_dir, exist_ok=True)
+            os.chmod(self.capture_dir, 0o1777)
+
+    @property
+    def available(self) -> bool:
+        return self.bwrap is not None
+
+    def describe(self) -> str:
+        if not self.available:
+            return ("isolation: bubblewrap (bwrap) not found; learner code runs with resource limits and a "
+                    "process-group kill only (apt-get install bubblewrap for the sandbox)")
+        who = "as uid 65534" if os.geteuid() == 0 and self.setpriv else "as the current user"
+        return f"isolation: bubblewrap sandbox (no network, read-only root, fresh /tmp, others' files hidden), {who}"
+
+    def __call__(self, command: list[str], submission: Submission) -> list[str]:
+        if not self.available:
+            return command
+        root = str(Path(submission.root).resolve())
+        args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp"]
+        emptied = ["/tmp"]  # folders replaced by an empty tmpfs: bind targets inside need their parents made
+        drop = os.geteuid() == 0 and self.setpriv is not None
+        if drop:  # root's home is 0700: give nobody a way to the interpreter and nothing else there
+            home = os.path.expanduser("~")
+            needed = {sys.prefix, sys.base_prefix, *child_path()}
+            inside_home = sorted(p for p in needed if p.startswith(home + os.sep) and os.path.exists(p))
+            if inside_home:
+                args += ["--tmpfs", home]
+                emptied.append(home)
+                for path in _outermost(inside_home):
+                    args += _parents(path, emptied) + ["--ro-bind", path, path]
+        for path in self.hide:
+            args += _parents(path, emptied) + ["--tmpfs", path]
+            emptied.append(path)
+        args += _parents(root, emptied) + ["--ro-bind", root, root]
+        if self.capture_dir:
+            args += _parents(self.capture_dir, emptied) + ["--bind", self.capture_dir, self.capture_dir]
+        args += ["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
+                 "--die-with-parent", "--new-session", "--chdir", root, "--"]
+        if drop:
+            args += [self.setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
+                     "--inh-caps=-all", "--bounding-set=-all"]
+        return args + command
+
+
+def _parents(path: str, emptied: list[str]) -> list[str]:
+    """bwrap arguments making the folders above `path` inside an emptied folder, traversable (0755)."""
+    args = []
+    for top in emptied:
+        if path.startswith(top + os.sep):
+            relative = Path(path).relative_to(top).parts[:-1]
+            current = top
+            for part in relative:
+                current = os.path.join(current, part)
+                args += ["--perms", "0755", "--dir", current]
+    return args
+
+
+def _outermost(paths: list[str]) -> list[str]:
+    """Drop paths that lie inside another path of the list."""
+    out: list[str] = []
+    for path in sorted(paths, key=len):
+        if not any(path == p or path.startswith(p + os.sep) for p in out):
+            out.append(path)
+    return out
