@@ -184,3 +184,37 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     report, _ = quiz_report([c.id for c in picked], submission.root, submission.package,
                             str(submission.root), learner)
     _emit(report, output_format, verbose=False)
+
+
+@main.command("batch")
+@click.argument("submissions", type=click.Path(exists=True, file_okay=False))
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Output folder.")
+@click.option("--roster", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="CSV with columns submission,learner mapping folder/zip names to learner ids.")
+@click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
+@click.option("--jobs", type=int, default=None, help="Parallel workers (default: all cores).")
+@click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
+@click.option("--no-html", is_flag=True, help="Skip the per-learner report.html.")
+@click.option("--plots", is_flag=True, help="Draw plots in each report.html (about 2 s per learner).")
+def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
+                  seed: int | None, no_html: bool, plots: bool) -> None:
+    """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports."""
+    from pathlib import Path
+
+    from grader.batch import progress_bar, run_batch
+    from grader.grading import DEFAULT_SEED
+    from grader.sandbox import Sandbox
+
+    picked = chapters_from(tuple(chapter_list.split(",")))
+    click.echo(Sandbox().describe(), err=True)
+    result = run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
+                       roster=Path(roster) if roster else None, jobs=jobs,
+                       seed=DEFAULT_SEED if seed is None else seed, html=not no_html, plots=plots,
+                       progress=progress_bar())
+    counts = ", ".join(f"{n} {status}" for status, n in sorted(result["counts"].items()))
+    click.echo(f"{len(result['statuses'])} submissions: {counts}; graded {result['graded_now']} in "
+               f"{result['seconds']:.1f} s. Gradebook: {Path(out_dir) / 'gradebook.csv'}")
+    for learner, message in sorted(result["messages"].items()):
+        if result["statuses"][learner] in ("error", "unreadable"):
+            click.echo(f"  {learner}: {message}", err=True)
+    sys.exit(0 if all(s in ("graded", "unchanged") for s in result["statuses"].values()) else 1)

@@ -105,6 +105,18 @@ class Report:
         return all(c.status == Status.PASS for ch in self.chapters for c in ch.checks) and not any(
             ch.problems for ch in self.chapters)
 
+    @classmethod
+    def from_dict(cls, data: dict) -> Report:
+        """The report a to_dict() made (for resumed batches); details and plots are not kept."""
+        chapters = []
+        for ch in data.get("chapters", []):
+            checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
+                                  status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
+                                  message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
+                                  kind=c.get("kind", "code")) for c in ch.get("checks", [])]
+            chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", []))))
+        return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"))
+
     def to_dict(self) -> dict:
         return {
             "version": SCHEMA_VERSION,

@@ -1,0 +1,60 @@
+"""Renderers for instructors' systems: Gradescope results.json, JUnit XML, the gradebook CSV row."""
+
+from __future__ import annotations
+
+import json
+from xml.etree import ElementTree
+
+from grader.model import Report, Status
+
+
+def gradescope(report: Report) -> str:
+    """Gradescope's autograder format: score, tests[] with name, score, max_score, status, output."""
+    tests = []
+    for chapter in report.chapters:
+        for problem in chapter.problems:
+            tests.append({"name": f"{chapter.chapter}: problem", "score": 0, "max_score": 0,
+                          "status": "failed", "output": problem, "visibility": "visible"})
+        for check in chapter.checks:
+            tests.append({
+                "name": f"{chapter.chapter} {check.kind}: {check.description}",
+                "score": check.points, "max_score": check.max_points,
+                "status": "passed" if check.status == Status.PASS else "failed",
+                "output": check.message, "visibility": "visible",
+            })
+    return json.dumps({"score": report.score, "tests": tests}, indent=2) + "\n"
+
+
+def junit(reports: list[tuple[str, Report]]) -> str:
+    """One <testsuite> per learner, one <testcase> per check."""
+    suites = ElementTree.Element("testsuites", name="jacobians-grader")
+    for learner, report in reports:
+        checks = [(ch, c) for ch in report.chapters for c in ch.checks]
+        suite = ElementTree.SubElement(suites, "testsuite", name=learner, tests=str(len(checks)),
+                                       failures=str(sum(c.status == Status.FAIL for _, c in checks)),
+                                       errors=str(sum(c.status == Status.ERROR for _, c in checks)),
+                                       skipped=str(sum(c.status == Status.SKIP for _, c in checks)))
+        for chapter, check in checks:
+            case = ElementTree.SubElement(suite, "testcase", classname=f"{learner}.{chapter.chapter}",
+                                          name=f"{check.kind}:{check.id}")
+            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped"}.get(check.status)
+            if tag:
+                ElementTree.SubElement(case, tag, message=check.message.splitlines()[0][:200] if check.message else "")
+    return ElementTree.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"
+
+
+def gradebook_header(chapters: list[str]) -> list[str]:
+    columns = ["learner"]
+    for chapter in chapters:
+        columns += [f"{chapter}_code", f"{chapter}_quiz"]
+    return columns + ["total", "max_total", "status"]
+
+
+def gradebook_row(learner: str, report: Report | None, chapters: list[str], status: str) -> list[str]:
+    row = [learner]
+    by_id = {c.chapter: c for c in report.chapters} if report else {}
+    for chapter in chapters:
+        result = by_id.get(chapter)
+        row += ["", ""] if result is None else [f"{result.score_of('code'):g}", f"{result.score_of('quiz'):g}"]
+    row += ["", ""] if report is None else [f"{report.score:g}", f"{report.max_score:g}"]
+    return row + [status]
