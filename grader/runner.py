@@ -250,35 +250,57 @@ class Session:
         def deadline() -> float:
             return min(state["deadline"], state["chapter_end"])
 
-        finished = timed_out = False
+        # The child's lines must follow the request exactly: import, imported, then call i and its
+        # result for each pending call in order, ..., done. Anything else means learner code wrote to
+        # the channel (it runs in the same process): the child is stopped and nothing more is read.
+        order = [(r.chapter, [i for i, x in enumerate(runs[r.chapter].results) if x is None]) for r in pending]
+        position = {"chapter": 0, "call": 0}
+        finished = timed_out = violated = False
+
+        def next_call() -> int | None:
+            calls = order[position["chapter"]][1]
+            return calls[position["call"]] if position["call"] < len(calls) else None
+
         try:
             for event in child.events(deadline):
-                kind, name = event.get("event"), event.get("chapter")
-                now = time.monotonic()
-                if kind == "done":
-                    finished = True
-                    break
-                if name not in by_name:
+                kind, name, now = event.get("event"), event.get("chapter"), time.monotonic()
+                stage = state["stage"]
+                if stage == "calls" and next_call() is None:  # the chapter is done
+                    position.update(chapter=position["chapter"] + 1, call=0)
+                    stage = "between"
+                if stage in ("startup", "between"):
+                    if kind == "done" and position["chapter"] == len(order):
+                        finished = True
+                        break
+                    if kind == "import" and position["chapter"] < len(order) and name == order[position["chapter"]][0]:
+                        state.update(chapter=name, index=None, stage="import", deadline=now + limits.import_seconds,
+                                     chapter_end=now + limits.chapter_seconds)
+                        continue
+                elif stage == "import" and name == state["chapter"]:
+                    if kind == "import-failed":
+                        error = event.get("error")
+                        runs[name].import_error = error if isinstance(error, dict) else {}
+                        position.update(chapter=position["chapter"] + 1, call=0)
+                        state.update(stage="between", deadline=float("inf"))
+                        continue
+                    if kind == "imported":
+                        state.update(stage="calls", deadline=float("inf"))
+                        continue
+                elif stage == "calls" and kind == "call" and name == state["chapter"] and event.get("index") == next_call():
+                    state.update(index=next_call(), stage="call", deadline=now + limits.call_seconds)
                     continue
-                run, req = runs[name], by_name[name]
-                if kind == "import":
-                    state.update(chapter=name, index=None, stage="import",
-                                 deadline=now + limits.import_seconds,
-                                 chapter_end=now + limits.chapter_seconds)
-                elif kind == "import-failed":
-                    run.import_error = event.get("error") if isinstance(event.get("error"), dict) else {}
-                    state.update(stage="between", deadline=float("inf"))
-                elif kind == "imported":
+                elif stage == "call" and kind in ("returned", "raised", "missing") and name == state["chapter"] \
+                        and event.get("index") == state["index"]:
+                    req = by_name[name]
+                    runs[name].results[state["index"]] = from_event(req.calls[state["index"]].function, event)
+                    position["call"] += 1
                     state.update(stage="calls", deadline=float("inf"))
-                elif kind == "call" and _valid_index(event.get("index"), req):
-                    state.update(index=event["index"], stage="call", deadline=now + limits.call_seconds)
-                elif kind in ("returned", "raised", "missing") and _valid_index(event.get("index"), req):
-                    index = event["index"]
-                    run.results[index] = from_event(req.calls[index].function, event)
-                    state.update(stage="calls", deadline=float("inf"))
+                    continue
+                violated = True
+                break
         except TimeoutError:
             timed_out = True
-        if not finished and not timed_out:  # the pipe closed: let the process finish dying
+        if not finished and not timed_out and not violated:  # the pipe closed: let the process finish dying
             try:
                 child.process.wait(timeout=2)
             except subprocess.TimeoutExpired:
@@ -287,7 +309,9 @@ class Session:
         self._child = None
         if finished:
             return []
-        return self._recover(state, pending, runs, timed_out, child.exit_description())
+        exit_text = ("it broke the grading protocol: learner code wrote to the grader's result channel"
+                     if violated else child.exit_description())
+        return self._recover(state, pending, runs, timed_out, exit_text)
 
     def _recover(self, state: dict, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
                  timed_out: bool, exit_text: str) -> list[ChapterRequest]:
@@ -330,7 +354,3 @@ class Session:
 
 def _unresolved(runs: dict[str, ChapterRun]) -> int:
     return sum(r.import_error is None and x is None for r in runs.values() for x in r.results)
-
-
-def _valid_index(index: object, req: ChapterRequest) -> bool:
-    return isinstance(index, int) and 0 <= index < len(req.calls)
