@@ -90,7 +90,11 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
     # the child may already run (grader.launch); else start it now, to overlap our imports below
-    session = launch.take(submission) or Session(submission)
+    session = launch.take(submission)
+    if session is None:
+        from grader.sandbox import learner_sandbox
+
+        session = Session(submission, wrap=learner_sandbox())
     try:
         from grader.grading import DEFAULT_SEED, grade
 
@@ -119,6 +123,10 @@ def write_atomically(path: str, text: str) -> None:
 
 def _emit(report, output_format: str, verbose: bool) -> None:
     """Print the report in the chosen format and exit 0 (all passed) or 1."""
+    if verbose:
+        from grader.sandbox import Sandbox
+
+        click.echo(Sandbox().describe(), err=True)
     if output_format == "json":
         from grader.render import json_report
 

@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from grader.runner import Session
 
 _OTHER_COMMANDS = {"list", "quiz", "batch", "--help", "-h", "--version"}
-_prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned)
+_prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned, its sandbox)
 
 
 def _guess(args: list[str]) -> tuple | None:
@@ -23,6 +23,7 @@ def _guess(args: list[str]) -> tuple | None:
         return None
     if args[0] == "run":
         args = args[1:]
+    from grader.sandbox import learner_sandbox
     from grader.spawn import start_child
     from grader.submission import SubmissionNotFound, locate
 
@@ -34,7 +35,8 @@ def _guess(args: list[str]) -> tuple | None:
             directory = arg.split("=", 1)[1]
     try:
         submission = locate(directory, "--solutions" in args)
-        return submission, start_child(submission)
+        wrap = learner_sandbox()
+        return submission, start_child(submission, wrap), wrap
     except (SubmissionNotFound, OSError):
         return None
 
@@ -47,8 +49,9 @@ def take(submission: Submission, **session_options) -> Session | None:
         return None
     from grader.runner import Session
 
-    session = Session(prestarted[0], started=prestarted[1], **session_options)
-    if prestarted[0] == submission and not session_options.get("wrap"):
+    submission_started, started, wrap = prestarted
+    session = Session(submission_started, started=started, wrap=wrap, **session_options)
+    if submission_started == submission:
         return session
     session.close()
     return None

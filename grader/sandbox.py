@@ -108,3 +108,12 @@ def _outermost(paths: list[str]) -> list[str]:
         if not any(path == p or path.startswith(p + os.sep) for p in out):
             out.append(path)
     return out
+
+
+def learner_sandbox() -> Sandbox | None:
+    """The sandbox for `grade chNN`, or None where bubblewrap is not installed (or GRADER_SANDBOX=off)."""
+    if os.environ.get("GRADER_SANDBOX") == "off" or shutil.which("bwrap") is None:
+        return None
+    from grader.spawn import temp_dir
+
+    return Sandbox(capture_dir=os.path.join(temp_dir(), f"grade-capture-{os.getuid()}"))
