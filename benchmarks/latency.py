@@ -36,6 +36,9 @@ def main() -> None:
     commands = {
         "python -c 'import numpy'": [sys.executable, "-c", "import numpy"],
         "grade ch06 --solutions": [sys.executable, "-m", "grader", "ch06", "--solutions"],
+        "  code only (--no-quiz)": [sys.executable, "-m", "grader", "ch06", "--solutions", "--no-quiz"],
+        "  code only, no sandbox": [sys.executable, "-m", "grader", "ch06", "--solutions", "--no-quiz",
+                                    "--no-sandbox"],
         "grade ch06 (stubs)": [sys.executable, "-m", "grader", "ch06"],
         "grade all --solutions": [sys.executable, "-m", "grader", "all", "--solutions"],
     }
@@ -51,7 +54,8 @@ def main() -> None:
         median = statistics.median(values)
         print(f"{name:<28} {median:9.3f} {min(values):7.3f} {median / baseline:8.2f}")
     ratio = statistics.median(samples["grade ch06 --solutions"]) / baseline
-    print(f"\ngrade ch06 / import numpy = {ratio:.2f}x (target <= 1.5x); "
+    code = statistics.median(samples["  code only (--no-quiz)"]) / baseline
+    print(f"\ngrade ch06 / import numpy = {ratio:.2f}x with the quiz, {code:.2f}x code only (target <= 1.5x); "
           f"otter-grader's quoted 3.4 s would be {3.4 / baseline:.0f}x")
 
 

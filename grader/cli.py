@@ -81,20 +81,24 @@ def _unicode_ok(stream) -> bool:
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers "
               "(default: exercises/answers/learner.yaml, else 'anonymous').")
 @click.option("--no-quiz", is_flag=True, help="Grade the code only.")
+@click.option("--no-sandbox", is_flag=True, help="Do not run your code inside bubblewrap even where it is installed.")
 @click.option("--html", "html_path", type=click.Path(dir_okay=False, writable=True), default=None,
               help="Also write a self-contained HTML report with plots made from your functions.")
 def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
                 output_format: str, seed: int | None, verbose: bool, learner: str | None,
-                no_quiz: bool, html_path: str | None) -> None:
+                no_quiz: bool, no_sandbox: bool, html_path: str | None) -> None:
     """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
     # the child may already run (grader.launch); else start it now, to overlap our imports below
     session = launch.take(submission)
+    if session is not None and no_sandbox and session.wrap is not None:
+        session.close()
+        session = None
     if session is None:
         from grader.sandbox import learner_sandbox
 
-        session = Session(submission, wrap=learner_sandbox())
+        session = Session(submission, wrap=None if no_sandbox else learner_sandbox())
     try:
         from grader.grading import DEFAULT_SEED, grade
 

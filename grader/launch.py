@@ -35,7 +35,7 @@ def _guess(args: list[str]) -> tuple | None:
             directory = arg.split("=", 1)[1]
     try:
         submission = locate(directory, "--solutions" in args)
-        wrap = learner_sandbox()
+        wrap = None if "--no-sandbox" in args else learner_sandbox()
         return submission, start_child(submission, wrap), wrap
     except (SubmissionNotFound, OSError):
         return None
