@@ -1,0 +1,157 @@
+"""grade batch: layouts, zips, roster, outputs in every format, resuming, and a killed run."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+from xml.etree import ElementTree
+
+import pytest
+from click.testing import CliRunner
+
+from grader.batch import StagingError, discover, stage
+from grader.cli import main
+from tests.conftest import build_submission, replace_function
+
+CHAPTERS = "ch03,ch06"
+
+
+def _zip(folder: Path, target: Path, prefix: str = "") -> Path:
+    with zipfile.ZipFile(target, "w") as archive:
+        for path in sorted(folder.rglob("*.py")):
+            archive.write(path, prefix + str(path.relative_to(folder)))
+    return target
+
+
+@pytest.fixture
+def submissions(tmp_path):
+    folder = tmp_path / "submissions"
+    folder.mkdir()
+    build_submission(folder / "alice")  # exercises/ layout, all right
+    flat = build_submission(tmp_path / "flat")  # chapter files directly in the folder
+    (folder / "bob").mkdir()
+    for path in (flat / "exercises").glob("ch0*.py"):
+        (folder / "bob" / path.name).write_text(path.read_text())
+    wrong = build_submission(tmp_path / "wrong", {"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n"
+                                          "    return np.array([[x / r, y / r], [y / r2, x / r2]])\n")})
+    _zip(wrong, folder / "carol.zip", prefix="carol-main/")
+    (folder / "dave.zip").write_bytes(b"this is not a zip")
+    return folder
+
+
+def _rows(path: Path) -> list[dict]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def _invoke(*args):
+    result = CliRunner().invoke(main, ["batch", *map(str, args)])
+    return result
+
+
+def test_batch_outputs_every_format(submissions, tmp_path):
+    out = tmp_path / "out"
+    result = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--jobs", "2")
+    assert result.exit_code == 1  # dave's zip cannot be read
+    assert "dave: dave.zip: dave.zip is not a valid zip file" in result.output
+    rows = _rows(out / "gradebook.csv")
+    by_learner = {row["learner"]: row for row in rows}
+    assert set(by_learner) == {"alice", "bob", "carol", "dave"}
+    assert list(rows[0]) == ["learner", "ch03_code", "ch03_quiz", "ch06_code", "ch06_quiz", "total", "max_total", "status"]
+    assert by_learner["alice"]["ch06_code"] == by_learner["bob"]["ch06_code"] == "15"
+    assert float(by_learner["carol"]["ch06_code"]) < 15 and by_learner["carol"]["ch03_code"] == "10"
+    assert by_learner["dave"]["status"] == "unreadable" and by_learner["dave"]["total"] == ""
+    report = json.loads((out / "carol" / "report.json").read_text())
+    assert report["chapters"][1]["chapter"] == "ch06"
+    gradescope = json.loads((out / "carol" / "results.json").read_text())
+    assert gradescope["score"] == report["score"]
+    test = gradescope["tests"][0]
+    assert {"name", "score", "max_score", "status", "output", "visibility"} <= set(test)
+    assert any(t["status"] == "failed" and "H[1,0]" in t["output"] for t in gradescope["tests"])
+    assert (out / "carol" / "report.html").read_text().count("<section class=\"chapter\"") == 2
+    suites = ElementTree.parse(out / "junit.xml").getroot()
+    assert {s.get("name") for s in suites} == {"alice", "bob", "carol"}
+    carol = next(s for s in suites if s.get("name") == "carol")
+    assert int(carol.get("failures")) > 0
+    summary = (out / "summary.html").read_text()
+    assert "id='histogram'" in summary and "id='failure-rates'" in summary and "id='messages'" in summary
+    rates_section = summary[summary.index("id='failure-rates'"):summary.index("id='messages'")]
+    rates = [int(r) for r in __import__("re").findall(r"(\d+)%</td>", rates_section)]
+    assert rates == sorted(rates, reverse=True) and "ch06/H_worked_example" in rates_section
+    assert "H_jacobian(3, 4): 1 of 4 entries differ" in summary
+
+
+def test_roster_names_learners(submissions, tmp_path):
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner\nalice,s1001\ncarol.zip,s1003\n")
+    names = {e.learner for e in discover(submissions, roster)}
+    assert {"s1001", "s1003", "bob", "dave"} == names
+
+
+def test_rerun_skips_unchanged_and_regrades_changed(submissions, tmp_path):
+    out = tmp_path / "out"
+    _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
+    first = (out / "alice" / "report.json").stat().st_mtime_ns
+    again = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
+    assert "3 unchanged" in again.output and "graded 0" in again.output
+    assert (out / "alice" / "report.json").stat().st_mtime_ns == first
+    target = submissions / "alice" / "exercises" / "ch03_jacobian.py"
+    target.write_text(target.read_text() + "\n# changed\n")
+    third = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
+    assert "graded 1" in third.output
+    assert (out / "alice" / "report.json").stat().st_mtime_ns != first
+
+
+def test_zip_entries_outside_the_archive_are_never_extracted(tmp_path):
+    target = tmp_path / "evil.zip"
+    with zipfile.ZipFile(target, "w") as archive:
+        archive.writestr("../../ch06_measurement.py", "x = 1\n")
+        archive.writestr("/abs/ch03_jacobian.py", "x = 1\n")
+        archive.writestr("exercises/ch00_range_sensor.py", "x = 1\n")
+    from grader.batch import Entry
+
+    root = stage(Entry("evil", target), tmp_path / "staging")
+    assert sorted(p.name for p in (root / "exercises").glob("ch*.py")) == ["ch00_range_sensor.py"]
+    assert not (tmp_path / "ch06_measurement.py").exists()
+
+
+def test_oversized_zip_member_is_refused(tmp_path):
+    target = tmp_path / "bomb.zip"
+    with zipfile.ZipFile(target, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("ch06_measurement.py", "#" * (4 << 20))
+    from grader.batch import Entry
+
+    with pytest.raises(StagingError, match="bytes"):
+        stage(Entry("bomb", target), tmp_path / "staging")
+
+
+def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissions, tmp_path):
+    out = tmp_path / "out"
+    for i in range(6):
+        build_submission(submissions / f"extra{i}")
+    proc = subprocess.Popen([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out),
+                             "--chapters", CHAPTERS, "--jobs", "1", "--no-html"],
+                            cwd=Path(__file__).resolve().parents[1], start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(list(out.glob("*/report.json"))) < 2:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = list(out.glob("*/report.json"))
+    assert done, "nothing was graded before the kill"
+    for path in done:
+        json.loads(path.read_text())  # every written report is whole
+    assert not (out / "gradebook.csv").exists() or _rows(out / "gradebook.csv") is not None
+    result = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
+    assert f"{len(done)} unchanged" in result.output
+    rows = _rows(out / "gradebook.csv")
+    assert len(rows) == 10 and all(r["status"] in ("graded", "unreadable") for r in rows)
