@@ -10,6 +10,7 @@ are rebuilt from the per-learner reports at the end, so an interrupted run loses
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import io
 import json
@@ -136,6 +137,7 @@ def content_hash(root: Path, chapters: list[str], seed: int) -> str:
     return digest.hexdigest()
 
 
+@functools.lru_cache(maxsize=1)
 def _grader_version() -> str:
     """Changes when the grader's own checks change, so a re-run re-grades after an update."""
     digest = hashlib.sha256()
