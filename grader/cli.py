@@ -69,13 +69,22 @@ def _unicode_ok(stream) -> bool:
         return False
 
 
+def chapter_and_submission_options(command):
+    """CHAPTER..., --submission, --solutions and --format: shared by `grade run` and `grade quiz`."""
+    for option in reversed([
+        click.argument("chapters", nargs=-1, metavar="CHAPTER..."),
+        click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
+                     help="Folder holding exercises/ (default: the project around the current directory)."),
+        click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference solutions instead."),
+        click.option("--format", "output_format", type=click.Choice(["text", "json"]), default="text",
+                     show_default=True, help="Output format."),
+    ]):
+        command = option(command)
+    return command
+
+
 @main.command("run")
-@click.argument("chapters", nargs=-1, metavar="CHAPTER...")
-@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
-              help="Folder holding exercises/ (default: the project around the current directory).")
-@click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference solutions instead.")
-@click.option("--format", "output_format", type=click.Choice(["text", "json"]), default="text",
-              show_default=True, help="Output format.")
+@chapter_and_submission_options
 @click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
 @click.option("-v", "--verbose", is_flag=True, help="Show tracebacks and what your code printed.")
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers "
@@ -160,12 +169,7 @@ def list_command() -> None:
 
 
 @main.command("quiz")
-@click.argument("chapters", nargs=-1, metavar="CHAPTER...")
-@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
-              help="Folder holding exercises/ (default: the project around the current directory).")
-@click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference answers instead.")
-@click.option("--format", "output_format", type=click.Choice(["text", "json"]), default="text",
-              show_default=True, help="Output format.")
+@chapter_and_submission_options
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers.")
 @click.option("--show", is_flag=True, help="Print the questions (with this learner's numbers) instead of grading.")
 def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,

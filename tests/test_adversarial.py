@@ -40,8 +40,8 @@ HOSTILE = {
                                 "        sys.stdout.write(chunk)\n    return np.zeros((2, 2))"),
     "sleeping_children": _module(f"import subprocess\nsubprocess.Popen(['sleep', '{MARKER}'])\n"
                                  f"subprocess.Popen(['sleep', '{MARKER}'], start_new_session=True)\n"),
-    "reads_references": _h(f"    from solutions.ch06_measurement import H_jacobian as reference\n"
-                           f"    return reference(x, y)"),
+    "reads_references": _h("    from solutions.ch06_measurement import H_jacobian as reference\n"
+                           "    return reference(x, y)"),
     "reads_reference_file": _h(f"    text = open({os.path.join(GRADER_PARENT, 'solutions', 'ch06_measurement.py')!r}).read()\n"
                                "    namespace = {}\n    exec(text, namespace)\n    return namespace['H_jacobian'](x, y)"),
     "reads_quiz_keys": _h(f"    open({os.path.join(GRADER_PARENT, 'quizzes', 'keys', 'ch06.yaml')!r}).read()\n"

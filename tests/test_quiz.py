@@ -17,7 +17,7 @@ from grader.cli import main
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import judge
-from grader.quiz.symbolic import AnswerError, check_text, equivalent, number, parse
+from grader.quiz.symbolic import AnswerError, equivalent, number, parse
 from grader.quiz.templates import reference_answers, template
 
 ALL = [c.id for c in CHAPTERS]

@@ -14,7 +14,8 @@ import numpy as np
 
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
-from grader.compare import all_of, compare_arrays, expect, fail, fmt, passed, value_problem
+from grader.checks.sampling import same_seed_same_value
+from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_problem
 from grader.runner import call
 
 CHECKS = chapter_checks("ch00")
@@ -133,16 +134,4 @@ def mean_shift_reproducible(ctx):
     args = ((3, 4), 1.0, 2000)
     got = yield [call("mean_shift", *args, seed), call("mean_shift", *args, seed), call("mean_shift", *args, other)]
     label = "mean_shift((3, 4), 1, 2000, seed={})"
-    for g, s in zip(got, (seed, seed, other)):
-        problem = value_problem(g, (), label.format(s))
-        if problem:
-            return fail(problem)
-    first, again, different = (float(g.as_array()) for g in got)
-    if first != again:
-        return fail(f"{label.format(seed)} gave {first!r}, then {again!r} with the same seed: draw the "
-                    "samples from np.random.default_rng(seed), not from an unseeded generator.",
-                    expected=first, got=again)
-    if first == different:
-        return fail(f"{label.format(seed)} and seed={other} both gave {first!r}: the seed must choose the samples.",
-                    got=different)
-    return passed()
+    return same_seed_same_value(got, label, seed, other)

@@ -30,7 +30,18 @@ import solutions.ch06_measurement as ch06
 import solutions.ch08_lab as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
-from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, passed, value_problem
+from grader.checks.sampling import same_seed_same_value
+from grader.compare import (
+    Entries,
+    all_of,
+    compare_arrays,
+    expect,
+    expect_raises,
+    fail,
+    fmt,
+    passed,
+    value_problem,
+)
 from grader.runner import Array, Rng, call
 
 CHECKS = chapter_checks("ch08")
@@ -265,18 +276,7 @@ def mismatch_reproducible(ctx):
     args = (2.0, -1.5, 0.6, 2000)
     got = yield [call("linearization_mismatch", *args, s) for s in (seed, seed, other)]
     label = "linearization_mismatch(2, -1.5, 0.6, 2000, seed={})"
-    for g, s in zip(got, (seed, seed, other)):
-        problem = value_problem(g, (), label.format(s))
-        if problem:
-            return fail(problem)
-    first, again, different = (float(g.as_array()) for g in got)
-    if first != again:
-        return fail(f"{label.format(seed)} gave {first!r}, then {again!r} with the same seed: draw the samples from "
-                    "np.random.default_rng(seed).", expected=first, got=again)
-    if first == different:
-        return fail(f"{label.format(seed)} and seed={other} both gave {first!r}: the seed must choose the samples.",
-                    got=different)
-    return passed()
+    return same_seed_same_value(got, label, seed, other)
 
 
 @CHECKS.check("linearization_mismatch", points=1)
