@@ -65,15 +65,18 @@ class Sandbox:
         args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp"]
         emptied = ["/tmp"]  # folders replaced by an empty tmpfs: bind targets inside need their parents made
         drop = os.geteuid() == 0 and self.setpriv is not None
-        if drop:  # root's home is 0700: give nobody a way to the interpreter and nothing else there
+        if drop:  # root's home is usually 0700: nobody gets an empty one, with what it needs bound back
             home = os.path.expanduser("~")
-            needed = {sys.prefix, sys.base_prefix, *child_path()}
-            inside_home = sorted(p for p in needed if p.startswith(home + os.sep) and os.path.exists(p))
-            if inside_home:
+            if home not in ("/", "") and os.path.isdir(home):
                 args += ["--tmpfs", home]
                 emptied.append(home)
-                for path in _outermost(inside_home):
-                    args += _parents(path, emptied) + ["--ro-bind", path, path]
+        # The interpreter, its libraries and the grader package must stay visible even where they
+        # live inside an emptied folder (a virtual environment in /tmp, pyenv in root's home).
+        needed = {sys.prefix, sys.base_prefix, os.path.dirname(os.path.realpath(sys.executable)),
+                  *(p for p in child_path() if p != GRADER_PARENT), os.path.join(GRADER_PARENT, "grader")}
+        inside = sorted(p for p in needed if os.path.exists(p) and any(p.startswith(e + os.sep) for e in emptied))
+        for path in _outermost(inside):
+            args += _parents(path, emptied) + ["--ro-bind", path, path]
         for path in self.hide:
             args += _parents(path, emptied) + ["--tmpfs", path]
             emptied.append(path)
