@@ -108,6 +108,12 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.sandbox import learner_sandbox
 
         session = Session(submission, wrap=None if no_sandbox else learner_sandbox())
+    if html_path is not None:  # import matplotlib while grading mostly waits on the child
+        import threading
+
+        from grader.render.html import preload
+
+        threading.Thread(target=preload, daemon=True).start()
     try:
         from grader.grading import DEFAULT_SEED, grade
 
