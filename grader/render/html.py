@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import io
+import os
 
 import numpy as np
 
@@ -322,6 +323,28 @@ def render(report: Report) -> str:
 
     environment = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
     template = environment.from_string(TEMPLATE)
-    return template.render(report=report, figures={c.chapter: figures(c) for c in report.chapters},
-                           num=_num, values=_values)
+    return template.render(report=report, figures=_all_figures(report), num=_num, values=_values)
+
+
+def _all_figures(report: Report) -> dict[str, list[_Figure]]:
+    """Every chapter's figures, drawn by two forked processes where possible (drawing is most of
+    the report's cost); serially where fork is unavailable or fails."""
+    chapters = [c for c in report.chapters if c.plots]
+    out: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
+    if len(chapters) > 1:
+        try:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            preload()
+            with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
+                                     mp_context=multiprocessing.get_context("fork")) as pool:
+                for chapter, drawn in zip(chapters, pool.map(figures, chapters)):
+                    out[chapter.chapter] = drawn
+            return out
+        except (OSError, ValueError, ImportError, RuntimeError):
+            pass
+    for chapter in chapters:
+        out[chapter.chapter] = figures(chapter)
+    return out
 
