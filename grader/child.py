@@ -226,7 +226,6 @@ def run(request: dict, out) -> None:
         _emit(out, {"event": "imported", "chapter": name})
         for call in chapter["calls"]:
             index = call["index"]
-            _emit(out, {"event": "call", "chapter": name, "index": index})
             function = getattr(module, call["function"], None)
             if not callable(function):
                 _emit(out, {"event": "missing", "chapter": name, "index": index})

@@ -250,9 +250,10 @@ class Session:
         def deadline() -> float:
             return min(state["deadline"], state["chapter_end"])
 
-        # The child's lines must follow the request exactly: import, imported, then call i and its
-        # result for each pending call in order, ..., done. Anything else means learner code wrote to
-        # the channel (it runs in the same process): the child is stopped and nothing more is read.
+        # The child's lines must follow the request exactly: import, imported, then one result per
+        # pending call in order, ..., done. Anything else means learner code wrote to the channel
+        # (it runs in the same process): the child is stopped and nothing more is read. The call in
+        # flight is always the next pending one, so the child need not announce it.
         order = [(r.chapter, [i for i, x in enumerate(runs[r.chapter].results) if x is None]) for r in pending]
         position = {"chapter": 0, "call": 0}
         finished = timed_out = violated = False
@@ -261,13 +262,18 @@ class Session:
             calls = order[position["chapter"]][1]
             return calls[position["call"]] if position["call"] < len(calls) else None
 
+        def start_next_call(now: float) -> None:
+            index = next_call()
+            if index is not None:
+                state.update(index=index, stage="call", deadline=now + limits.call_seconds)
+            else:  # the chapter is done; the child moves on at once
+                position.update(chapter=position["chapter"] + 1, call=0)
+                state.update(index=None, stage="between", deadline=now + limits.call_seconds)
+
         try:
             for event in child.events(deadline):
                 kind, name, now = event.get("event"), event.get("chapter"), time.monotonic()
                 stage = state["stage"]
-                if stage == "calls" and next_call() is None:  # the chapter is done
-                    position.update(chapter=position["chapter"] + 1, call=0)
-                    stage = "between"
                 if stage in ("startup", "between"):
                     if kind == "done" and position["chapter"] == len(order):
                         finished = True
@@ -281,20 +287,17 @@ class Session:
                         error = event.get("error")
                         runs[name].import_error = error if isinstance(error, dict) else {}
                         position.update(chapter=position["chapter"] + 1, call=0)
-                        state.update(stage="between", deadline=float("inf"))
+                        state.update(stage="between", deadline=now + limits.call_seconds)
                         continue
                     if kind == "imported":
-                        state.update(stage="calls", deadline=float("inf"))
+                        start_next_call(now)
                         continue
-                elif stage == "calls" and kind == "call" and name == state["chapter"] and event.get("index") == next_call():
-                    state.update(index=next_call(), stage="call", deadline=now + limits.call_seconds)
-                    continue
                 elif stage == "call" and kind in ("returned", "raised", "missing") and name == state["chapter"] \
                         and event.get("index") == state["index"]:
                     req = by_name[name]
                     runs[name].results[state["index"]] = from_event(req.calls[state["index"]].function, event)
                     position["call"] += 1
-                    state.update(stage="calls", deadline=float("inf"))
+                    start_next_call(now)
                     continue
                 violated = True
                 break

@@ -8,6 +8,7 @@ computed by the reference implementation in solutions/, never stored.
 
 from __future__ import annotations
 
+import functools
 import importlib
 import random
 from dataclasses import dataclass, field
@@ -92,7 +93,9 @@ def _load(path: Path) -> object:
         raise BankError(f"{path}: line {mark.line + 1 if mark else '?'}: {exc.problem}") from None
 
 
+@functools.lru_cache(maxsize=32)
 def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
+    """The chapter's questions (read once per process; do not modify the list)."""
     path = quiz_dir / f"{chapter}.yaml"
     data = _load(path)
     out = []
@@ -109,8 +112,9 @@ def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
     return out
 
 
+@functools.lru_cache(maxsize=32)
 def keys(chapter: str, quiz_dir: Path = QUIZ_DIR) -> dict[str, Key] | None:
-    """The chapter's keys, or None when the keys folder is not shipped."""
+    """The chapter's keys, or None when the keys folder is not shipped (read once per process)."""
     path = quiz_dir / "keys" / f"{chapter}.yaml"
     if not path.exists():
         return None
