@@ -186,7 +186,7 @@ def _grade_one(learner: str, root: str, out: str, chapters: list[str], seed: int
         from grader.render import html as html_renderer
 
         write_atomically(folder / "report.html", html_renderer.render(report))
-    write_atomically(folder / "report.json", json.dumps(data, indent=1, allow_nan=False) + "\n")  # last: marks done
+    write_atomically(folder / "report.json", json.dumps(data, allow_nan=False) + "\n")  # last: marks done
     problems = sum(bool(c.problems) for c in report.chapters)
     return learner, "graded", f"{report.score:g}/{report.max_score:g}" + (f", {problems} chapter(s) with problems" if problems else "")
 

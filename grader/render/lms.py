@@ -22,7 +22,7 @@ def gradescope(report: Report) -> str:
                 "status": "passed" if check.status == Status.PASS else "failed",
                 "output": check.message, "visibility": "visible",
             })
-    return json.dumps({"score": report.score, "tests": tests}, indent=2) + "\n"
+    return json.dumps({"score": report.score, "tests": tests}) + "\n"
 
 
 def junit(reports: list[tuple[str, Report]]) -> str:
