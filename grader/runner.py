@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from grader.returned import CRASHED, NOT_RUN, TIMEOUT, Returned, from_event
-from grader.spawn import CommandWrapper, start_child
+from grader.spawn import CommandWrapper, forget, kill_orphans, start_child
 from grader.submission import Submission
 
 _CAPTURE_LIMIT = 64 * 1024
@@ -175,6 +175,8 @@ class _Child:
         except (ProcessLookupError, PermissionError):
             pass
         self.process.wait()
+        forget(self.process.pid)
+        kill_orphans()  # grandchildren that left the process group with setsid
         os.close(self.read_fd)
         try:
             with open(self.capture, "rb") as handle:

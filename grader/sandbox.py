@@ -39,7 +39,7 @@ class Sandbox:
     """A grader.runner CommandWrapper: `Session(submission, wrap=Sandbox(...))`."""
 
     def __init__(self, hide: list[str | Path] = (), capture_dir: str | Path | None = None) -> None:
-        self.bwrap = shutil.which("bwrap")
+        self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
         self.setpriv = shutil.which("setpriv")
         self.hide = [str(Path(p).resolve()) for p in hide] + _hidden_defaults()
         self.capture_dir = str(capture_dir) if capture_dir else None
@@ -115,8 +115,12 @@ def _outermost(paths: list[str]) -> list[str]:
 
 def learner_sandbox() -> Sandbox | None:
     """The sandbox for `grade chNN`, or None where bubblewrap is not installed (or GRADER_SANDBOX=off)."""
-    if os.environ.get("GRADER_SANDBOX") == "off" or shutil.which("bwrap") is None:
+    sandbox = Sandbox()
+    if not sandbox.available:
         return None
     from grader.spawn import temp_dir
 
-    return Sandbox(capture_dir=os.path.join(temp_dir(), f"grade-capture-{os.getuid()}"))
+    sandbox.capture_dir = os.path.join(temp_dir(), f"grade-capture-{os.getuid()}")
+    os.makedirs(sandbox.capture_dir, exist_ok=True)
+    os.chmod(sandbox.capture_dir, 0o1777)
+    return sandbox

@@ -40,9 +40,55 @@ def child_environment() -> dict:
     return env
 
 
+_LIVE: set[int] = set()  # pids of the children started here and not yet stopped
+_SUBREAPER = False
+
+
+def _become_subreaper() -> None:
+    """Linux: adopt orphaned descendants (a learner's `setsid` grandchildren, which leave the
+    process group) so that kill_orphans() can find them. Elsewhere a no-op."""
+    global _SUBREAPER
+    if _SUBREAPER or not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
+        _SUBREAPER = True
+    except (OSError, AttributeError):
+        pass
+
+
+def kill_orphans() -> None:
+    """Kill and reap the adopted processes that are not one of our live children."""
+    if not _SUBREAPER:
+        return
+    me = os.getpid()
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit() or int(entry) in _LIVE:
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", "rb") as handle:
+                fields = handle.read().rsplit(b")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == me:
+            pid = int(entry)
+            try:
+                os.kill(pid, 9)
+                os.waitpid(pid, os.WNOHANG)
+            except (ProcessLookupError, ChildProcessError, PermissionError):
+                pass
+
+
+def forget(pid: int) -> None:
+    _LIVE.discard(pid)
+
+
 def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subprocess.Popen, int, str]:
     """Start a child for `submission`: (process, read end of its result pipe, capture file path)."""
     global _capture_count
+    _become_subreaper()
     _capture_count += 1
     read_fd, write_fd = os.pipe()
     folder = getattr(wrap, "capture_dir", None) or temp_dir()  # a sandbox shares only its capture dir
@@ -56,4 +102,5 @@ def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subproc
         cwd=str(submission.root),
     )
     os.close(write_fd)
+    _LIVE.add(process.pid)
     return process, read_fd, capture

@@ -18,7 +18,9 @@ from tests.conftest import build_submission, replace_function
 MARKER = "313.131"  # sleep duration used by hostile children, to find strays in /proc
 LIMITS = {"import_seconds": 2.0, "call_seconds": 2.0, "chapter_seconds": 8.0}
 CHAPTERS = ["ch03", "ch06"]
-BWRAP = shutil.which("bwrap")
+BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
+# Without the sandbox learner code can read what the grader's own account can: these need it.
+SANDBOX_ONLY = {"reads_references", "reads_reference_file", "reads_quiz_keys", "reads_other_learner"}
 
 
 def _h(body: str) -> dict:
@@ -124,6 +126,8 @@ def test_other_learners_are_graded_normally(batch):
 
 @pytest.mark.parametrize("learner", sorted(HOSTILE))
 def test_no_false_pass_and_a_clear_message(batch, learner):
+    if learner in SANDBOX_ONLY and BWRAP is None:
+        pytest.skip("reading the grader's own files is only prevented by the bubblewrap sandbox")
     out, _, _ = batch
     checks, data = _checks(out, learner)
     h_checks = [c for c in checks.values() if c["function"] == "H_jacobian" and c["id"] != "H_raises_at_origin"]
@@ -143,7 +147,8 @@ def test_specific_messages(batch):
     assert "ndarray subclass" in message("always_equal_subclass")
     assert "returned str" in message("returns_string")
     assert "not finite" in message("returns_nan")
-    assert "ModuleNotFoundError" in message("reads_references")
+    if BWRAP:
+        assert "ModuleNotFoundError" in message("reads_references")
 
 
 def test_fake_result_files_do_not_count(batch):
