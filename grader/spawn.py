@@ -88,7 +88,6 @@ def forget(pid: int) -> None:
 def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subprocess.Popen, int, str]:
     """Start a child for `submission`: (process, read end of its result pipe, capture file path)."""
     global _capture_count
-    _become_subreaper()
     _capture_count += 1
     read_fd, write_fd = os.pipe()
     folder = getattr(wrap, "capture_dir", None) or temp_dir()  # a sandbox shares only its capture dir
@@ -103,4 +102,5 @@ def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subproc
     )
     os.close(write_fd)
     _LIVE.add(process.pid)
+    _become_subreaper()  # after the start: the child imports numpy long before learner code runs
     return process, read_fd, capture
