@@ -39,6 +39,11 @@ def replace_function(module: str, function: str, new_source: str) -> str:
     return pattern.sub(textwrap.dedent(new_source).strip() + "\n\n\n", text + "\n#end\n", count=1)
 
 
+def checks_by_id(chapter) -> dict:
+    """A ChapterResult's checks by id."""
+    return {c.id: c for c in chapter.checks}
+
+
 @pytest.fixture(scope="session")
 def repo_root() -> Path:
     return REPO

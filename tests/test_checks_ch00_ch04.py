@@ -7,19 +7,15 @@ import numpy as np
 import pytest
 
 from grader import checks as check_registry
+from grader.chapters import BY_ID
 from grader.checks.ch00 import rice_moments
 from grader.grading import grade
 from grader.model import Status
 from grader.runner import Session, Submission
-from tests.conftest import replace_function
+from tests.conftest import checks_by_id, replace_function
 
 CHAPTERS = ["ch00", "ch01", "ch02", "ch03", "ch04"]
-MODULES = {"ch00": "ch00_range_sensor", "ch01": "ch01_tangent_line", "ch02": "ch02_gradient",
-           "ch03": "ch03_jacobian", "ch04": "ch04_chain_rule"}
-
-
-def _by_id(chapter):
-    return {c.id: c for c in chapter.checks}
+MODULES = {c: BY_ID[c].module for c in CHAPTERS}
 
 
 def test_chapter_sizes_follow_the_guide():
@@ -195,7 +191,7 @@ def test_a_realistic_mistake_fails_the_check_aimed_at_it(submission_factory, nam
     module = MODULES[chapter_id]
     root = submission_factory({module: replace_function(module, function, source)})
     chapter = grade(Session(Submission(root, "exercises")), [chapter_id]).chapters[0]
-    checks = _by_id(chapter)
+    checks = checks_by_id(chapter)
     aimed = checks[target]
     assert aimed.function == function or target in collateral
     assert aimed.status == Status.FAIL, (aimed.status, aimed.message)

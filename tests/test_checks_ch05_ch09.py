@@ -9,19 +9,15 @@ import pytest
 
 import solutions.ch08_lab as ch08_ref
 from grader import checks as check_registry
+from grader.chapters import BY_ID
 from grader.checks import ch05, ch08, ch09
 from grader.grading import grade
 from grader.model import Status
 from grader.runner import Session, Submission
-from tests.conftest import replace_function
+from tests.conftest import checks_by_id, replace_function
 
 CHAPTERS = ["ch05", "ch07", "ch08", "ch09"]
-MODULES = {"ch05": "ch05_finite_differences", "ch07": "ch07_dynamics", "ch08": "ch08_lab",
-           "ch09": "ch09_choose_your_tool"}
-
-
-def _by_id(chapter):
-    return {c.id: c for c in chapter.checks}
+MODULES = {c: BY_ID[c].module for c in CHAPTERS}
 
 
 def test_chapter_sizes_follow_the_guide():
@@ -61,9 +57,8 @@ def test_difference_bounds_hold_for_right_answers_and_separate_the_wrong_ones():
 
 
 def test_hessian_tolerance_covers_the_reference_and_not_a_forward_outer_difference():
-    from solutions.ch09_choose_your_tool import gradient_fd, hessian_fd
-
     from grader.catalogue import CALLABLES
+    from solutions.ch09_choose_your_tool import gradient_fd, hessian_fd
     rng = np.random.default_rng(3)
     for _ in range(40):
         for name in ("saddle3_vec", "rosenbrock_vec"):
@@ -396,7 +391,7 @@ def test_a_realistic_mistake_fails_the_check_aimed_at_it(submission_factory, nam
     root = submission_factory({module: replace_function(module, function, source)})
     chapter = grade(Session(Submission(root, "exercises")), [chapter_id]).chapters[0]
     assert not chapter.problems, chapter.problems
-    checks = _by_id(chapter)
+    checks = checks_by_id(chapter)
     aimed = checks[target]
     assert aimed.function == function
     assert aimed.status == Status.FAIL, (aimed.status, aimed.message)

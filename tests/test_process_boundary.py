@@ -10,16 +10,13 @@ import pytest
 from grader.grading import grade
 from grader.model import Status
 from grader.runner import Limits, Session, Submission
+from tests.conftest import checks_by_id
 
 FAST = Limits(import_seconds=2.0, call_seconds=2.0, chapter_seconds=8.0)
 
 
 def _grade(root, chapters, limits=FAST):
     return grade(Session(Submission(root, "exercises"), limits), chapters)
-
-
-def _by_id(chapter):
-    return {c.id: c for c in chapter.checks}
 
 
 def test_syntax_error_is_reported_with_file_and_line_and_other_chapters_are_graded(submission_factory):
@@ -65,7 +62,7 @@ def test_os_exit_inside_one_function_costs_only_that_function(submission_factory
                               "def measurement_covariance(x, y, sigma):\n    import os\n    os._exit(3)\n")
     root = submission_factory({"ch06_measurement": source})
     ch06 = _grade(root, ["ch06"]).chapters[0]
-    checks = _by_id(ch06)
+    checks = checks_by_id(ch06)
     assert checks["covariance_worked_example"].status == Status.FAIL
     assert "ended abruptly" in checks["covariance_worked_example"].message
     assert "exit status 3" in checks["covariance_worked_example"].message
@@ -82,7 +79,7 @@ def test_endless_loop_in_one_function_times_out_and_the_rest_is_graded(submissio
     started = time.monotonic()
     ch06 = _grade(root, ["ch06"]).chapters[0]
     assert time.monotonic() - started < 10
-    checks = _by_id(ch06)
+    checks = checks_by_id(ch06)
     timed_out = [c for c in ch06.checks if c.function == "H_jacobian"]
     assert all(c.status in (Status.FAIL, Status.SKIP) for c in timed_out)
     assert any("did not return in time" in c.message for c in timed_out)
@@ -106,7 +103,7 @@ def test_wrong_types_are_never_compared(submission_factory, body, wrong_type):
 
     source = replace_function("ch06_measurement", "H_jacobian", f"def H_jacobian(x, y):\n    {body}\n")
     root = submission_factory({"ch06_measurement": source})
-    checks = _by_id(_grade(root, ["ch06"]).chapters[0])
+    checks = checks_by_id(_grade(root, ["ch06"]).chapters[0])
     example = checks["H_worked_example"]
     assert example.status == Status.FAIL
     assert wrong_type in example.message
@@ -119,8 +116,8 @@ def test_wrong_shape_and_nan_are_named(submission_factory):
                              "def H_jacobian(x, y):\n    return np.array([0.6, 0.8, -0.16, 0.12])\n")
     nan = replace_function("ch06_measurement", "H_jacobian",
                            "def H_jacobian(x, y):\n    return np.array([[0.6, 0.8], [np.nan, 0.12]])\n")
-    shape_check = _by_id(_grade(submission_factory({"ch06_measurement": shape}), ["ch06"]).chapters[0])
-    nan_check = _by_id(_grade(submission_factory({"ch06_measurement": nan}), ["ch06"]).chapters[0])
+    shape_check = checks_by_id(_grade(submission_factory({"ch06_measurement": shape}), ["ch06"]).chapters[0])
+    nan_check = checks_by_id(_grade(submission_factory({"ch06_measurement": nan}), ["ch06"]).chapters[0])
     assert "returned shape (4,); expected shape (2, 2)" in shape_check["H_worked_example"].message
     assert "not finite: H[1,0] = d bearing/d x = nan" in nan_check["H_worked_example"].message
 
@@ -130,7 +127,7 @@ def test_learner_traceback_is_trimmed_to_learner_frames(submission_factory):
 
     source = replace_function("ch06_measurement", "H_jacobian",
                               "def H_jacobian(x, y):\n    return helper(x)\n\n\ndef helper(x):\n    return x[0]\n")
-    checks = _by_id(_grade(submission_factory({"ch06_measurement": source}), ["ch06"]).chapters[0])
+    checks = checks_by_id(_grade(submission_factory({"ch06_measurement": source}), ["ch06"]).chapters[0])
     example = checks["H_worked_example"]
     assert "raised TypeError" in example.message
     trace = example.details["traceback"]
@@ -166,5 +163,5 @@ def test_child_runs_in_another_process(submission_factory):
     source = replace_function("ch06_measurement", "range_bearing",
                               "def range_bearing(x, y):\n    import os\n    return np.array([os.getpid(), 0.0])\n")
     report = _grade(submission_factory({"ch06_measurement": source}), ["ch06"])
-    got = _by_id(report.chapters[0])["range_bearing_worked_example"].got
+    got = checks_by_id(report.chapters[0])["range_bearing_worked_example"].got
     assert got[0] != os.getpid()
