@@ -108,9 +108,13 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.sandbox import learner_sandbox
 
         session = Session(submission, wrap=None if no_sandbox else learner_sandbox())
-    if html_path is not None:  # import matplotlib while grading mostly waits on the child
-        import threading
+    # Imports that grading does not need yet run in a thread: it makes progress while grading
+    # waits on the child (pyyaml for the quiz, matplotlib for the report).
+    import threading
 
+    if not no_quiz:
+        threading.Thread(target=_preload_quiz, daemon=True).start()
+    if html_path is not None:
         from grader.render.html import preload
 
         threading.Thread(target=preload, daemon=True).start()
@@ -130,6 +134,10 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
         write_atomically(html_path, html.render(report))
     _emit(report, output_format, verbose)
+
+
+def _preload_quiz() -> None:
+    import grader.quiz.judge  # noqa: F401  (pyyaml and the quiz modules)
 
 
 def write_atomically(path: str, text: str) -> None:
