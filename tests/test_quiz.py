@@ -24,11 +24,6 @@ ALL = [c.id for c in CHAPTERS]
 QUESTIONS = [(c, q) for c in ALL for q in bank.questions(c)]
 
 
-@pytest.fixture(autouse=True)
-def _no_shared_cache(monkeypatch, tmp_path):
-    monkeypatch.setenv("GRADER_CACHE_DIR", str(tmp_path / "cache"))
-
-
 def _grade(tmp_path, chapter, text, learner="alice"):
     folder = tmp_path / "answers"
     folder.mkdir(exist_ok=True)
@@ -129,7 +124,10 @@ def test_number_spellings(text, value):
     ("atan2(y, x)", "atan2(y,x)", ("x", "y")),
 ])
 def test_equivalent_spellings_are_accepted(answer, key, symbols):
-    assert equivalent(parse(answer, symbols), parse(key, symbols), symbols)
+    assert equivalent(answer, key, symbols)
+    import sympy
+
+    assert sympy.simplify(parse(answer, symbols) - parse(key, symbols)) == 0  # sympy agrees
 
 
 @pytest.mark.parametrize("answer, key, symbols", [
@@ -140,7 +138,7 @@ def test_equivalent_spellings_are_accepted(answer, key, symbols):
     ("cos(x^2)", "2*x*cos(x^2)", ("x",)),
 ])
 def test_non_equivalent_spellings_are_rejected(answer, key, symbols):
-    assert not equivalent(parse(answer, symbols), parse(key, symbols), symbols)
+    assert not equivalent(answer, key, symbols)
 
 
 @pytest.mark.parametrize("hostile, says", [
@@ -181,10 +179,11 @@ def test_hostile_answer_in_a_file_is_reported_with_file_line_and_question(tmp_pa
 def test_malformed_yaml_costs_only_the_broken_answer(tmp_path):
     text = "bearing_near_dish: a\nH_at_point: [[1, 2], [3, 4]\nH_facts: a, b, c\n"
     results, problems = _grade(tmp_path, "ch06", text)
-    assert any("exercises/answers/ch06.yaml, line 2" in p for p in problems)
+    assert any("exercises/answers/ch06.yaml, line" in p and "not valid YAML" in p for p in problems)
     assert results["bearing_near_dish"].status == Status.PASS
     assert results["H_facts"].status == Status.PASS
-    assert results["H_at_point"].message == "not answered yet"
+    assert "exercises/answers/ch06.yaml, line 2, question H_at_point" in results["H_at_point"].message
+    assert results["H_at_point"].status == Status.FAIL and results["H_at_point"].points == 0
 
 
 def test_unknown_question_id_and_unparsable_answer_name_file_and_line(tmp_path):
@@ -257,7 +256,7 @@ def test_cli_quiz_solutions_full_marks_and_show(monkeypatch):
 
 def test_grade_chapter_shows_code_and_quiz_apart(repo_root):
     proc = subprocess.run([sys.executable, "-m", "grader", "ch06", "--format", "json"], cwd=repo_root,
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=120, check=False)
     data = json.loads(proc.stdout)
     chapter = data["chapters"][0]
     assert chapter["quiz_max_score"] > 0 and chapter["code_max_score"] > 0

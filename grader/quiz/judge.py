@@ -10,7 +10,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from grader.quiz.bank import Key, Question
-from grader.quiz.symbolic import AnswerError, check_text, number, same_expression
+from grader.quiz.symbolic import (
+    MAX_LENGTH,
+    AnswerError,
+    Undefined,
+    check_text,
+    equivalent,
+    evaluate,
+    number,
+)
 
 
 @dataclass
@@ -28,15 +36,19 @@ def _letters(value: object, question: Question) -> list[str]:
     letters = [item.strip().strip(").").lower() for item in items if item.strip()]
     unknown = [letter for letter in letters if letter not in question.options]
     if unknown or not letters:
-        raise AnswerError(f"choose from {', '.join(question.options)} (got {value!r})")
+        shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+        raise AnswerError(f"choose from {', '.join(question.options)} (got {shown})")
     return letters
 
 
 def _numbers(value: object) -> list:
-    """A flat or nested list of numbers from YAML data or text like '4, 1', '[4, 1]', '(4,1)'."""
+    """A flat or nested list of numbers from YAML data or text like '4, 1', '[4, 1]', '(4,1)',
+    '4 1', '[[1, 2], [3, 4]]' or rows separated by ';' ('1, 2; 3, 4')."""
     if isinstance(value, (list, tuple)):
         return [_numbers(v) if isinstance(v, (list, tuple)) else number(v) for v in value]
     text = str(value).strip()
+    if len(text) > 4 * MAX_LENGTH:
+        raise AnswerError(f"the answer is {len(text)} characters long; at most {4 * MAX_LENGTH} are read")
     if ";" in text:  # rows separated by ';'
         return [_numbers(row) for row in text.strip("[]() ").split(";")]
     if text.startswith(("[", "(")):
@@ -49,7 +61,10 @@ def _numbers(value: object) -> list:
 def _numbers_of_node(node: ast.AST) -> list | float:
     if isinstance(node, (ast.List, ast.Tuple)):
         return [_numbers_of_node(item) for item in node.elts]
-    return number(ast.unparse(node))
+    try:
+        return evaluate(node, {})
+    except Undefined as exc:
+        raise AnswerError(f"{ast.unparse(node)} has no finite real value ({exc})") from None
 
 
 def _array(value: object, shape: tuple[int, ...]) -> np.ndarray:
@@ -98,6 +113,8 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
             notes.append(f"{len(missed)} true statement(s) not selected")
         return Judgement(fraction, "; ".join(notes) or key.explanation, picked == right)
     if kind in ("numeric", "vector", "matrix"):
+        if kind == "numeric" and isinstance(value, (list, dict)):
+            raise AnswerError("expected one number, got a list")
         got = np.array(number(value)) if kind == "numeric" else _array(value, question.shape)
         want = np.asarray(right_value, dtype=float)
         if got.shape != want.shape:
@@ -113,11 +130,13 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
                 return Judgement(0.0, wrong["feedback"])
         return Judgement(0.0, "not within the tolerance of the right value")
     if kind == "symbolic":
+        if isinstance(value, (list, dict)):
+            raise AnswerError("expected one expression, got a list")
         text = str(value)
-        if same_expression(text, str(right_value), question.symbols, seed):
+        if equivalent(text, str(right_value), question.symbols, question.domain, seed):
             return Judgement(1.0, key.explanation, True)
         for wrong in key.wrong:
-            if same_expression(text, str(wrong["answer"]), question.symbols, seed):
+            if equivalent(text, str(wrong["answer"]), question.symbols, question.domain, seed):
                 return Judgement(0.0, wrong["feedback"])
         return Judgement(0.0, "not equivalent to the right expression")
     raise AnswerError(f"unknown question kind {kind}")

@@ -1,28 +1,97 @@
-"""Answers as expressions, parsed without eval of raw input.
+"""Answers as expressions, read without eval of raw input.
 
-Every answer is first parsed by Python's `ast` and checked against a whitelist of the syntax
-tree (numbers, the question's symbols, + - * / ** and unary minus, calls to a fixed set of
-functions); only then is it handed to sympy, with a dictionary of exactly those names. Length,
-exponent size and simplification time are capped. Equivalence: simplify(a - b) == 0, else
-agreement at random points of the question's domain; "undecided" is never "equal".
+Every answer is first parsed by Python's `ast` (after `^` -> `**`) and checked against a
+whitelist of the syntax tree: numbers, the question's symbols, `pi` and `e`, + - * / ** and unary
+signs, and calls with plain arguments to a fixed set of functions. Length is capped, and so are
+exponents: a power's exponent is a number of size at most MAX_EXPONENT (`x^2`, `r^-2`,
+`(x^2+y^2)^(1/2)`), except for a power of `e`; powers of powers are refused. Nothing else reaches
+sympy or the evaluator below.
+
+Equivalence of two expressions: both are evaluated with plain floats (math module, no sympy) at
+random points of the question's domain. Agreement at NUMERIC_POINTS points (at least
+MIN_POINTS) means equal; a clear difference at one point where both sides are defined means not
+equal (then simplify(a - b) cannot be 0 either). Only when too few points are defined does sympy
+decide: parse_expr with exactly the allowed names, and simplify(a - b) == 0 within
+SIMPLIFY_SECONDS. "Undecided" (a timeout, an error) is never "equal". So sympy is imported only
+for those rare answers, and `grade` stays fast.
 """
 
 from __future__ import annotations
 
 import ast
+import math
 import random
 import threading
+from fractions import Fraction
 
 MAX_LENGTH = 200
 MAX_EXPONENT = 10
 SIMPLIFY_SECONDS = 2.0
 NUMERIC_POINTS = 12
-FUNCTIONS = ("sqrt", "sin", "cos", "tan", "atan", "atan2", "exp", "log", "Abs", "abs")
-CONSTANTS = ("pi", "e")
+MIN_POINTS = 8
+RELATIVE_TOLERANCE = 1e-8
+DEFAULT_DOMAIN = (0.5, 3.0)  # each symbol in +-[0.5, 3] unless the question gives its own range
+
+# name -> (float implementation, accepted numbers of arguments)
+FUNCTIONS: dict[str, tuple] = {
+    "sqrt": (math.sqrt, (1,)), "sin": (math.sin, (1,)), "cos": (math.cos, (1,)), "tan": (math.tan, (1,)),
+    "atan": (math.atan, (1,)), "atan2": (math.atan2, (2,)), "exp": (math.exp, (1,)),
+    "log": (math.log, (1, 2)), "Abs": (abs, (1,)), "abs": (abs, (1,)),
+}
+CONSTANTS = {"pi": math.pi, "e": math.e}
 
 
 class AnswerError(ValueError):
     """An answer that cannot be read; the message says why, in the learner's terms."""
+
+
+class Undefined(ArithmeticError):
+    """The expression has no real value at this point (outside its domain, overflow)."""
+
+
+def _constant(node: ast.AST) -> Fraction | None:
+    """The exact value of a number-only expression (+ - * / and signs), None if it has names or calls."""
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        try:
+            return Fraction(node.value)
+        except (OverflowError, ValueError):  # inf, nan
+            raise AnswerError("numbers must be finite") from None
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = _constant(node.operand)
+        return None if value is None else (-value if isinstance(node.op, ast.USub) else value)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub, ast.Mult, ast.Div)):
+        left, right = _constant(node.left), _constant(node.right)
+        if left is None or right is None:
+            return None
+        if isinstance(node.op, ast.Add):
+            return left + right
+        if isinstance(node.op, ast.Sub):
+            return left - right
+        if isinstance(node.op, ast.Mult):
+            return left * right
+        if right == 0:
+            raise AnswerError("division by zero")
+        return left / right
+    return None
+
+
+def _has_power(node: ast.AST) -> bool:
+    return any(isinstance(n, ast.BinOp) and isinstance(n.op, ast.Pow) for n in ast.walk(node))
+
+
+def _check_power(node: ast.BinOp, symbols: tuple[str, ...]) -> None:
+    if isinstance(node.left, ast.BinOp) and isinstance(node.left.op, ast.Pow):
+        raise AnswerError("a power of a power is not allowed; write it out with brackets and one ^")
+    if isinstance(node.left, ast.Name) and node.left.id == "e" and "e" not in symbols:
+        return  # e^(anything allowed): stays exp(...) in sympy, overflows harmlessly as a float
+    if _has_power(node.right):
+        raise AnswerError("a power of a power is not allowed; write it out with brackets and one ^")
+    exponent = _constant(node.right)
+    if exponent is None:
+        raise AnswerError("an exponent must be a number such as 2, -1 or 1/2 (write exp(x) or e^x "
+                          "for a power of e)")
+    if abs(exponent) > MAX_EXPONENT:
+        raise AnswerError(f"exponents above {MAX_EXPONENT} in size are not allowed")
 
 
 def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
@@ -30,28 +99,27 @@ def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
     for node in ast.walk(tree):
         if lists and isinstance(node, (ast.List, ast.Tuple)):
             continue
-        if isinstance(node, (ast.Expression, ast.Load, ast.operator, ast.unaryop)):
-            if isinstance(node, ast.operator) and not isinstance(node, (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow)):
+        if isinstance(node, (ast.Expression, ast.Load)):
+            continue
+        if isinstance(node, ast.operator):
+            if not isinstance(node, (ast.Add, ast.Sub, ast.Mult, ast.Div, ast.Pow)):
                 raise AnswerError(f"the operator {type(node).__name__} is not allowed (use + - * / ^)")
-            if isinstance(node, ast.unaryop) and not isinstance(node, (ast.USub, ast.UAdd)):
+            continue
+        if isinstance(node, ast.unaryop):
+            if not isinstance(node, (ast.USub, ast.UAdd)):
                 raise AnswerError("only a leading minus or plus sign is allowed")
             continue
         if isinstance(node, ast.BinOp):
             if isinstance(node.op, ast.Pow):
-                exponent = node.right
-                if isinstance(exponent, ast.UnaryOp) and isinstance(exponent.operand, ast.Constant):
-                    exponent = exponent.operand
-                if isinstance(node.left, ast.BinOp) and isinstance(node.left.op, ast.Pow) or \
-                        isinstance(node.right, ast.BinOp) and isinstance(node.right.op, ast.Pow):
-                    raise AnswerError("a power of a power is not allowed; write it out with brackets and one ^")
-                if isinstance(exponent, ast.Constant) and abs(exponent.value) > MAX_EXPONENT:
-                    raise AnswerError(f"exponents above {MAX_EXPONENT} are not allowed")
+                _check_power(node, symbols)
             continue
         if isinstance(node, ast.UnaryOp):
             continue
         if isinstance(node, ast.Constant):
             if type(node.value) not in (int, float):
                 raise AnswerError("only numbers and the question's symbols are allowed (no strings)")
+            if not math.isfinite(node.value):
+                raise AnswerError("numbers must be finite")
             continue
         if isinstance(node, ast.Name):
             if node.id not in allowed_names and node.id not in FUNCTIONS:
@@ -63,13 +131,22 @@ def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
                 raise AnswerError(f"only these functions may be called: {', '.join(FUNCTIONS)}")
             if node.keywords:
                 raise AnswerError("function calls take plain arguments only")
+            arities = FUNCTIONS[node.func.id][1]
+            if len(node.args) not in arities:
+                wanted = " or ".join(map(str, arities))
+                raise AnswerError(f"{node.func.id} takes {wanted} argument(s), got {len(node.args)}")
             continue
         raise AnswerError(f"{type(node).__name__} is not allowed in an answer")
+    called = {id(node.func) for node in ast.walk(tree) if isinstance(node, ast.Call)}
+    for node in ast.walk(tree):  # a bare function name used as a value, e.g. "sqrt + 1"
+        if isinstance(node, ast.Name) and node.id in FUNCTIONS and id(node) not in called \
+                and node.id not in allowed_names:
+            raise AnswerError(f"{node.id} is a function: write {node.id}(...)")
 
 
-def check_text(text: str, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
+def check_text(text: object, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
     """Whitelist-check an answer's syntax tree (with `lists`, brackets of numbers too); the tree,
-    or AnswerError."""
+    or AnswerError. Needs neither sympy nor any evaluation."""
     if not isinstance(text, str):
         text = str(text)
     if len(text) > MAX_LENGTH:
@@ -77,75 +154,106 @@ def check_text(text: str, symbols: tuple[str, ...] = (), lists: bool = False) ->
     if not text.isascii():
         bad = next(ch for ch in text if not ch.isascii())
         raise AnswerError(f"the character {bad!r} (U+{ord(bad):04X}) is not plain ASCII; type it with the keyboard "
-                          "(e.g. - for a minus sign, x for the letter x)")
+                          "(e.g. - for a minus sign, x for the letter x, sqrt(...) for a root)")
     if not text.strip():
         raise AnswerError("the answer is empty")
-    source = text.replace("^", "**")
     try:
-        tree = ast.parse(source.strip(), mode="eval")
+        tree = ast.parse(text.replace("^", "**").strip(), mode="eval")
     except SyntaxError as exc:
         raise AnswerError(f"cannot read it as a formula ({exc.msg})") from None
+    except (ValueError, RecursionError, MemoryError):  # e.g. a NUL byte, absurd nesting
+        raise AnswerError("cannot read it as a formula") from None
     _check_tree(tree, symbols, lists)
     return tree
 
 
+def evaluate(node: ast.AST, values: dict[str, float]) -> float:
+    """A checked tree's value as a float at `values` (symbol -> number); Undefined where it has none."""
+    if isinstance(node, ast.Expression):
+        return evaluate(node.body, values)
+    if isinstance(node, ast.Constant):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        if node.id in values:
+            return values[node.id]
+        return CONSTANTS[node.id]
+    try:
+        if isinstance(node, ast.UnaryOp):
+            operand = evaluate(node.operand, values)
+            result = -operand if isinstance(node.op, ast.USub) else operand
+        elif isinstance(node, ast.BinOp):
+            left, right = evaluate(node.left, values), evaluate(node.right, values)
+            if isinstance(node.op, ast.Add):
+                result = left + right
+            elif isinstance(node.op, ast.Sub):
+                result = left - right
+            elif isinstance(node.op, ast.Mult):
+                result = left * right
+            elif isinstance(node.op, ast.Div):
+                result = left / right
+            else:
+                result = left ** right
+        elif isinstance(node, ast.Call):
+            function = FUNCTIONS[node.func.id][0]
+            result = function(*[evaluate(arg, values) for arg in node.args])
+        else:
+            raise AnswerError(f"{type(node).__name__} has no value")
+    except ZeroDivisionError:
+        raise Undefined("division by zero") from None
+    except OverflowError:
+        raise Undefined("too large") from None
+    except ValueError:
+        raise Undefined("outside a function's domain, e.g. sqrt or log of a negative number") from None
+    if isinstance(result, complex) or not math.isfinite(result):
+        raise Undefined("not a finite real number")
+    return float(result)
+
+
+def number(text: object) -> float:
+    """A numeric answer: 0.6, '0.6', '3/5', '-1e-5', 'sqrt(3)/2', '2*pi'; AnswerError otherwise."""
+    if isinstance(text, bool) or text is None:
+        raise AnswerError(f"expected a number, got {text!r}")
+    if isinstance(text, (int, float)):
+        if not math.isfinite(text):
+            raise AnswerError("expected a finite number")
+        return float(text)
+    tree = check_text(str(text).strip(), ())
+    try:
+        return evaluate(tree, {})
+    except Undefined as exc:
+        raise AnswerError(f"it has no finite real value ({exc})") from None
+
+
 def parse(text: str, symbols: tuple[str, ...] = ()):
-    """The answer as a sympy expression, after the whitelist check."""
+    """The answer as a sympy expression, after the whitelist check: parse_expr with a dictionary of
+    exactly the allowed symbols, functions and constants, and no other name (no auto-symbols)."""
     check_text(text, symbols)
     import sympy
-
-    names = {name: sympy.Symbol(name, real=True) for name in symbols}
-    names.update(sqrt=sympy.sqrt, sin=sympy.sin, cos=sympy.cos, tan=sympy.tan, atan=sympy.atan,
-                 atan2=sympy.atan2, exp=sympy.exp, log=sympy.log, Abs=sympy.Abs, abs=sympy.Abs,
-                 pi=sympy.pi, e=sympy.E)
     from sympy.parsing.sympy_parser import auto_number, parse_expr
 
+    names = {"sqrt": sympy.sqrt, "sin": sympy.sin, "cos": sympy.cos, "tan": sympy.tan, "atan": sympy.atan,
+             "atan2": sympy.atan2, "exp": sympy.exp, "log": sympy.log, "Abs": sympy.Abs, "abs": sympy.Abs,
+             "pi": sympy.pi, "e": sympy.E}
+    names.update({name: sympy.Symbol(name, real=True) for name in symbols})
     global_names = {"Integer": sympy.Integer, "Float": sympy.Float, "Rational": sympy.Rational,
                     "__builtins__": {}}
     try:
         return parse_expr(text.replace("^", "**"), local_dict=names, global_dict=global_names,
                           transformations=(auto_number,), evaluate=True)
-    except Exception as exc:  # sympy's own errors on a whitelisted tree: report, never crash
+    except Exception as exc:  # noqa: BLE001  sympy's own errors on a whitelisted tree: report, never crash
         raise AnswerError(f"cannot read it as a formula ({type(exc).__name__})") from None
 
 
-def number(text: object) -> float:
-    """A numeric answer: '0.6', '3/5', '-1e-5', 'sqrt(3)/2'; AnswerError otherwise."""
-    if isinstance(text, bool):
-        raise AnswerError("expected a number, got true/false")
-    if isinstance(text, (int, float)):
-        return float(text)
-    text = str(text).strip()
-    try:
-        return float(text)
-    except ValueError:
-        pass
-    from fractions import Fraction
-
-    try:
-        return float(Fraction(text.replace(" ", "")))
-    except (ValueError, ZeroDivisionError):
-        pass
-    value = parse(text, ())
-    try:
-        result = complex(value.evalf())
-    except (TypeError, ValueError):
-        raise AnswerError("cannot read it as a number") from None
-    if result.imag != 0:
-        raise AnswerError("expected a real number")
-    return result.real
-
-
-def _simplify_is_zero(difference) -> bool | None:
-    """True/False from simplify within SIMPLIFY_SECONDS; None when it did not finish."""
+def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...]) -> bool | None:
+    """simplify(answer - key) == 0 within SIMPLIFY_SECONDS (in a daemon thread); None if undecided."""
     outcome: list = []
 
     def work() -> None:
-        import sympy
-
         try:
-            outcome.append(sympy.simplify(difference) == 0)
-        except Exception:
+            import sympy
+
+            outcome.append(bool(sympy.simplify(parse(answer, symbols) - parse(key, symbols)) == 0))
+        except Exception:  # noqa: BLE001  any failure is 'undecided'
             outcome.append(None)
 
     worker = threading.Thread(target=work, daemon=True)
@@ -154,75 +262,32 @@ def _simplify_is_zero(difference) -> bool | None:
     return outcome[0] if outcome else None
 
 
-def equivalent(answer, key, symbols: tuple[str, ...], domain: tuple[float, float] = (0.5, 3.0),
-               seed: int = 0) -> bool:
-    """simplify(answer - key) == 0, else equal at NUMERIC_POINTS random points of the domain
-    (each symbol in +-[low, high]). A point where either side is undefined does not count; fewer
-    than 8 usable points is "undecided", which is never equal."""
-    import sympy
-
-    difference = answer - key
-    if _simplify_is_zero(difference):
-        return True
-    variables = [sympy.Symbol(s, real=True) for s in symbols]
-    f_answer = sympy.lambdify(variables, answer, modules="math")
-    f_key = sympy.lambdify(variables, key, modules="math")
+def equivalent(answer: str, key: str, symbols: tuple[str, ...],
+               domain: dict[str, tuple[float, float]] | None = None, seed: int = 0) -> bool:
+    """Whether two expression texts are the same function of `symbols` (see the module docstring).
+    `domain` maps a symbol to its (low, high) range; others are drawn from +-DEFAULT_DOMAIN.
+    AnswerError if `answer` cannot be read."""
+    answer_tree = check_text(answer, symbols)
+    key_tree = check_text(key, symbols)
+    domain = domain or {}
     draw = random.Random(seed)
     agree = 0
-    for _ in range(NUMERIC_POINTS * 3):
-        point = [draw.choice((-1, 1)) * draw.uniform(*domain) for _ in variables]
+    for _ in range(NUMERIC_POINTS * 4):
+        point = {}
+        for name in symbols:
+            if name in domain:
+                point[name] = draw.uniform(*domain[name])
+            else:
+                point[name] = draw.choice((-1, 1)) * draw.uniform(*DEFAULT_DOMAIN)
         try:
-            a, k = complex(f_answer(*point)), complex(f_key(*point))
-        except (ValueError, ZeroDivisionError, OverflowError, TypeError):
+            a, k = evaluate(answer_tree, point), evaluate(key_tree, point)
+        except Undefined:
             continue
-        if abs(a - k) > 1e-9 * max(1.0, abs(k)):
-            return False
+        if abs(a - k) > RELATIVE_TOLERANCE * max(1.0, abs(a), abs(k)):
+            return False  # a point where both are defined and differ: not the same function
         agree += 1
         if agree >= NUMERIC_POINTS:
             return True
-    return False
-
-
-def _cache_path() -> str | None:
-    """Where symbolic verdicts are remembered between runs (GRADER_CACHE_DIR=off disables)."""
-    import os
-
-    folder = os.environ.get("GRADER_CACHE_DIR")
-    if folder == "off":
-        return None
-    if not folder:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-        folder = os.path.join(base, "jacobians-grader")
-    return os.path.join(folder, "symbolic-v1.json")
-
-
-def same_expression(answer_text: str, key_text: str, symbols: tuple[str, ...], seed: int = 0) -> bool:
-    """equivalent() on two answer texts, remembered on disk: sympy is imported only for a pair
-    not seen before (it costs about half a second), so re-running `grade` stays fast."""
-    import json
-    import os
-
-    check_text(answer_text, symbols)
-    path = _cache_path()
-    digest = json.dumps([answer_text, key_text, list(symbols), seed])
-    cache: dict = {}
-    if path and os.path.exists(path):
-        try:
-            with open(path, encoding="utf-8") as handle:
-                cache = json.load(handle)
-        except (OSError, ValueError):
-            cache = {}
-        if isinstance(cache.get(digest), bool):
-            return cache[digest]
-    result = equivalent(parse(answer_text, symbols), parse(key_text, symbols), symbols, seed=seed)
-    if path:
-        try:
-            os.makedirs(os.path.dirname(path), exist_ok=True)
-            cache[digest] = result
-            temporary = f"{path}.{os.getpid()}.tmp"
-            with open(temporary, "w", encoding="utf-8") as handle:
-                json.dump(cache, handle)
-            os.replace(temporary, path)
-        except OSError:
-            pass
-    return result
+    if agree >= MIN_POINTS:
+        return True
+    return _simplify_is_zero(answer, key, symbols) is True
