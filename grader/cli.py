@@ -196,7 +196,7 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     if show:
         from grader.quiz import bank
 
-        who, source = learner_id(answers_dir(submission.root, submission.package), learner)
+        who, source = learner_id(answers_dir(submission.root, submission.package), learner, submission.package)
         click.echo(f"Questions for learner {who} (from {source}); answer in "
                    f"{submission.package}/answers/chNN.yaml\n")
         for info in picked:

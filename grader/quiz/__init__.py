@@ -2,41 +2,70 @@
 
 Quiz results are CheckResult(kind="quiz") in the same ChapterResult as the code checks. No learner
 code runs here: answers are data, read from YAML and parsed behind a whitelist (symbolic.py).
+`add_quiz_results` is the one entry point of `grade chNN`; `quiz_report` that of `grade quiz`.
 """
 
 from __future__ import annotations
 
-import zlib
+import re
 from pathlib import Path
 
 from grader.chapters import BY_ID
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
-from grader.quiz.answers import read
+from grader.quiz.answers import LOADER, MAX_BYTES, read
 from grader.quiz.symbolic import AnswerError
 
 DEFAULT_LEARNER = "anonymous"
+_LEARNER_ID = re.compile(r"^[\w.@+-]{1,100}$")
 
 
 def answers_dir(root: Path, package: str) -> Path:
     return Path(root) / package / "answers"
 
 
-def learner_id(answers_folder: Path, given: str | None) -> tuple[str, str]:
-    """(learner id, where it came from): --learner, else answers/learner.yaml, else 'anonymous'."""
-    if given:
-        return given, "--learner"
-    config = answers_folder / "learner.yaml"
-    if config.exists():
-        import yaml
+def _configured_learner(config: Path) -> tuple[str | None, str]:
+    """(the id in learner.yaml or None, a note on why it was not used)."""
+    import yaml
 
-        try:
-            data = yaml.safe_load(config.read_text(encoding="utf-8")) or {}
-            if isinstance(data, dict) and str(data.get("learner") or "").strip():
-                return str(data["learner"]).strip(), f"{config.parent.name}/learner.yaml"
-        except yaml.YAMLError:
-            pass
-    return DEFAULT_LEARNER, "default"
+    if not config.exists():
+        return None, ""
+    if config.stat().st_size > MAX_BYTES:
+        return None, f"{config.name} is too large"
+    try:
+        node = yaml.compose(config.read_bytes().decode("utf-8", errors="replace"), Loader=LOADER)
+    except (yaml.YAMLError, RecursionError) as exc:
+        mark = getattr(exc, "problem_mark", None)
+        return None, f"{config.name} is not valid YAML{f' (line {mark.line + 1})' if mark else ''}"
+    if node is None:
+        return None, ""
+    if not isinstance(node, yaml.MappingNode):
+        return None, f"{config.name} should hold one line `learner: your-id`"
+    for key, value in node.value:
+        if isinstance(key, yaml.ScalarNode) and key.value == "learner" and isinstance(value, yaml.ScalarNode):
+            who = value.value.strip()
+            if not who:
+                return None, ""
+            if not _LEARNER_ID.match(who):
+                return None, f"{config.name}: a learner id is letters, digits and . _ @ + - (at most 100)"
+            return who, ""
+    return None, ""
+
+
+def learner_id(answers_folder: Path, given: str | None, package: str = "exercises") -> tuple[str, str]:
+    """(learner id, where it came from): --learner, else <package>/answers/learner.yaml, else
+    'anonymous'."""
+    if given is not None and given.strip():
+        return given.strip(), "--learner"
+    who, note = _configured_learner(answers_folder / "learner.yaml")
+    if who is not None:
+        return who, f"{package}/answers/learner.yaml"
+    return DEFAULT_LEARNER, f"default; {note}" if note else "default"
+
+
+def _short(text: str, width: int = 100) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= width else text[:width - 3] + "..."
 
 
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
@@ -54,44 +83,56 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
         if qid not in known:
             problems.append(f"{shown}, line {answer.line}: unknown question id {qid!r} "
                             f"(the questions are {', '.join(sorted(known))})")
+    problems.extend(message for qid, message in answers.unreadable.items() if qid not in known)
+    if keys is None:
+        problems.append(f"the answer keys of {chapter} are not installed here (quizzes/keys/); "
+                        "answers are read and checked for format but not graded")
     module = BY_ID[chapter].module
     results = []
     for question in questions:
         values = question.values_for(learner, chapter)
-        description = " ".join(question.text_for(values).split())
-        if len(description) > 100:
-            description = description[:97] + "..."
-        result = CheckResult(id=f"quiz_{question.id}", function=question.id, description=description,
-                             status=Status.FAIL, points=0.0, max_points=question.points, kind="quiz")
-        answer = answers.answers.get(question.id)
-        if answer is None or answer.value is None or str(answer.value).strip() == "":
-            result.message = "not answered yet"
-        elif keys is None or question.id not in keys:
-            result.status, result.message = Status.SKIP, "the answer key is not installed here; your answer is kept"
-            result.got = answer.value
-        else:
-            key = keys[question.id]
-            result.got = answer.value if isinstance(answer.value, (int, float, str, list)) else str(answer.value)
-            seed = zlib.crc32(f"{chapter}/{question.id}".encode())
-            try:
-                right_value = key.value_for(module, values)
-                verdict = judge(question, key, answer.value, right_value, seed)
-            except AnswerError as exc:
-                result.message = f"{shown}, line {answer.line}, question {question.id}: {exc}"
-            else:
-                result.points = question.points * verdict.fraction
-                result.status = Status.PASS if verdict.right else Status.FAIL
-                result.message = verdict.feedback
-                if verdict.right:
-                    result.expected = fmt_value(right_value)
+        result = CheckResult(id=f"quiz_{question.id}", function=question.id,
+                             description=_short(question.text_for(values)), status=Status.FAIL,
+                             points=0.0, max_points=question.points, kind="quiz")
         results.append(result)
+        answer = answers.answers.get(question.id)
+        if question.id in answers.unreadable:
+            result.message = answers.unreadable[question.id]
+            continue
+        if answer is None or answer.value is None or answer.text.strip() == "":
+            result.message = "not answered yet"
+            continue
+        result.got = answer.text
+        where = f"{shown}, line {answer.line}, question {question.id}"
+        key = None if keys is None else keys.get(question.id)
+        if key is None:
+            result.status = Status.SKIP
+            result.message = "the answer key is not installed here; your answer is kept"
+            continue
+        try:
+            right_value = key.value_for(module, values)
+        except bank.KeyUnavailable as exc:
+            result.status, result.message = Status.SKIP, str(exc)
+            continue
+        try:
+            verdict = judge(question, key, answer.value,
+                            right_value, bank.variant_seed("points", chapter, question.id))
+        except AnswerError as exc:
+            result.message = f"{where}: {exc}"
+            continue
+        result.points = question.points * verdict.fraction
+        result.status = Status.PASS if verdict.right else Status.FAIL
+        result.message = verdict.feedback
+        if verdict.right:  # the key appears in the output only once the learner has it
+            result.expected = fmt_value(right_value)
     return results, problems
 
 
 def add_quiz_results(report: Report, root: Path, package: str, learner: str | None = None) -> str:
-    """Append each chapter's quiz results to `report` and record whose variants were graded."""
+    """Append each chapter's quiz results to `report` and record whose variants were graded.
+    Reads YAML only: no learner code runs, and sympy is imported only for an answer that needs it."""
     folder = answers_dir(root, package)
-    who, source = learner_id(folder, learner)
+    who, source = learner_id(folder, learner, package)
     report.learner = f"{who} (from {source})"
     for chapter in report.chapters:
         try:

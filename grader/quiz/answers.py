@@ -1,19 +1,27 @@
 """Learner answer files (exercises/answers/chNN.yaml): each answer with the line it is on.
 
-A file that is not valid YAML is read entry by entry (each top-level `id:` line starts one), so a
-slip in one answer costs only that answer.
+The file is composed into YAML nodes (their marks give line numbers) and each answer is checked
+before it is turned into data: no anchors/aliases (an alias bomb would expand exponentially), at
+most MAX_DEPTH levels of brackets and MAX_ITEMS values. A file that is not valid YAML is read
+entry by entry (each top-level `id:` line starts one), so a slip in one answer costs only that
+answer.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from itertools import pairwise
 from pathlib import Path
 
 import yaml
 
-from grader.quiz.bank import SAFE_LOADER
-
+# The pure-Python loader on purpose: libyaml's composer recurses in C and crashes the process on
+# deeply nested input, while Python's stops with a RecursionError. Answer files are small.
+LOADER = yaml.SafeLoader
+MAX_BYTES = 64_000
+MAX_DEPTH = 3  # an answer, a list, a list of lists (a matrix)
+MAX_ITEMS = 100
 _ENTRY = re.compile(r"^([A-Za-z_][\w-]*)\s*:")
 
 
@@ -21,15 +29,39 @@ _ENTRY = re.compile(r"^([A-Za-z_][\w-]*)\s*:")
 class Answer:
     value: object
     line: int
+    text: str = ""  # the answer as written (the source of a list, the value of a scalar)
 
 
 @dataclass
 class AnswerFile:
     answers: dict[str, Answer]
-    problems: list[str]  # messages naming the file and line
+    problems: list[str]  # about the file as a whole, naming the file and line
+    unreadable: dict[str, str] = field(default_factory=dict)  # question id -> why (file, line, question)
 
 
-def _entries_of_node(node: yaml.Node, offset: int, shown: str, out: AnswerFile) -> None:
+def _shape_problem(node: yaml.Node) -> str | None:
+    """Why this answer node is not plain data of a sensible size, or None."""
+    seen: set[int] = set()
+    stack = [(node, 1)]
+    count = 0
+    while stack:
+        current, depth = stack.pop()
+        if id(current) in seen:
+            return "anchors and aliases (& and *) are not used in answers; quote an answer that starts with *"
+        seen.add(id(current))
+        count += 1
+        if count > MAX_ITEMS:
+            return f"more than {MAX_ITEMS} values in one answer"
+        if depth > MAX_DEPTH:
+            return f"brackets nested more than {MAX_DEPTH - 1} deep"
+        if isinstance(current, yaml.SequenceNode):
+            stack.extend((child, depth + 1) for child in current.value)
+        elif isinstance(current, yaml.MappingNode):
+            return "a mapping (key: value) is not an answer; quote the answer if it contains ': '"
+    return None
+
+
+def _entries_of_node(node: yaml.Node, offset: int, source: str, shown: str, out: AnswerFile) -> None:
     if not isinstance(node, yaml.MappingNode):
         out.problems.append(f"{shown}, line {node.start_mark.line + 1 + offset}: expected `question_id: answer` lines")
         return
@@ -37,14 +69,27 @@ def _entries_of_node(node: yaml.Node, offset: int, shown: str, out: AnswerFile) 
     for key_node, value_node in node.value:
         line = key_node.start_mark.line + 1 + offset
         key = str(key_node.value)
-        try:
-            value = constructor.construct_object(value_node, deep=True)
-        except yaml.YAMLError as exc:
-            out.problems.append(f"{shown}, line {line}, question {key}: {exc}")
+        if not isinstance(key_node, yaml.ScalarNode):
+            out.problems.append(f"{shown}, line {line}: expected `question_id: answer` lines")
             continue
+        problem = _shape_problem(value_node)
+        if problem is None:
+            try:
+                value = constructor.construct_object(value_node, deep=True)
+            except (yaml.YAMLError, RecursionError) as exc:
+                problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if problem is not None:
+            out.unreadable[key] = f"{shown}, line {line}, question {key}: {problem}"
+            out.answers.pop(key, None)
+            continue
+        if isinstance(value_node, yaml.ScalarNode):
+            text = "" if value is None else str(value)
+        else:
+            text = source[value_node.start_mark.index:value_node.end_mark.index].strip()
         if key in out.answers:
             out.problems.append(f"{shown}, line {line}, question {key}: answered twice; the later answer counts")
-        out.answers[key] = Answer(value, line)
+        out.answers[key] = Answer(value, line, text)
+        out.unreadable.pop(key, None)
 
 
 def read(path: Path, shown: str) -> AnswerFile:
@@ -53,27 +98,36 @@ def read(path: Path, shown: str) -> AnswerFile:
     if not path.exists():
         out.problems.append(f"{shown} was not found: copy the template from the lesson and fill it in")
         return out
-    text = path.read_text(encoding="utf-8", errors="replace")
+    size = path.stat().st_size
+    if size > MAX_BYTES:
+        out.problems.append(f"{shown} is {size} bytes; answer files are read up to {MAX_BYTES} bytes")
+        return out
+    text = path.read_bytes().decode("utf-8", errors="replace")
     try:
-        node = yaml.compose(text, Loader=SAFE_LOADER)
+        node = yaml.compose(text, Loader=LOADER)
         if node is not None:
-            _entries_of_node(node, 0, shown, out)
+            _entries_of_node(node, 0, text, shown, out)
         return out
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         where = f"line {mark.line + 1}" if mark else "somewhere"
         out.problems.append(f"{shown}, {where}: not valid YAML ({exc.problem}); the other answers are still graded")
+    except (yaml.YAMLError, RecursionError):
+        out.problems.append(f"{shown}: not valid YAML; the other answers are still graded")
+    out.answers.clear()
+    out.unreadable.clear()
     lines = text.splitlines()
     starts = [i for i, line in enumerate(lines) if _ENTRY.match(line)] + [len(lines)]
-    for begin, end in zip(starts, starts[1:]):
+    for begin, end in pairwise(starts):
         block = "\n".join(lines[begin:end])
         try:
-            node = yaml.compose(block, Loader=SAFE_LOADER)
-        except yaml.MarkedYAMLError:
+            node = yaml.compose(block, Loader=LOADER)
+        except (yaml.YAMLError, RecursionError):
             key = _ENTRY.match(lines[begin]).group(1)
-            out.problems.append(f"{shown}, line {begin + 1}, question {key}: this answer is not valid YAML "
-                                "(quote it: key: \"...\")")
+            out.unreadable[key] = (f"{shown}, line {begin + 1}, question {key}: this answer is not valid YAML "
+                                   "(quote it: key: \"...\")")
+            out.answers.pop(key, None)
             continue
         if node is not None:
-            _entries_of_node(node, begin, shown, out)
+            _entries_of_node(node, begin, block, shown, out)
     return out

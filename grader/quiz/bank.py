@@ -2,13 +2,15 @@
 
 A question says what is asked; its key, in a separate file, says what is right, how close is close
 enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
-(seeded by learner id, chapter and question: the same on every run and machine); their key is
-computed by the reference implementation in solutions/, never stored.
+(seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine);
+their key is computed by the reference implementation in solutions/ (trusted code, imported in
+the grading process), never stored.
 """
 
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib
 import random
 from dataclasses import dataclass, field
@@ -25,6 +27,17 @@ class BankError(ValueError):
     """A question bank or key file that is not valid; the message names the file and line."""
 
 
+class KeyUnavailable(RuntimeError):
+    """A key that cannot be computed here (the reference implementation is not installed)."""
+
+
+def variant_seed(learner: str, chapter: str, question: str) -> int:
+    """The seed of one learner's numbers for one question: stable across runs, machines and
+    Python versions (hashlib, not the salted built-in hash())."""
+    digest = hashlib.sha256(f"{learner}\x00{chapter}\x00{question}".encode()).digest()
+    return int.from_bytes(digest[:8], "big")
+
+
 @dataclass
 class Question:
     id: str
@@ -36,10 +49,12 @@ class Question:
     params: dict[str, list] = field(default_factory=dict)
     shape: tuple[int, ...] = ()
     answer_format: str = ""
+    domain: dict[str, tuple[float, float]] = field(default_factory=dict)  # symbolic: symbol -> range
 
     def values_for(self, learner: str, chapter: str) -> dict[str, float]:
-        """This learner's numbers for a parametrised question (empty for a fixed one)."""
-        draw = random.Random(f"{learner}/{chapter}/{self.id}")  # str seeds go through SHA-512: stable
+        """This learner's numbers for a parametrised question (empty for a fixed one): each
+        parameter uniform in its range, one decimal, at least 0.5 in size."""
+        draw = random.Random(variant_seed(learner, chapter, self.id))
         values = {}
         for name, (low, high) in self.params.items():
             while True:
@@ -67,7 +82,11 @@ class Key:
         """The right answer: stored, or computed by the reference implementation for `values`."""
         if self.compute is None:
             return self.answer
-        reference = importlib.import_module(f"solutions.{module}")
+        try:
+            reference = importlib.import_module(f"solutions.{module}")
+        except ImportError:
+            raise KeyUnavailable("this question's key is computed by the reference solutions, "
+                                 "which are not installed here; your answer is kept") from None
 
         def resolve(arg: object) -> object:
             if isinstance(arg, list):
@@ -108,6 +127,7 @@ def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
             options={str(k): str(v) for k, v in (raw.get("options") or {}).items()},
             symbols=tuple(raw.get("symbols", ())), params=dict(raw.get("params") or {}),
             shape=tuple(raw.get("shape", ())), answer_format=str(raw.get("format", "")),
+            domain={str(k): (float(v[0]), float(v[1])) for k, v in (raw.get("domain") or {}).items()},
         ))
     return out
 

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import textwrap
+from pathlib import Path
 
 from grader.quiz import bank
+
+REFERENCE_LEARNER = "reference"
 
 FORMATS = {
     "choice": "one letter, e.g. b",
@@ -18,8 +21,7 @@ FORMATS = {
 
 def template(chapter: str) -> str:
     lines = [f"# Quiz answers for {chapter}. Fill in each answer after the colon; quote answers",
-             "# that contain a colon or start with [ if YAML complains. `grade quiz "
-             f"{chapter} --show` prints the questions",
+             f"# that contain a colon or start with [ if YAML complains. `grade quiz {chapter} --show` prints the questions",
              "# with your own numbers (parametrised questions differ per learner id).", ""]
     for question in bank.questions(chapter):
         prompt = question.prompt
@@ -37,7 +39,7 @@ def template(chapter: str) -> str:
     return "\n".join(lines)
 
 
-def reference_answers(chapter: str, learner: str = "reference") -> str:
+def reference_answers(chapter: str, learner: str = REFERENCE_LEARNER) -> str:
     """The reference answers file of a chapter for `learner` (solutions/answers/chNN.yaml)."""
     import json
 
@@ -53,3 +55,35 @@ def reference_answers(chapter: str, learner: str = "reference") -> str:
         value = np.round(np.asarray(value, dtype=float), 8).tolist() if not isinstance(value, (str, list)) else value
         lines.append(f"{question.id}: {json.dumps(value)}")
     return "\n".join(lines) + "\n"
+
+
+LEARNER_TEMPLATE = """\
+# Your learner id (e.g. your login). Parametrised quiz questions draw your own numbers from it;
+# `grade quiz chNN --show` prints them. `grade ... --learner ID` overrides this file.
+learner:
+"""
+
+
+def write_all(root: Path) -> list[Path]:
+    """Regenerate the shipped files from the banks and keys: the learner templates
+    (exercises/answers/) and the reference answers (solutions/answers/, learner 'reference')."""
+    from grader.chapters import CHAPTERS
+
+    written = []
+    for folder, make in (("exercises", template), ("solutions", reference_answers)):
+        out = root / folder / "answers"
+        out.mkdir(parents=True, exist_ok=True)
+        for info in CHAPTERS:
+            path = out / f"{info.id}.yaml"
+            path.write_text(make(info.id), encoding="utf-8")
+            written.append(path)
+    (root / "exercises" / "answers" / "learner.yaml").write_text(LEARNER_TEMPLATE, encoding="utf-8")
+    (root / "solutions" / "answers" / "learner.yaml").write_text(
+        f"# Whose per-learner quiz numbers the reference answers are for.\nlearner: {REFERENCE_LEARNER}\n",
+        encoding="utf-8")
+    return written
+
+
+if __name__ == "__main__":  # python -m grader.quiz.templates
+    for written_path in write_all(bank.QUIZ_DIR.parent):
+        print(written_path)
