@@ -1,0 +1,283 @@
+"""Quizzes under pressure: exponent and nesting bombs, YAML aliases, oversized and broken files,
+missing keys or reference solutions, where the learner id comes from, and no sympy on the fast path."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from grader.chapters import CHAPTERS
+from grader.cli import main
+from grader.model import Status
+from grader.quiz import bank, grade_quiz, learner_id, symbolic
+from grader.quiz.judge import judge
+from grader.quiz.symbolic import AnswerError, equivalent, number, parse
+
+ALL = [c.id for c in CHAPTERS]
+SYMBOLIC = [(c, q) for c in ALL for q in bank.questions(c) if q.kind == "symbolic"]
+
+
+def _grade(tmp_path, chapter, text, learner="alice", **kwargs):
+    folder = tmp_path / "answers"
+    folder.mkdir(exist_ok=True)
+    path = folder / f"{chapter}.yaml"
+    path.write_bytes(text) if isinstance(text, bytes) else path.write_text(text)
+    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers", **kwargs)
+    return {r.function: r for r in results}, problems
+
+
+def _question(chapter, qid):
+    return next(q for q in bank.questions(chapter) if q.id == qid)
+
+
+# ---------------------------------------------------------------- expressions that would hang sympy
+
+@pytest.mark.parametrize("hostile, says", [
+    ("9**(9*9*9*9*9*9*9*9)", "exponents above 10"),
+    ("2^(10*10*10*10*10*10*10*10)", "exponents above 10"),
+    ("9**(+-+99999999)", "exponents above 10"),
+    ("x**(y*99999999)", "an exponent must be a number"),
+    ("(x^2)^3", "power of a power"),
+    ("2^(2^(2^22))", "power of a power"),
+    ("1e999 * x", "finite"),
+    ("atan2(x)", "takes 2 argument"),
+    ("sqrt + x", "is a function"),
+    ("x if y else 1", "IfExp"),
+    ("x < y", "Compare"),
+    ("(x := 1)", "NamedExpr"),
+    ("sqrt(*[x])", "not allowed"),
+    ("x\x00", "formula"),
+    ("(" * 150 + "x" + ")" * 150, "at most 200"),
+    ("__builtins__", "unknown name"),
+    ("\uff58 + 1", "not plain ASCII"),  # fullwidth x
+    ("x\u200b + 1", "not plain ASCII"),  # zero-width space
+])
+def test_expression_bombs_are_refused_before_sympy(hostile, says):
+    started = time.perf_counter()
+    with pytest.raises(AnswerError) as info:
+        parse(hostile, ("x", "y"))
+    assert time.perf_counter() - started < 1.0
+    assert says in str(info.value)
+
+
+@pytest.mark.parametrize("text", ["9**(9*9*9*9*9*9*9*9)", "exp(exp(exp(exp(10))))", "e^(99999*99999)",
+                                  "sqrt(-1)", "1/0", "nan", "inf", "log(0)", "x"])
+def test_numbers_that_are_not_finite_reals_are_refused_quickly(text):
+    started = time.perf_counter()
+    with pytest.raises(AnswerError):
+        number(text)
+    assert time.perf_counter() - started < 1.0
+
+
+def test_allowed_but_odd_expressions_are_decided_quickly_and_never_equal_by_default():
+    for answer in ["exp(exp(exp(exp(10))))", "sqrt(-1 - x^2)", "e^(x*99999)", "log(-x^2 - y^2)"]:
+        started = time.perf_counter()
+        assert not equivalent(answer, "-y/(x^2 + y^2)", ("x", "y"))
+        assert time.perf_counter() - started < symbolic.SIMPLIFY_SECONDS + 1.0
+
+
+def test_undecided_is_never_equal(monkeypatch):
+    monkeypatch.setattr(symbolic, "_simplify_is_zero", lambda *args: None)  # e.g. a timeout
+    assert not equivalent("sqrt(-1 - x^2)", "sqrt(-1 - x^2)", ("x",))  # undefined at every point
+
+
+def test_simplify_decides_where_points_cannot():
+    # undefined at every real point of the domain, so only simplify can say they are the same
+    assert equivalent("sqrt(-1 - x^2)*2", "2*sqrt(-1 - x^2)", ("x",))
+
+
+def test_simplify_time_limit(monkeypatch):
+    import sympy
+
+    monkeypatch.setattr(sympy, "simplify", lambda expression: time.sleep(2) or 0)
+    monkeypatch.setattr(symbolic, "SIMPLIFY_SECONDS", 0.2)
+    started = time.perf_counter()
+    assert symbolic._simplify_is_zero("x", "x", ("x",)) is None
+    assert time.perf_counter() - started < 1.0
+
+
+@pytest.mark.parametrize("chapter, question", SYMBOLIC, ids=lambda v: getattr(v, "id", v))
+def test_symbolic_keys_and_known_wrong_answers_agree_with_sympy(chapter, question):
+    import sympy
+
+    key = bank.keys(chapter)[question.id]
+    right = parse(str(key.answer), question.symbols)
+    for wrong in key.wrong:
+        assert sympy.simplify(parse(str(wrong["answer"]), question.symbols) - right) != 0
+        assert not equivalent(str(wrong["answer"]), str(key.answer), question.symbols, question.domain)
+    assert equivalent(str(key.answer), str(right), question.symbols, question.domain)
+
+
+def test_vector_answers_go_through_the_same_whitelist(tmp_path):
+    question, key = _question("ch06", "H_at_point"), bank.keys("ch06")["H_at_point"]
+    for hostile in ["[[9**(9*9*9*9*9*9*9*9), 1], [1, 1]]", "[[().__class__, 1], [1, 1]]",
+                    "[[__import__('os'), 1], [1, 1]]", "1, 2; 3, x"]:
+        started = time.perf_counter()
+        with pytest.raises(AnswerError):
+            judge(question, key, hostile, [[1, 0], [0, 1]], seed=0)
+        assert time.perf_counter() - started < 1.0
+
+
+# ------------------------------------------------------------------------------- answer files
+
+def test_alias_bomb_is_refused_and_the_rest_graded(tmp_path):
+    text = 'a0: &a0 ["1","1","1","1","1","1","1","1","1"]\n'
+    for i in range(1, 12):
+        text += f"a{i}: &a{i} [" + ",".join([f"*a{i - 1}"] * 9) + "]\n"
+    text += "H_at_point: *a11\nbearing_near_dish: a\n"
+    started = time.perf_counter()
+    results, problems = _grade(tmp_path, "ch06", text)
+    assert time.perf_counter() - started < 2.0
+    assert "line 13, question H_at_point: " in results["H_at_point"].message
+    assert any("anchors and aliases" in p for p in problems), problems  # a1 ... a11: unknown ids too
+    assert results["bearing_near_dish"].status == Status.PASS
+    assert results["H_at_point"].status == Status.FAIL
+
+
+@pytest.mark.parametrize("depth", [50, 30_000])
+def test_deeply_nested_answer_is_refused_without_crashing(tmp_path, depth):
+    text = "bearing_near_dish: a\nH_at_point: " + "[" * depth + "]" * depth + "\nH_facts: a, b, c\n"
+    results, _ = _grade(tmp_path, "ch06", text)
+    assert "exercises/answers/ch06.yaml, line 2, question H_at_point" in results["H_at_point"].message
+    assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+
+
+def test_other_shapes_of_bad_answers(tmp_path):
+    text = ("bearing_near_dish: {a: 1}\nH_at_point: [" + ", ".join(["1"] * 500) + "]\n"
+            "H_facts: !!python/object:os.system x\ndbearing_dx: *nothing\n")
+    results, problems = _grade(tmp_path, "ch06", text)
+    assert any("line 4: not valid YAML" in p for p in problems)
+    assert "line 1, question bearing_near_dish: a mapping" in results["bearing_near_dish"].message
+    assert "line 2, question H_at_point: more than 100 values" in results["H_at_point"].message
+    assert "line 3, question H_facts: could not determine a constructor" in results["H_facts"].message
+    assert "line 4, question dbearing_dx: this answer is not valid YAML" in results["dbearing_dx"].message
+    assert all(r.status == Status.FAIL and r.points == 0 for r in results.values())
+
+
+def test_oversized_file_is_reported_not_read(tmp_path):
+    results, problems = _grade(tmp_path, "ch06", "bearing_near_dish: a\n" + "# padding\n" * 10_000)
+    assert any("bytes" in p for p in problems)
+    assert all(r.message == "not answered yet" for r in results.values())
+
+
+def test_bytes_that_are_not_utf8_cost_only_their_answer(tmp_path):
+    results, _ = _grade(tmp_path, "ch06", b"bearing_near_dish: a\ndbearing_dx: \xff\xfe\nH_facts: a, b, c\n")
+    assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+    assert "line 2, question dbearing_dx" in results["dbearing_dx"].message
+    assert "ASCII" in results["dbearing_dx"].message
+
+
+def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(tmp_path):
+    text = "\n".join([
+        "bearing_near_dish: \"__import__('os').system('touch pwned')\"",
+        "H_at_point: \"[[x.__class__, 1], [1, 1]]\"",
+        "dbearing_dx: \"lambda: 1\"",
+        f"bearing_variance: \"{'9' * 10_000}\"",
+        "H_facts: \"a, b, c, d, e\"",
+    ]) + "\n"
+    started = time.perf_counter()
+    results, _ = _grade(tmp_path, "ch06", text)
+    assert time.perf_counter() - started < 2.0
+    assert all(r.status == Status.FAIL and r.points == 0 for r in results.values())
+    for qid in ("bearing_near_dish", "H_at_point", "dbearing_dx", "bearing_variance"):
+        assert "exercises/answers/ch06.yaml, line" in results[qid].message and qid in results[qid].message
+    assert not (tmp_path / "pwned").exists() and not Path("pwned").exists()
+
+
+def test_got_is_the_answer_as_written_and_expected_only_when_right(tmp_path):
+    question = _question("ch06", "H_at_point")
+    right = bank.keys("ch06")["H_at_point"].value_for("ch06_measurement", question.values_for("alice", "ch06"))
+    written = json.dumps(right.round(6).tolist())
+    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {written}\ndbearing_dx: -y/r\n")
+    assert results["H_at_point"].got == written and results["H_at_point"].expected is not None
+    assert results["dbearing_dx"].got == "-y/r" and results["dbearing_dx"].expected is None
+    assert "unknown name 'r'" in results["dbearing_dx"].message
+
+
+# ---------------------------------------------------------------- keys or references not shipped
+
+def test_without_the_keys_folder_answers_are_read_but_not_graded(tmp_path):
+    quiz_dir = tmp_path / "quizzes"
+    quiz_dir.mkdir()
+    for path in bank.QUIZ_DIR.glob("ch*.yaml"):
+        shutil.copy(path, quiz_dir / path.name)
+    results, problems = _grade(tmp_path, "ch06", "bearing_near_dish: a\nH_facts: zz\n", quiz_dir=quiz_dir)
+    assert any("keys" in p and "not installed" in p for p in problems)
+    assert results["bearing_near_dish"].status == Status.SKIP and "key is not installed" in results[
+        "bearing_near_dish"].message
+    assert results["dbearing_dx"].message == "not answered yet"
+    assert all(r.points == 0 for r in results.values())
+
+
+def test_without_the_reference_solutions_a_computed_key_is_skipped():
+    with pytest.raises(bank.KeyUnavailable):
+        bank.Key(compute={"function": "H_jacobian", "args": []}).value_for("no_such_module_here", {})
+
+
+# ------------------------------------------------------------------------ per-learner numbers
+
+def test_learner_numbers_are_pinned_and_the_same_in_a_fresh_interpreter():
+    question = _question("ch06", "H_at_point")
+    here = {learner: question.values_for(learner, "ch06") for learner in ("alice", "bob", "reference")}
+    code = ("import json; from grader.quiz import bank; q = [q for q in bank.questions('ch06') "
+            "if q.id == 'H_at_point'][0]; print(json.dumps({l: q.values_for(l, 'ch06') "
+            "for l in ('alice', 'bob', 'reference')}))")
+    env = dict(os.environ, PYTHONHASHSEED="12345", PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    there = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                      check=True, env=env).stdout)
+    assert here == there
+    assert bank.variant_seed("alice", "ch06", "H_at_point") == 0x0A4DF1E3878BEAFF  # sha256, pinned
+
+
+def test_learner_id_sources(tmp_path):
+    folder = tmp_path / "exercises" / "answers"
+    folder.mkdir(parents=True)
+    assert learner_id(folder, None) == ("anonymous", "default")
+    (folder / "learner.yaml").write_text("learner: carol\n")
+    assert learner_id(folder, None) == ("carol", "exercises/answers/learner.yaml")
+    assert learner_id(folder, "dave") == ("dave", "--learner")
+    (folder / "learner.yaml").write_text("learner: [carol\n")
+    who, source = learner_id(folder, None)
+    assert who == "anonymous" and "not valid YAML" in source
+    (folder / "learner.yaml").write_text("a: &a [1,1,1,1,1,1,1,1]\nb: &b [*a,*a,*a,*a,*a,*a,*a,*a]\nlearner: *b\n")
+    assert learner_id(folder, None)[0] == "anonymous"
+
+
+def test_cli_names_the_learner_and_its_source(tmp_path):
+    root = tmp_path / "project"
+    answers = root / "exercises" / "answers"
+    answers.mkdir(parents=True)
+    shutil.copytree(Path(__file__).resolve().parents[1] / "exercises", root / "exercises", dirs_exist_ok=True,
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (answers / "learner.yaml").write_text("learner: carol\n")
+    runner = CliRunner()
+    result = runner.invoke(main, ["quiz", "ch06", "--submission", str(root)])
+    assert result.exit_code == 1, result.output
+    assert "carol (from exercises/answers/learner.yaml)" in result.output.splitlines()[0]
+    assert "error" not in result.output.lower()
+    result = runner.invoke(main, ["quiz", "ch06", "--submission", str(root), "--learner", "dave", "--show"])
+    numbers = _question("ch06", "H_at_point").values_for("dave", "ch06")
+    assert "dave (from --learner)" in result.output and f"({numbers['x']:g}, {numbers['y']:g})" in result.output
+
+
+# --------------------------------------------------------------------------- speed of grade chNN
+
+def test_quiz_path_of_grade_chapter_imports_no_sympy_even_for_right_symbolic_answers(repo_root):
+    code = ("import sys; from pathlib import Path; from grader.model import Report, ChapterResult; "
+            "from grader.quiz import add_quiz_results; "
+            "r = Report('x', [ChapterResult(c, c) for c in ('ch00', 'ch06', 'ch09')]); "
+            "add_quiz_results(r, Path(sys.argv[1]), 'solutions'); "
+            "assert all(c.status.value == 'pass' for ch in r.chapters for c in ch.checks), r.to_dict(); "
+            "print('sympy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(repo_root)], capture_output=True, text=True, check=False,
+                         cwd=repo_root, env=dict(os.environ, PYTHONPATH=str(repo_root)))
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"
