@@ -58,8 +58,12 @@ def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
             continue
         if path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip"):
             stem = path.stem if path.is_file() else path.name
-            learner = names.get(path.name) or names.get(stem) or stem
-            entries.append(Entry(SAFE_ID.sub("_", learner), path))
+            learner = SAFE_ID.sub("_", names.get(path.name) or names.get(stem) or stem)
+            taken = {e.learner for e in entries}
+            unique, n = learner, 2
+            while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
+                unique, n = f"{learner}-{n}", n + 1
+            entries.append(Entry(unique, path))
     return entries
 
 
@@ -158,9 +162,12 @@ def write_atomically(path: Path, text: str) -> None:
 _worker_state: dict = {}
 
 
-def _grade_one(learner: str, root: str, out: str, chapters: list[str], seed: int, digest: str,
-               html: bool, plots: bool, limits: dict) -> tuple[str, str, str]:
-    """Grade one staged submission (in a worker process); returns (learner, status, message)."""
+def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
+               limits: dict) -> tuple[str, str, str]:
+    """Stage and grade one submission (in a worker process); returns (learner, status, message).
+
+    A submission whose staged files hash as at its last grading is not graded again."""
+    from grader.forkserver import ForkServer
     from grader.grading import grade
     from grader.quiz import add_quiz_results
     from grader.render import lms
@@ -168,15 +175,23 @@ def _grade_one(learner: str, root: str, out: str, chapters: list[str], seed: int
     from grader.sandbox import Sandbox
 
     started = time.monotonic()
+    learner = entry.learner
+    staging = Path(out) / ".staging"
+    try:
+        root = stage(entry, staging)
+    except StagingError as exc:
+        return learner, "unreadable", f"{entry.source.name}: {exc}"
+    digest = content_hash(root, chapters, seed)
     folder = Path(out) / learner
+    if _previous_hash(folder) == digest:
+        return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
-    sandbox = _worker_state.get("sandbox")
-    if sandbox is None:
-        staging = Path(root).parent
-        sandbox = _worker_state["sandbox"] = Sandbox(hide=[staging, Path(out)], capture_dir=staging.parent / ".capture")
-    submission = Submission(Path(root), "exercises")
-    report = grade(Session(submission, Limits(**limits), wrap=sandbox), chapters, seed=seed, with_plots=plots,
-                   submission_label=learner)
+    server = _worker_state.get("server")
+    if server is None:  # one fork server per worker; it sees no learner's files, they come with each request
+        server = _worker_state["server"] = ForkServer(Sandbox(hide=[staging, Path(out)]))
+    submission = Submission(root, "exercises")
+    report = grade(Session(submission, Limits(**limits), launcher=server.start), chapters, seed=seed,
+                   with_plots=plots, submission_label=learner)
     add_quiz_results(report, submission.root, submission.package, learner)
     data = report.to_dict()
     data["batch"] = {"hash": digest, "seconds": round(time.monotonic() - started, 3),
@@ -209,25 +224,13 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     entries = discover(submissions, roster)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}
-    todo = []
-    for entry in entries:
-        try:
-            root = stage(entry, staging)
-        except StagingError as exc:
-            statuses[entry.learner], messages[entry.learner] = "unreadable", f"{entry.source.name}: {exc}"
-            continue
-        digest = content_hash(root, chapters, seed)
-        if _previous_hash(out / entry.learner) == digest:
-            statuses[entry.learner], messages[entry.learner] = "unchanged", "already graded, files unchanged"
-            continue
-        todo.append((entry.learner, str(root), digest))
     jobs = jobs or os.cpu_count() or 1
     started = time.monotonic()
     done = 0
     limits = limits or {}
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = {pool.submit(_grade_one, learner, root, str(out), chapters, seed, digest, html, plots, limits): learner
-                   for learner, root, digest in todo}
+        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits): entry.learner
+                   for entry in entries}
         for future in as_completed(futures):
             learner = futures[future]
             try:
@@ -236,12 +239,13 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                 statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
             done += 1
             if progress:
-                progress(done, len(todo), time.monotonic() - started)
+                progress(done, len(entries), time.monotonic() - started)
     write_summaries(out, [e.learner for e in entries], chapters, statuses, messages)
     counts: dict[str, int] = {}
     for status in statuses.values():
         counts[status] = counts.get(status, 0) + 1
-    return {"counts": counts, "seconds": time.monotonic() - started, "graded_now": len(todo),
+    graded_now = sum(status == "graded" for status in statuses.values())
+    return {"counts": counts, "seconds": time.monotonic() - started, "graded_now": graded_now,
             "messages": messages, "statuses": statuses}
 
 

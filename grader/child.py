@@ -11,6 +11,7 @@ Nothing here decides whether an answer is right; that happens in the parent.
 
 from __future__ import annotations
 
+import binascii
 import importlib
 import importlib.machinery
 import json
@@ -26,6 +27,7 @@ _REAL_SCALAR_TYPES = frozenset(
      np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64}
 )
 _MAX_ELEMENTS = 1_000_000
+_MAX_AS_TEXT = 16
 _MAX_DEPTH = 3
 _MAX_ITEMS = 64
 
@@ -45,8 +47,13 @@ def encode(value: object, depth: int = 0) -> dict:
             return {"t": "ndarray-other", "type": f"ndarray of dtype {value.dtype}"}
         if value.size > _MAX_ELEMENTS:
             return {"t": "too-large", "type": f"ndarray with {value.size} elements"}
-        flat = np.asarray(value, dtype=np.float64).ravel().tolist()
-        return {"t": "ndarray", "dtype": str(value.dtype), "shape": list(value.shape), "data": flat}
+        encoded = {"t": "ndarray", "dtype": str(value.dtype), "shape": list(value.shape)}
+        if value.size <= _MAX_AS_TEXT:  # small arrays stay readable in the protocol
+            encoded["data"] = np.asarray(value, dtype=np.float64).ravel().tolist()
+        else:  # large ones travel as little-endian float64 bytes: exact and fast both ways
+            raw = np.ascontiguousarray(value, dtype="<f8").tobytes()
+            encoded["f8"] = binascii.b2a_base64(raw, newline=False).decode("ascii")
+        return encoded
     if kind in _REAL_SCALAR_TYPES:
         try:
             return {"t": "scalar", "type": _type_name(value), "data": float(value)}
@@ -144,15 +151,14 @@ def _emit(stream, record: dict) -> None:
     stream.flush()
 
 
-def _redirect_output(capture_path: str | None) -> None:
-    flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
-    target = os.open(capture_path or os.devnull, flags, 0o600)
+def _redirect_output(capture_fd: int) -> None:
+    """stdin from /dev/null; stdout and stderr into the capture file the parent opened."""
     null_in = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null_in, 0)
-    os.dup2(target, 1)
-    os.dup2(target, 2)
-    os.close(target)
+    os.dup2(capture_fd, 1)
+    os.dup2(capture_fd, 2)
     os.close(null_in)
+    os.close(capture_fd)
 
 
 def _apply_limits(limits: dict) -> None:
@@ -246,11 +252,27 @@ def run(request: dict, out) -> None:
     _emit(out, {"event": "done"})
 
 
-def main(argv: list[str] | None = None) -> None:
-    argv = sys.argv[1:] if argv is None else argv
-    out = os.fdopen(int(argv[0]), "w", buffering=1)
-    request = json.loads(sys.stdin.read())
-    _redirect_output(request.get("capture"))
+def _write_files(files: dict, root: str) -> None:
+    """Write the submission's files (relative path -> base64), sent in the request, under `root`."""
+    import base64
+
+    for relative, data in files.items():
+        path = os.path.join(root, relative)
+        if os.path.isabs(relative) or ".." in relative.split("/"):
+            continue
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as handle:
+            handle.write(base64.b64decode(data))
+
+
+def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
+    """Grade one request and leave the process (never returns)."""
+    out = os.fdopen(result_fd, "w", buffering=1)
+    request = json.loads(request_text)
+    if "files" in request:  # a forked child (grader.forkserver): the files come with the request
+        _write_files(request["files"], request["root"])
+        os.chdir(request["root"])
+    _redirect_output(capture_fd)
     _apply_limits(request.get("limits", {}))
     run(request, out)
     out.close()
@@ -260,6 +282,12 @@ def main(argv: list[str] | None = None) -> None:
         except BaseException:  # a learner may have replaced or closed them
             pass
     os._exit(0)  # skip learner atexit handlers and finalizers
+
+
+def main(argv: list[str] | None = None) -> None:
+    """A spawned child: argv is [result pipe fd, capture file fd]; the request arrives on stdin."""
+    argv = sys.argv[1:] if argv is None else argv
+    serve(sys.stdin.read(), int(argv[0]), int(argv[1]))
 
 
 if __name__ == "__main__":

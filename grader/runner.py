@@ -8,18 +8,36 @@ broken chapter never stops the others.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import selectors
 import signal
-import subprocess
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Protocol
 
 from grader.returned import CRASHED, NOT_RUN, TIMEOUT, Returned, from_event
-from grader.spawn import CommandWrapper, forget, kill_orphans, start_child
+from grader.spawn import CommandWrapper, start_child
 from grader.submission import Submission
+
+
+class ChildHandle(Protocol):
+    """A started child process as the runner drives it (grader.spawn.SpawnedChild, grader.forkserver.ForkedChild)."""
+
+    read_fd: int
+
+    def send(self, request: dict) -> None: ...
+
+    def wait(self, timeout: float) -> None: ...
+
+    @property
+    def returncode(self) -> int | None: ...
+
+    def stop(self, output_limit: int) -> str: ...
+
+
+Launcher = Callable[[Submission], ChildHandle]
 
 _CAPTURE_LIMIT = 64 * 1024
 
@@ -129,25 +147,20 @@ class Limits:
 
 
 class _Child:
-    """One running child process and its result pipe."""
+    """One running child (grader.spawn.SpawnedChild or grader.forkserver.ForkedChild) and its result pipe."""
 
-    def __init__(self, submission: Submission, wrap: CommandWrapper | None,
-                 started: tuple | None = None) -> None:
-        self.process, self.read_fd, self.capture = started or start_child(submission, wrap)
+    def __init__(self, handle: ChildHandle) -> None:
+        self.handle = handle
         self.buffer = b""
 
     def send(self, request: dict) -> None:
-        request["capture"] = self.capture
-        try:
-            self.process.stdin.write(json.dumps(request).encode())
-            self.process.stdin.close()
-        except (BrokenPipeError, OSError):
-            pass
+        self.handle.send(request)
 
     def events(self, deadline: Callable[[], float]):
         """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes."""
+        read_fd = self.handle.read_fd
         selector = selectors.DefaultSelector()
-        selector.register(self.read_fd, selectors.EVENT_READ)
+        selector.register(read_fd, selectors.EVENT_READ)
         try:
             while True:
                 while b"\n" in self.buffer:
@@ -161,7 +174,7 @@ class _Child:
                 remaining = deadline() - time.monotonic()
                 if remaining <= 0 or not selector.select(remaining):
                     raise TimeoutError
-                chunk = os.read(self.read_fd, 1 << 16)
+                chunk = os.read(read_fd, 1 << 16)
                 if not chunk:
                     return
                 self.buffer += chunk
@@ -169,25 +182,11 @@ class _Child:
             selector.close()
 
     def stop(self) -> str:
-        """Kill the child's whole process group; return what learner code printed (capped)."""
-        try:
-            os.killpg(self.process.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
-        self.process.wait()
-        forget(self.process.pid)
-        kill_orphans()  # grandchildren that left the process group with setsid
-        os.close(self.read_fd)
-        try:
-            with open(self.capture, "rb") as handle:
-                text = handle.read(_CAPTURE_LIMIT).decode("utf-8", "replace")
-            os.unlink(self.capture)
-        except OSError:
-            text = ""
-        return text
+        """Kill the child and everything it started; return what learner code printed (capped)."""
+        return self.handle.stop(_CAPTURE_LIMIT)
 
     def exit_description(self) -> str:
-        code = self.process.poll()
+        code = self.handle.returncode
         if code is None:
             return "it was still running"
         if code < 0:
@@ -198,14 +197,17 @@ class _Child:
 class Session:
     """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
 
-    def __init__(self, submission: Submission, limits: Limits = Limits(),
-                 wrap: CommandWrapper | None = None, started: tuple | None = None) -> None:
-        """Start the child now, or adopt one grader.spawn.start_child already started (`started`)."""
+    def __init__(self, submission: Submission, limits: Limits = Limits(), wrap: CommandWrapper | None = None,
+                 started: ChildHandle | None = None, launcher: Launcher | None = None) -> None:
+        """Start the child now, or adopt one already started (`started`).
+
+        Children come from `launcher` (e.g. grader.forkserver.ForkServer.start); by default each is a
+        fresh interpreter from grader.spawn.start_child, wrapped by `wrap` (e.g. a sandbox)."""
         self.submission = submission
         self.limits = limits
-        self.wrap = wrap
+        self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
         self.output = ""
-        self._child: _Child | None = _Child(submission, wrap, started)
+        self._child: _Child | None = _Child(started or self.launcher(submission))
 
     def close(self) -> None:
         if self._child is not None:
@@ -241,7 +243,7 @@ class Session:
     def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:
         """Run what is pending in one child; return what still needs a fresh child."""
         if self._child is None:
-            self._child = _Child(self.submission, self.wrap)
+            self._child = _Child(self.launcher(self.submission))
         child = self._child
         child.send(self._request(pending, runs))
         by_name = {r.chapter: r for r in pending}
@@ -306,10 +308,7 @@ class Session:
         except TimeoutError:
             timed_out = True
         if not finished and not timed_out and not violated:  # the pipe closed: let the process finish dying
-            try:
-                child.process.wait(timeout=2)
-            except subprocess.TimeoutExpired:
-                pass
+            child.handle.wait(2)
         self.output += child.stop()
         self._child = None
         if finished:

@@ -38,14 +38,11 @@ def _hidden_defaults() -> list[str]:
 class Sandbox:
     """A grader.runner CommandWrapper: `Session(submission, wrap=Sandbox(...))`."""
 
-    def __init__(self, hide: list[str | Path] = (), capture_dir: str | Path | None = None) -> None:
+    def __init__(self, hide: list[str | Path] = ()) -> None:
         self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
         self.setpriv = shutil.which("setpriv")
         self.hide = [str(Path(p).resolve()) for p in hide] + _hidden_defaults()
-        self.capture_dir = str(capture_dir) if capture_dir else None
-        if self.capture_dir:
-            os.makedirs(self.capture_dir, exist_ok=True)
-            os.chmod(self.capture_dir, 0o1777)
+        self.drops_to_nobody = os.geteuid() == 0 and self.setpriv is not None
 
     @property
     def available(self) -> bool:
@@ -55,21 +52,27 @@ class Sandbox:
         if not self.available:
             return ("isolation: bubblewrap (bwrap) not found; learner code runs with resource limits and a "
                     "process-group kill only (apt-get install bubblewrap for the sandbox)")
-        who = "as uid 65534" if os.geteuid() == 0 and self.setpriv else "as the current user"
+        who = "as uid 65534" if self.drops_to_nobody else "as the current user"
         return f"isolation: bubblewrap sandbox (no network, read-only root, fresh /tmp, others' files hidden), {who}"
 
-    def __call__(self, command: list[str], submission: Submission) -> list[str]:
+    def scratch_dirs(self) -> list[str]:
+        """The only folders learner code can write to inside the sandbox (each a fresh tmpfs)."""
+        return ["/tmp", "/dev/shm"] + ([self._home()] if self._home() else [])
+
+    def _home(self) -> str | None:
+        """Root's home, replaced by an empty tmpfs when learner code runs as nobody (it is usually 0700)."""
+        home = os.path.expanduser("~")
+        return home if self.drops_to_nobody and home not in ("/", "") and os.path.isdir(home) else None
+
+    def __call__(self, command: list[str], submission: Submission | None) -> list[str]:
+        """`command` inside the sandbox, seeing `submission`'s files read-only (None: no learner's files)."""
         if not self.available:
             return command
-        root = str(Path(submission.root).resolve())
-        args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp"]
+        args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--perms", "01777", "--tmpfs", "/tmp"]
         emptied = ["/tmp"]  # folders replaced by an empty tmpfs: bind targets inside need their parents made
-        drop = os.geteuid() == 0 and self.setpriv is not None
-        if drop:  # root's home is usually 0700: nobody gets an empty one, with what it needs bound back
-            home = os.path.expanduser("~")
-            if home not in ("/", "") and os.path.isdir(home):
-                args += ["--tmpfs", home]
-                emptied.append(home)
+        if self._home():
+            args += ["--tmpfs", self._home()]
+            emptied.append(self._home())
         # The interpreter, its libraries and the grader package must stay visible even where they
         # live inside an emptied folder (a virtual environment in /tmp, pyenv in root's home).
         needed = {sys.prefix, sys.base_prefix, os.path.dirname(os.path.realpath(sys.executable)),
@@ -77,15 +80,22 @@ class Sandbox:
         inside = sorted(p for p in needed if os.path.exists(p) and any(p.startswith(e + os.sep) for e in emptied))
         for path in _outermost(inside):
             args += _parents(path, emptied) + ["--ro-bind", path, path]
+        hidden = []
         for path in self.hide:
+            if any(path == e or path.startswith(e + os.sep) for e in emptied):
+                continue  # already inside an empty tmpfs
             args += _parents(path, emptied) + ["--tmpfs", path]
-            emptied.append(path)
-        args += _parents(root, emptied) + ["--ro-bind", root, root]
-        if self.capture_dir:
-            args += _parents(self.capture_dir, emptied) + ["--bind", self.capture_dir, self.capture_dir]
+            hidden.append(path)
+        chdir = "/tmp"
+        if submission is not None:
+            root = chdir = str(Path(submission.root).resolve())
+            args += _parents(root, emptied + hidden) + ["--ro-bind", root, root]
+            hidden = [p for p in hidden if not p.startswith(root + os.sep)]  # no longer a mount point
+        for path in hidden:  # nothing may be left there for the next learner of a fork server
+            args += ["--remount-ro", path]
         args += ["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
-                 "--die-with-parent", "--new-session", "--chdir", root, "--"]
-        if drop:
+                 "--die-with-parent", "--new-session", "--chdir", chdir, "--"]
+        if self.drops_to_nobody:
             args += [self.setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
                      "--inh-caps=-all", "--bounding-set=-all"]
         return args + command
@@ -116,11 +126,4 @@ def _outermost(paths: list[str]) -> list[str]:
 def learner_sandbox() -> Sandbox | None:
     """The sandbox for `grade chNN`, or None where bubblewrap is not installed (or GRADER_SANDBOX=off)."""
     sandbox = Sandbox()
-    if not sandbox.available:
-        return None
-    from grader.spawn import temp_dir
-
-    sandbox.capture_dir = os.path.join(temp_dir(), f"grade-capture-{os.getuid()}")
-    os.makedirs(sandbox.capture_dir, exist_ok=True)
-    os.chmod(sandbox.capture_dir, 0o1777)
-    return sandbox
+    return sandbox if sandbox.available else None

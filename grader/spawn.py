@@ -14,7 +14,6 @@ from typing import Callable
 GRADER_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # The child runs without site (-S, faster start) on the parent's own import path, grader last.
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.child import main; main()"
-_capture_count = 0
 
 # A hook that wraps the child's command line, e.g. in a bubblewrap sandbox: (command, submission).
 CommandWrapper = Callable[[list, object], list]
@@ -44,7 +43,7 @@ _LIVE: set[int] = set()  # pids of the children started here and not yet stopped
 _SUBREAPER = False
 
 
-def _become_subreaper() -> None:
+def become_subreaper() -> None:
     """Linux: adopt orphaned descendants (a learner's `setsid` grandchildren, which leave the
     process group) so that kill_orphans() can find them. Elsewhere a no-op."""
     global _SUBREAPER
@@ -85,22 +84,83 @@ def forget(pid: int) -> None:
     _LIVE.discard(pid)
 
 
-def start_child(submission, wrap: CommandWrapper | None = None) -> tuple[subprocess.Popen, int, str]:
-    """Start a child for `submission`: (process, read end of its result pipe, capture file path)."""
-    global _capture_count
-    _capture_count += 1
+def capture_file() -> int:
+    """An unnamed temporary file for learner stdout/stderr, outside any sandbox: its descriptor."""
+    if hasattr(os, "O_TMPFILE"):
+        try:
+            return os.open(temp_dir(), os.O_TMPFILE | os.O_RDWR, 0o600)
+        except OSError:  # a file system without O_TMPFILE
+            pass
+    import tempfile
+
+    return os.dup(tempfile.TemporaryFile(dir=temp_dir()).fileno())  # the dup outlives the file object
+
+
+def read_capture(fd: int, limit: int) -> str:
+    """Up to `limit` bytes of what learner code printed; closes the descriptor."""
+    try:
+        return os.pread(fd, limit, 0).decode("utf-8", "replace")
+    except OSError:
+        return ""
+    finally:
+        os.close(fd)
+
+
+class SpawnedChild:
+    """A child interpreter started by start_child: its process (group), result pipe and output file."""
+
+    def __init__(self, process: subprocess.Popen, read_fd: int, capture_fd: int) -> None:
+        self.process = process
+        self.read_fd = read_fd
+        self.capture_fd = capture_fd
+
+    def send(self, request: dict) -> None:
+        """Write the whole request to the child's stdin and close it."""
+        import json
+
+        try:
+            self.process.stdin.write(json.dumps(request).encode())
+            self.process.stdin.close()
+        except (BrokenPipeError, OSError):
+            pass
+
+    def wait(self, timeout: float) -> None:
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            pass
+
+    @property
+    def returncode(self) -> int | None:
+        """The exit status (negative: killed by that signal), or None while it runs."""
+        return self.process.poll()
+
+    def stop(self, output_limit: int) -> str:
+        """Kill the whole process group and stray grandchildren; return what learner code printed."""
+        try:
+            os.killpg(self.process.pid, 9)
+        except (ProcessLookupError, PermissionError):
+            pass
+        self.process.wait()
+        forget(self.process.pid)
+        kill_orphans()  # grandchildren that left the process group with setsid
+        os.close(self.read_fd)
+        return read_capture(self.capture_fd, output_limit)
+
+
+def start_child(submission, wrap: CommandWrapper | None = None) -> SpawnedChild:
+    """Start a fresh child interpreter for `submission`, wrapped (e.g. sandboxed) by `wrap`."""
     read_fd, write_fd = os.pipe()
-    folder = getattr(wrap, "capture_dir", None) or temp_dir()  # a sandbox shares only its capture dir
-    capture = os.path.join(folder, f"grade-output-{os.getpid()}-{_capture_count}.txt")
-    command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd)]
+    capture_fd = capture_file()
+    command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
     if wrap is not None:
         command = wrap(command, submission)
     process = subprocess.Popen(
         command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        pass_fds=(write_fd,), start_new_session=True, env=child_environment(),
+        pass_fds=(write_fd, capture_fd), start_new_session=True, env=child_environment(),
         cwd=str(submission.root),
     )
     os.close(write_fd)
     _LIVE.add(process.pid)
-    _become_subreaper()  # after the start: the child imports numpy long before learner code runs
-    return process, read_fd, capture
+    become_subreaper()  # after the start: the child imports numpy long before learner code runs
+    return SpawnedChild(process, read_fd, capture_fd)

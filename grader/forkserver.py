@@ -1,0 +1,366 @@
+"""A fork server for batch grading: one sandboxed interpreter imports numpy once, then forks a fresh
+child per grading run, so a learner costs a fork instead of a new interpreter.
+
+The server runs inside the sandbox with no learner's files visible. For each run the parent sends,
+over a Unix socket, the child's three descriptors (request pipe, result pipe, capture file); the
+forked child gets the learner's files inside its request, writes them under a fresh folder and then
+behaves exactly like a spawned child (grader.child.serve). When the child is done, or the parent
+asks, the server kills everything the run started, removes every file it left in the sandbox's
+writable folders, and only then reports the exit status: the next learner finds nothing of the last.
+
+The server never runs learner code itself, and learner code can only hurt its own run: killing the
+server ends that run as a crash, and the parent starts a new server for the next learner.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import selectors
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from grader.spawn import (
+    CommandWrapper, become_subreaper, capture_file, child_environment, child_path, kill_orphans, read_capture,
+    temp_dir,
+)
+from grader.submission import Submission
+
+_BOOT = "import sys; sys.path[:] = {!r}; from grader.forkserver import serve; serve()"
+_MESSAGE = 4096
+_REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
+_MAX_FILES_BYTES = 32 << 20
+
+
+def submission_files(submission: Submission) -> dict[str, str]:
+    """The submission package's Python files, relative path -> base64, for a forked child's request."""
+    package = Path(submission.root) / submission.package
+    files, total = {}, 0
+    for path in sorted(package.rglob("*.py")):
+        if path.is_symlink() or not path.is_file():
+            continue
+        data = path.read_bytes()
+        total += len(data)
+        if total > _MAX_FILES_BYTES:
+            break
+        files[path.relative_to(submission.root).as_posix()] = base64.b64encode(data).decode()
+    return files
+
+
+class ForkServer:
+    """The parent's end: starts the server (inside `wrap`, e.g. a grader.sandbox.Sandbox) on first use
+    and again whenever it has died; `start` is a grader.runner Launcher."""
+
+    def __init__(self, wrap: CommandWrapper | None = None) -> None:
+        self.wrap = wrap
+        self.process: subprocess.Popen | None = None
+        self.socket: socket.socket | None = None
+        self._runs = 0
+
+    def _launch(self) -> None:
+        parent_end, server_end = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        available = getattr(self.wrap, "available", False)
+        config = {"scratch": self.wrap.scratch_dirs() if available else [], "pid_namespace": bool(available)}
+        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(server_end.fileno()),
+                   json.dumps(config)]
+        if self.wrap is not None:
+            command = self.wrap(command, None)
+        self.process = subprocess.Popen(
+            command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            pass_fds=(server_end.fileno(),), start_new_session=True, env=child_environment(), cwd=temp_dir())
+        server_end.close()
+        self.socket = parent_end
+        become_subreaper()
+
+    def start(self, submission: Submission) -> ForkedChild:
+        """Fork a fresh child for `submission` (a grader.runner Launcher)."""
+        if self.process is None or self.process.poll() is not None:
+            self.close()
+            self._launch()
+        self._runs += 1
+        request_read, request_write = os.pipe()
+        result_read, result_write = os.pipe()
+        capture_fd = capture_file()
+        root = f"/tmp/grade-run-{self._runs}" if getattr(self.wrap, "available", False) else \
+            os.path.join(temp_dir(), f"grade-run-{os.getpid()}-{self._runs}")
+        sent = True
+        try:
+            socket.send_fds(self.socket, [b"run " + root.encode()], [request_read, result_write, capture_fd])
+        except OSError:
+            sent = False  # the server died: the child reads as crashed at once
+        for fd in (request_read, result_write):
+            os.close(fd)
+        return ForkedChild(self, submission, request_write, result_read, capture_fd, root, sent)
+
+    def _reply(self, timeout: float) -> int | None:
+        """The exit status the server reports for the current run; None if it gave none in time."""
+        if self.socket is None:
+            return None
+        self.socket.settimeout(timeout)
+        try:
+            message = self.socket.recv(_MESSAGE)
+        except (socket.timeout, OSError):
+            return None
+        if not message.startswith(b"exit "):
+            self.close()  # the server died (EOF) or said something else: it is replaced next time
+            return -signal.SIGKILL
+        return int(message[5:])
+
+    def _ask_to_kill(self) -> None:
+        try:
+            self.socket.send(b"kill")
+        except (OSError, AttributeError):
+            pass
+
+    def close(self) -> None:
+        """Stop the server, its sandbox and everything in it."""
+        if self.socket is not None:
+            self.socket.close()
+            self.socket = None
+        if self.process is not None:
+            try:
+                os.killpg(self.process.pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+            self.process.wait()
+            self.process = None
+            kill_orphans()
+
+
+class ForkedChild:
+    """One forked child, driven by grader.runner like a spawned one (grader.runner.ChildHandle)."""
+
+    def __init__(self, server: ForkServer, submission: Submission, request_fd: int, read_fd: int,
+                 capture_fd: int, root: str, sent: bool) -> None:
+        self.server = server
+        self.submission = submission
+        self.request_fd = request_fd
+        self.read_fd = read_fd
+        self.capture_fd = capture_fd
+        self.root = root
+        self._returncode: int | None = None if sent else -signal.SIGKILL
+
+    def send(self, request: dict) -> None:
+        """The request, with the submission's files and where the child writes them."""
+        request = dict(request, root=self.root, files=submission_files(self.submission))
+        try:
+            with open(self.request_fd, "wb", closefd=True) as pipe:
+                pipe.write(json.dumps(request).encode())
+        except OSError:
+            pass
+
+    def wait(self, timeout: float) -> None:
+        if self._returncode is None:
+            self._returncode = self.server._reply(timeout)
+
+    @property
+    def returncode(self) -> int | None:
+        return self._returncode
+
+    def stop(self, output_limit: int) -> str:
+        """Have the server kill the run and clean up; replace the server if it does not answer."""
+        if self._returncode is None:
+            self.server._ask_to_kill()
+            self._returncode = self.server._reply(_REPLY_SECONDS)
+            if self._returncode is None:
+                self.server.close()
+                self._returncode = -signal.SIGKILL
+        os.close(self.read_fd)
+        return read_capture(self.capture_fd, output_limit)
+
+
+# ------------------------------------------------------------------------------ the server side
+
+def _prctl(option: int, value: int) -> None:
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(option, value, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+
+
+def _live_children_of(pid: int) -> list[int]:
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat", "rb") as handle:
+                    fields = handle.read().rsplit(b")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != b"Z":
+                found.append(int(entry))
+    return found
+
+
+def _reap() -> None:
+    while True:
+        try:
+            if os.waitpid(-1, os.WNOHANG)[0] == 0:
+                return
+        except ChildProcessError:
+            return
+
+
+def _kill_everything(child: int, pid_namespace: bool) -> None:
+    """Kill the run's child and every process it started, and reap what has died."""
+    if pid_namespace:  # alone in our own PID namespace: kill(-1) reaches every process but us and init
+        for _ in range(2):
+            try:
+                os.kill(-1, signal.SIGKILL)
+            except OSError:
+                pass
+    else:  # the child's session, then whatever this subreaper adopted, until none is left
+        try:
+            os.killpg(child, signal.SIGKILL)
+        except OSError:
+            pass
+        me = os.getpid()
+        for _ in range(1000):
+            _reap()
+            strays = _live_children_of(me)
+            if not strays:
+                break
+            for pid in strays:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except OSError:
+                    pass
+            time.sleep(0.001)
+    _reap()
+
+
+def _wipe(folder: str, device: int | None = None) -> None:
+    """Remove everything in `folder` that lies on its own file system (mount points are left alone)."""
+    try:
+        device = os.lstat(folder).st_dev if device is None else device
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        try:
+            info = entry.stat(follow_symlinks=False)
+            if info.st_dev != device:
+                continue
+            if entry.is_dir(follow_symlinks=False):
+                os.chmod(entry.path, 0o700)
+                _wipe(entry.path, device)
+                os.rmdir(entry.path)
+            else:
+                os.unlink(entry.path)
+        except OSError:
+            continue
+
+
+def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> int | None:
+    """Fork a child for one run, wait for it (or for the parent's kill), clean up; its exit status,
+    or None when the parent has gone away."""
+    from grader.child import serve as serve_request
+
+    request_fd, result_fd, capture_fd = fds
+    try:
+        os.makedirs(root, mode=0o700, exist_ok=True)
+        pid = os.fork()
+    except OSError:  # no room for another process or folder: this run fails, the server goes on
+        for fd in fds:
+            os.close(fd)
+        return 71
+    if pid == 0:  # the child: nothing of the server's may stay open to learner code
+        try:
+            server.close()
+            os.setsid()
+            _prctl(4, 1)  # PR_SET_DUMPABLE: its own /proc entries stay its own
+            with open(request_fd, "rb") as pipe:
+                text = pipe.read().decode()
+            serve_request(text, result_fd, capture_fd)
+        finally:
+            os._exit(70)
+    for fd in fds:
+        os.close(fd)
+    selector = selectors.DefaultSelector()
+    try:
+        pidfd = os.pidfd_open(pid)
+        selector.register(pidfd, selectors.EVENT_READ)
+    except (AttributeError, OSError):
+        pidfd = None
+    selector.register(server, selectors.EVENT_READ)
+    status = None
+    parent_gone = False
+    while status is None:
+        ready = selector.select(None if pidfd is not None else 0.01)
+        if any(key.fileobj is server for key, _ in ready):
+            parent_gone = server.recv(_MESSAGE) == b""  # otherwise "kill"
+            break
+        done, wait_status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            status = os.waitstatus_to_exitcode(wait_status)
+    selector.close()
+    if pidfd is not None:
+        os.close(pidfd)
+    _kill_everything(pid, config["pid_namespace"])
+    if status is None:
+        try:
+            status = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+        except ChildProcessError:
+            status = -signal.SIGKILL
+    _wipe(root)
+    try:
+        os.rmdir(root)
+    except OSError:
+        pass
+    for folder in config["scratch"]:
+        _wipe(folder)
+    return None if parent_gone else status
+
+
+def _warm_up() -> None:
+    """Import, once and before any fork, what every run would otherwise load again: numpy, the child
+    side, the callables a request may name, numpy.random (for Generator arguments) and what import
+    errors and submission files need."""
+    import base64  # noqa: F401
+    import importlib.util  # noqa: F401
+    import traceback  # noqa: F401
+
+    import numpy as np
+
+    import grader.catalogue  # noqa: F401
+    import grader.child  # noqa: F401
+
+    np.random.default_rng(0).normal(size=2)
+
+
+def serve(argv: list[str] | None = None) -> None:
+    """The server's loop (inside the sandbox): one run at a time until the parent closes the socket."""
+    argv = sys.argv[1:] if argv is None else argv
+    _warm_up()
+
+    server = socket.socket(fileno=int(argv[0]))
+    config = json.loads(argv[1])
+    config["pid_namespace"] = config.get("pid_namespace", False) and os.getpid() <= 3
+    _prctl(4, 0)  # PR_SET_DUMPABLE 0: learner processes (same uid) cannot ptrace us or read our memory
+    _prctl(36, 1)  # PR_SET_CHILD_SUBREAPER: a run's orphans become ours, to be killed
+    while True:
+        try:
+            message, fds, _, _ = socket.recv_fds(server, _MESSAGE, 3)
+        except OSError:
+            break
+        if not message:
+            break
+        if not message.startswith(b"run ") or len(fds) != 3:  # e.g. a "kill" that came after the run ended
+            for fd in fds:
+                os.close(fd)
+            continue
+        status = _run_one(server, message[4:].decode(), fds, config)
+        if status is None:
+            break
+        try:
+            server.send(b"exit %d" % status)
+        except OSError:
+            break
+    os._exit(0)
