@@ -16,7 +16,6 @@ import io
 import json
 import os
 import re
-import shutil
 import sys
 import time
 import zipfile
@@ -79,14 +78,11 @@ def _wanted(relative: str) -> str | None:
 
 
 def stage(entry: Entry, staging: Path) -> Path:
-    """Copy the submission's chapter and answer files into staging/<learner>/exercises/."""
+    """Copy the submission's chapter and answer files into staging/<learner>/exercises/ (a file
+    already staged with the same bytes is left as it is; files no longer submitted are removed)."""
     root = staging / entry.learner
-    if root.exists():
-        shutil.rmtree(root)
     package = root / "exercises"
-    (package / "answers").mkdir(parents=True)
-    (package / "__init__.py").write_text("")
-    files: dict[str, bytes] = {}
+    files: dict[str, bytes] = {"__init__.py": b""}
     total = 0
     if entry.source.is_dir():
         for path in sorted(entry.source.rglob("*")):
@@ -128,8 +124,18 @@ def stage(entry: Entry, staging: Path) -> Path:
         raise StagingError("the submission is too large")
     if not any(CHAPTER_FILE.match(name) for name in files):
         raise StagingError("no chapter files (chNN_*.py) found, neither in exercises/ nor at the top")
+    (package / "answers").mkdir(parents=True, exist_ok=True)
+    for path in package.rglob("*"):
+        if path.is_file() and path.relative_to(package).as_posix() not in files:
+            path.unlink()
     for target, data in files.items():
-        (package / target).write_bytes(data)
+        path = package / target
+        try:
+            if path.read_bytes() == data:
+                continue
+        except OSError:
+            pass
+        path.write_bytes(data)
     return root
 
 
@@ -188,7 +194,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     folder.mkdir(parents=True, exist_ok=True)
     server = _worker_state.get("server")
     if server is None:  # one fork server per worker; it sees no learner's files, they come with each request
-        server = _worker_state["server"] = ForkServer(Sandbox(hide=[staging, Path(out)]))
+        server = _worker_state["server"] = ForkServer(Sandbox(hide=[entry.source.parent, Path(out)]))
     submission = Submission(root, "exercises")
     report = grade(Session(submission, Limits(**limits), launcher=server.start), chapters, seed=seed,
                    with_plots=plots, submission_label=learner)

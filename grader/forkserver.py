@@ -79,20 +79,23 @@ class ForkServer:
 
     def start(self, submission: Submission) -> ForkedChild:
         """Fork a fresh child for `submission` (a grader.runner Launcher)."""
-        if self.process is None or self.process.poll() is not None:
-            self.close()
-            self._launch()
         self._runs += 1
         request_read, request_write = os.pipe()
         result_read, result_write = os.pipe()
         capture_fd = capture_file()
         root = f"/tmp/grade-run-{self._runs}" if getattr(self.wrap, "available", False) else \
             os.path.join(temp_dir(), f"grade-run-{os.getpid()}-{self._runs}")
-        sent = True
-        try:
-            socket.send_fds(self.socket, [b"run " + root.encode()], [request_read, result_write, capture_fd])
-        except OSError:
-            sent = False  # the server died: the child reads as crashed at once
+        sent = False
+        for _ in range(2):  # a server that died since the last run (a learner killed it) is replaced
+            if self.process is None or self.process.poll() is not None:
+                self.close()
+                self._launch()
+            try:
+                socket.send_fds(self.socket, [b"run " + root.encode()], [request_read, result_write, capture_fd])
+                sent = True
+                break
+            except OSError:
+                self.close()
         for fd in (request_read, result_write):
             os.close(fd)
         return ForkedChild(self, submission, request_write, result_read, capture_fd, root, sent)
@@ -264,6 +267,7 @@ def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> 
     from grader.child import serve as serve_request
 
     request_fd, result_fd, capture_fd = fds
+    server_pid = os.getpid()
     try:
         os.makedirs(root, mode=0o700, exist_ok=True)
         pid = os.fork()
@@ -274,6 +278,9 @@ def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> 
     if pid == 0:  # the child: nothing of the server's may stay open to learner code
         try:
             server.close()
+            _prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG: die with the server, never outlive it
+            if os.getppid() != server_pid:
+                os._exit(70)
             os.setsid()
             _prctl(4, 1)  # PR_SET_DUMPABLE: its own /proc entries stay its own
             with open(request_fd, "rb") as pipe:

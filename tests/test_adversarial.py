@@ -65,10 +65,12 @@ HOSTILE = {
                                 "        __ne__ = lambda self, other: False\n    return np.zeros((2, 2)).view(Yes)"),
     "patches_numpy": _module("np.allclose = lambda *a, **k: True\nnp.testing.assert_allclose = lambda *a, **k: None\n"
                              "np.array_equal = lambda *a, **k: True\n"),
-    "forges_result_lines": _module("import os, sys, json\nfd = int(sys.argv[-1])\nfor i in range(300):\n"
-                                   "    os.write(fd, (json.dumps({'event': 'returned', 'chapter': 'ch06', 'index': i,"
-                                   " 'value': {'t': 'ndarray', 'dtype': 'float64', 'shape': [2, 2], 'data': [0.6, 0.8, -0.16, 0.12]}})"
-                                   " + '\\n').encode())\nos.write(fd, b'{\"event\": \"done\"}\\n')\n"),
+    # Writes forged "right answer" lines to every open descriptor, the result pipe among them.
+    "forges_result_lines": _module("import os, json\nlines = b''.join((json.dumps({'event': 'returned', 'chapter': 'ch06',"
+                                   " 'index': i, 'value': {'t': 'ndarray', 'dtype': 'float64', 'shape': [2, 2],"
+                                   " 'data': [0.6, 0.8, -0.16, 0.12]}}) + '\\n').encode() for i in range(300))\n"
+                                   "for fd in range(3, 256):\n    try:\n        os.write(fd, lines + b'{\"event\": \"done\"}\\n')\n"
+                                   "    except OSError:\n        pass\n"),
     "returns_nan": _h("    return np.full((2, 2), np.nan)"),
     "returns_string": _h("    return '[[0.6, 0.8], [-0.16, 0.12]]'"),
     "wrong_shape": _h("    return np.array([0.6, 0.8, -0.16, 0.12])"),

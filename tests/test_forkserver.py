@@ -1,0 +1,91 @@
+"""The batch fork server (grader.forkserver): one sandboxed interpreter forks a child per learner.
+Nothing of one learner's run (files, processes) reaches the next, and a learner who kills the
+server ends only their own run. Real processes and, where installed, real bubblewrap."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+from grader.forkserver import ForkServer
+from grader.grading import grade
+from grader.model import Status
+from grader.runner import Limits, Session
+from grader.sandbox import Sandbox
+from grader.submission import Submission
+from tests.conftest import replace_function
+
+MARKER = "271.828"  # sleep duration of the learner's background process, to find it in /proc
+BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
+LIMITS = Limits(import_seconds=3.0, call_seconds=3.0, chapter_seconds=10.0)
+
+
+def _grade(server: ForkServer, root: Path):
+    report = grade(Session(Submission(root, "exercises"), LIMITS, launcher=server.start), ["ch06"], seed=3)
+    return {c.id: c for c in report.chapters[0].checks}
+
+
+def _strays() -> list[str]:
+    found = []
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            try:
+                if MARKER in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
+                    found.append(pid)
+            except OSError:
+                continue
+    return found
+
+
+@pytest.fixture
+def server(tmp_path):
+    if not BWRAP and os.environ.get("CI"):
+        pytest.fail("CI must have bubblewrap (.ci/run installs it)")
+    forks = ForkServer(Sandbox(hide=[tmp_path]) if BWRAP else None)
+    yield forks
+    forks.close()
+
+
+def test_background_processes_of_a_run_are_killed_before_the_next(server, submission_factory):
+    spawner = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import subprocess\n"
+        f"    subprocess.Popen(['sleep', '{MARKER}'], start_new_session=True)\n"
+        f"    subprocess.Popen(['sleep', '{MARKER}'])\n    return np.eye(2)\n")})
+    _grade(server, spawner)
+    time.sleep(0.2)
+    assert _strays() == []
+    good = _grade(server, submission_factory())
+    assert all(c.status == Status.PASS for c in good.values())
+
+
+@pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"), reason="wiping /tmp needs the sandbox's own /tmp")
+def test_files_a_run_leaves_in_tmp_are_gone_for_the_next(server, submission_factory):
+    leaver = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import os\n"
+        "    os.makedirs('/tmp/left/deeper', exist_ok=True)\n    open('/tmp/left/deeper/answers.txt', 'w').write('x')\n"
+        "    open('/tmp/left-behind.txt', 'w').write('x')\n    os.chmod('/tmp/left', 0o500)\n    return np.eye(2)\n")})
+    _grade(server, leaver)
+    looker = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", "def range_bearing(x, y):\n    import os\n"
+        "    if os.path.exists('/tmp/left-behind.txt') or os.path.exists('/tmp/left'):\n"
+        "        raise RuntimeError('the last learner left files in /tmp')\n"
+        "    return np.array([np.hypot(x, y), np.arctan2(y, x)])\n")})
+    checks = _grade(server, looker)
+    assert checks["range_bearing_worked_example"].status == Status.PASS, checks["range_bearing_worked_example"].message
+
+
+def test_a_learner_who_kills_the_server_ends_only_their_own_run(server, submission_factory):
+    killer = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian",
+        "def H_jacobian(x, y):\n    import os, signal\n    os.kill(os.getppid(), signal.SIGKILL)\n"
+        "    return np.eye(2)\n")})
+    checks = _grade(server, killer)
+    h_checks = [c for c in checks.values() if c.function == "H_jacobian" and c.id != "H_raises_at_origin"]
+    assert h_checks and all(c.status != Status.PASS and c.message for c in h_checks)
+    good = _grade(server, submission_factory())
+    assert all(c.status == Status.PASS for c in good.values()), [(c.id, c.message) for c in good.values()
+                                                                   if c.status != Status.PASS]
