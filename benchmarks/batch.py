@@ -1,13 +1,16 @@
 """Throughput of `grade batch`: a few hundred generated submissions (right, buggy and hostile mixed),
-all chapters and quizzes, isolation on. Prints submissions per second and per-submission cost,
-against `grade all --solutions` (one submission through the learner CLI) timed in the same run.
+all chapters and quizzes, isolation on. Prints submissions per second and the cost per submission
+(wall and CPU), against two baselines timed in the same run: one `grade all --solutions` from the
+CLI, and the same batch with a fresh sandboxed interpreter per learner instead of the fork server
+(GRADER_FORK_SERVER=off).
 
-    python benchmarks/batch.py [--count 200] [--jobs N]
+    python benchmarks/batch.py [--count 300] [--jobs N] [--baseline-count 100]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import random
 import shutil
 import subprocess
@@ -50,28 +53,58 @@ def make(folder: Path, count: int) -> None:
         shutil.copytree(answers, root / "exercises" / "answers")
 
 
+def busy_cpu_seconds() -> float | None:
+    """CPU time spent by the whole machine (all cores, not idle) so far; None off Linux."""
+    try:
+        with open("/proc/stat") as handle:
+            fields = [int(v) for v in handle.readline().split()[1:]]
+    except OSError:
+        return None
+    return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
+
+
+def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict) -> tuple[float, float | None, str]:
+    """(wall seconds, busy CPU seconds, first output lines) of one `grade batch` run."""
+    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out), "--no-html"]
+    command += ["--jobs", str(jobs)] if jobs else []
+    cpu_before, started = busy_cpu_seconds(), time.perf_counter()
+    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False, env=env)
+    wall, cpu_after = time.perf_counter() - started, busy_cpu_seconds()
+    cpu = None if cpu_before is None or cpu_after is None else cpu_after - cpu_before
+    lines = (proc.stdout.strip().splitlines()[:1] + proc.stderr.strip().splitlines()[:1]) or [proc.stderr[-500:]]
+    return wall, cpu, "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--count", type=int, default=200)
+    parser.add_argument("--count", type=int, default=300)
+    parser.add_argument("--baseline-count", type=int, default=100)
     parser.add_argument("--jobs", type=int, default=None)
     args = parser.parse_args()
     work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
     make(work / "submissions", args.count)
-    started = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "grader", "all", "--solutions"], cwd=ROOT, stdout=subprocess.DEVNULL,
-                   check=False)
-    single = time.perf_counter() - started
-    command = [sys.executable, "-m", "grader", "batch", str(work / "submissions"), "--out", str(work / "out"),
-               "--no-html"] + (["--jobs", str(args.jobs)] if args.jobs else [])
-    started = time.perf_counter()
-    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False)
-    elapsed = time.perf_counter() - started
-    print(proc.stdout.strip().splitlines()[0] if proc.stdout.strip() else proc.stderr[-500:])
-    print(proc.stderr.strip().splitlines()[0] if proc.stderr.strip() else "")
-    print(f"{args.count} submissions (all chapters and quizzes) in {elapsed:.1f} s: "
-          f"{args.count / elapsed:.1f} submissions/s, {elapsed / args.count * 1000:.0f} ms each (wall, all cores)")
-    print(f"one `grade all --solutions` from the CLI: {single:.2f} s; batch per submission / that = "
-          f"{elapsed / args.count / single:.2f}; target >= 10 submissions/s")
+    make(work / "baseline", args.baseline_count)
+    singles = []
+    for _ in range(3):
+        started = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "grader", "all", "--solutions"], cwd=ROOT, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, check=False)
+        singles.append(time.perf_counter() - started)
+    single = sorted(singles)[1]
+    env = dict(os.environ)
+    wall, cpu, output = run_batch(work / "submissions", work / "out", args.jobs, env)
+    base_wall, base_cpu, _ = run_batch(work / "baseline", work / "out-baseline", args.jobs,
+                                       dict(env, GRADER_FORK_SERVER="off"))
+    print(output)
+    per, base_per = wall / args.count, base_wall / args.baseline_count
+    cpu_text = lambda total, n: "" if total is None else f", {total / n * 1000:.0f} ms CPU"  # noqa: E731
+    print(f"fork server: {args.count} submissions (all chapters and quizzes) in {wall:.1f} s: "
+          f"{args.count / wall:.1f} submissions/s, {per * 1000:.0f} ms wall each{cpu_text(cpu, args.count)}")
+    print(f"fresh sandboxed interpreter per learner: {args.baseline_count} in {base_wall:.1f} s: "
+          f"{args.baseline_count / base_wall:.1f} submissions/s, {base_per * 1000:.0f} ms wall each"
+          f"{cpu_text(base_cpu, args.baseline_count)}; fork server speed-up {base_per / per:.2f}x")
+    print(f"one `grade all --solutions` from the CLI: {single:.2f} s; batch per submission / that = {per / single:.2f}; "
+          f"target >= 10 submissions/s")
     shutil.rmtree(work, ignore_errors=True)
 
 

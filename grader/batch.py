@@ -179,6 +179,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     from grader.render import lms
     from grader.runner import Limits, Session, Submission
     from grader.sandbox import Sandbox
+    from grader.spawn import start_child
 
     started = time.monotonic()
     learner = entry.learner
@@ -192,11 +193,14 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     if _previous_hash(folder) == digest:
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
-    server = _worker_state.get("server")
-    if server is None:  # one fork server per worker; it sees no learner's files, they come with each request
-        server = _worker_state["server"] = ForkServer(Sandbox(hide=[entry.source.parent, Path(out)]))
+    if "launcher" not in _worker_state:
+        sandbox = Sandbox(hide=[entry.source.parent, Path(out)])
+        if os.environ.get("GRADER_FORK_SERVER") == "off":  # a fresh interpreter per learner (slower)
+            _worker_state["launcher"] = functools.partial(start_child, wrap=sandbox)
+        else:  # one fork server per worker; it sees no learner's files, they come with each request
+            _worker_state["launcher"] = ForkServer(sandbox).start
     submission = Submission(root, "exercises")
-    report = grade(Session(submission, Limits(**limits), launcher=server.start), chapters, seed=seed,
+    report = grade(Session(submission, Limits(**limits), launcher=_worker_state["launcher"]), chapters, seed=seed,
                    with_plots=plots, submission_label=learner)
     add_quiz_results(report, submission.root, submission.package, learner)
     data = report.to_dict()

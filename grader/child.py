@@ -1,10 +1,11 @@
 """The child side of the process boundary: import the learner's module, call it, report plain data.
 
-This file runs in a separate interpreter (`python -I -S -c ...`, see grader.runner). It imports numpy first (while
-the parent prepares its request), then reads one JSON request from stdin, points stdout/stderr at
-a capture file, and for each chapter imports the learner's module and calls the named functions on
-the arguments the parent chose. Every outcome is written to the result pipe FD as one JSON line.
-Only numbers, shapes and type names travel back: never pickle, never a learner object.
+This file runs in a separate interpreter (`python -I -S -c ...`, see grader.spawn), or in a child
+forked from grader.forkserver, which then also sends the learner's files with the request. It reads
+one JSON request, points stdout/stderr at the capture file the parent opened, and for each chapter
+imports the learner's module and calls the named functions on the arguments the parent chose.
+Every outcome is written to the result pipe as one JSON line. Only numbers, shapes and type names
+travel back: never pickle, never a learner object.
 
 Nothing here decides whether an answer is right; that happens in the parent.
 """
