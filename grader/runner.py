@@ -205,6 +205,7 @@ class Session:
         fresh interpreter from grader.spawn.start_child, wrapped by `wrap` (e.g. a sandbox)."""
         self.submission = submission
         self.limits = limits
+        self.wrap = wrap
         self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
         self.output = ""
         self._child: _Child | None = _Child(started or self.launcher(submission))

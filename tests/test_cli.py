@@ -109,6 +109,16 @@ def test_real_subprocess_all_solutions_full_marks(repo_root):
         assert chapter["score"] == chapter["max_score"] > 0, chapter["chapter"]
 
 
+@pytest.mark.parametrize("options", [["--no-sandbox"], ["--no-sandbox", "--no-quiz"], ["--no-quiz"]])
+def test_real_subprocess_sandbox_and_quiz_options_keep_full_marks(repo_root, options):
+    proc = _run(["ch06", "--solutions", "--format", "json", *options], repo_root)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    data = json.loads(proc.stdout)
+    kinds = {c["kind"] for c in data["chapters"][0]["checks"]}
+    assert data["score"] == data["max_score"] > 0
+    assert kinds == ({"code"} if "--no-quiz" in options else {"code", "quiz"})
+
+
 def test_real_subprocess_stubs_zero_and_no_error(repo_root):
     proc = _run(["all", "--format", "json"], repo_root)
     assert proc.returncode == 1
