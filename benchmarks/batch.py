@@ -1,5 +1,5 @@
 """Throughput of `grade batch`: a few hundred generated submissions (right, buggy and hostile mixed),
-all chapters and quizzes, isolation on. Prints submissions per second and the cost per submission
+all chapters and quizzes, isolation on, every output written (HTML reports included). Prints submissions per second and the cost per submission
 (wall and CPU), against two baselines timed in the same run: one `grade all --solutions` from the
 CLI, and the same batch with a fresh sandboxed interpreter per learner instead of the fork server
 (GRADER_FORK_SERVER=off).
@@ -65,7 +65,7 @@ def busy_cpu_seconds() -> float | None:
 
 def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict) -> tuple[float, float | None, str]:
     """(wall seconds, busy CPU seconds, first output lines) of one `grade batch` run."""
-    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out), "--no-html"]
+    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out)]  # HTML reports too
     command += ["--jobs", str(jobs)] if jobs else []
     cpu_before, started = busy_cpu_seconds(), time.perf_counter()
     proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False, env=env)

@@ -9,6 +9,7 @@ draw becomes a note; it never breaks the report. matplotlib and jinja2 load only
 from __future__ import annotations
 
 import base64
+import functools
 import io
 import os
 
@@ -330,13 +331,18 @@ def figures(chapter: ChapterResult) -> list[_Figure]:
     return out
 
 
-def render(report: Report) -> str:
-    """The report as one self-contained HTML page."""
+@functools.lru_cache(maxsize=1)
+def _template():
+    """The page template, compiled once per process (compiling costs more than rendering)."""
     import jinja2
 
     environment = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    template = environment.from_string(TEMPLATE)
-    return template.render(report=report, figures=_all_figures(report), num=_num, values=_values)
+    return environment.from_string(TEMPLATE)
+
+
+def render(report: Report) -> str:
+    """The report as one self-contained HTML page."""
+    return _template().render(report=report, figures=_all_figures(report), num=_num, values=_values)
 
 
 def _all_figures(report: Report) -> dict[str, list[_Figure]]:
