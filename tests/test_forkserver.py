@@ -4,6 +4,7 @@ server ends only their own run. Real processes and, where installed, real bubble
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import time
@@ -89,3 +90,31 @@ def test_a_learner_who_kills_the_server_ends_only_their_own_run(server, submissi
     good = _grade(server, submission_factory())
     assert all(c.status == Status.PASS for c in good.values()), [(c.id, c.message) for c in good.values()
                                                                    if c.status != Status.PASS]
+
+
+@pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"), reason="hiding folders needs the bubblewrap sandbox")
+def test_batch_hides_the_submissions_and_output_folders_wherever_they_are(tmp_path):
+    """Outside /tmp (which the sandbox replaces anyway): a folder in the project itself."""
+    import tempfile
+
+    from grader.batch import run_batch
+    from tests.conftest import build_submission
+
+    base = Path(tempfile.mkdtemp(prefix=".pytest-batch-", dir=Path(__file__).resolve().parents[1]))
+    base.chmod(0o755)  # readable to anyone: only the sandbox's hiding can stop the thief
+    try:
+        submissions, out = base / "submissions", base / "out"
+        build_submission(submissions / "a_victim")
+        targets = [submissions / "a_victim" / "exercises" / "ch06_measurement.py",
+                   out / ".staging" / "a_victim" / "exercises" / "ch06_measurement.py"]
+        build_submission(submissions / "thief", {"ch06_measurement": replace_function(
+            "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    seen = []\n"
+            f"    for path in {[str(t) for t in targets]!r}:\n        try:\n            open(path).read()\n"
+            "            seen.append('read')\n        except OSError as exc:\n"
+            "            seen.append(type(exc).__name__)\n    raise RuntimeError(' and '.join(seen))\n")})
+        run_batch(submissions, out, chapters=["ch06"], jobs=1, seed=2, html=False)
+        report = json.loads((out / "thief" / "report.json").read_text())
+        check = next(c for c in report["chapters"][0]["checks"] if c["id"] == "H_worked_example")
+        assert "RuntimeError: FileNotFoundError and FileNotFoundError" in check["message"], check["message"]
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
