@@ -155,3 +155,27 @@ def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissio
     assert f"{len(done)} unchanged" in result.output
     rows = _rows(out / "gradebook.csv")
     assert len(rows) == 10 and all(r["status"] in ("graded", "unreadable") for r in rows)
+
+
+def test_two_submissions_with_the_same_id_keep_both(tmp_path):
+    folder = tmp_path / "submissions"
+    folder.mkdir()
+    flat = build_submission(tmp_path / "flat")
+    build_submission(folder / "alice")
+    _zip(flat, folder / "alice.zip")
+    entries = discover(folder)
+    assert sorted(e.learner for e in entries) == ["alice", "alice-2"]
+    assert len({e.source for e in entries}) == 2
+
+
+def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
+    from grader.batch import Entry
+
+    source = build_submission(tmp_path / "learner")
+    staged = stage(Entry("learner", source), tmp_path / "staging") / "exercises"
+    assert (staged / "ch06_measurement.py").exists()
+    (source / "exercises" / "ch06_measurement.py").unlink()
+    (source / "exercises" / "ch03_jacobian.py").write_text("CHANGED = 1\n")
+    stage(Entry("learner", source), tmp_path / "staging")
+    assert not (staged / "ch06_measurement.py").exists()
+    assert (staged / "ch03_jacobian.py").read_text() == "CHANGED = 1\n"

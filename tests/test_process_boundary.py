@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import json
 import os
 import time
 
+import numpy as np
 import pytest
 
 from grader.grading import grade
@@ -165,3 +167,30 @@ def test_child_runs_in_another_process(submission_factory):
     report = _grade(submission_factory({"ch06_measurement": source}), ["ch06"])
     got = checks_by_id(report.chapters[0])["range_bearing_worked_example"].got
     assert got[0] != os.getpid()
+
+
+@pytest.mark.parametrize("value", [
+    np.arange(40, dtype=np.float64).reshape(5, 8) / 3.0,  # large: travels as float64 bytes
+    np.array([[0.1, -2.5], [1e-300, 7.0]]),  # small: travels as numbers
+    np.arange(30, dtype=np.int64) - 15,
+    np.array([np.nan, np.inf, -0.0] * 7),
+])
+def test_arrays_cross_the_process_boundary_exactly(value):
+    from grader.child import encode
+    from grader.returned import VALUE, Returned
+
+    wire = json.loads(json.dumps(encode(value)))  # what the pipe carries
+    got = Returned(VALUE, "f", wire).as_array()
+    assert type(got) is np.ndarray and got.dtype == np.float64 and got.shape == value.shape
+    assert np.array_equal(got, value.astype(np.float64), equal_nan=True)
+    assert np.array_equal(np.signbit(got), np.signbit(value))
+
+
+def test_a_malformed_array_from_the_child_is_no_value():
+    from grader.returned import VALUE, Returned
+
+    for encoded in ({"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "not base64!"},
+                    {"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "AAAA"},
+                    {"t": "ndarray", "dtype": "float64", "shape": [4], "f8": "AAAAAAAAAAA="},
+                    {"t": "ndarray", "dtype": "float64", "shape": [3], "f8": 12}):
+        assert Returned(VALUE, "f", encoded).as_array() is None, encoded
