@@ -179,3 +179,27 @@ def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
     stage(Entry("learner", source), tmp_path / "staging")
     assert not (staged / "ch06_measurement.py").exists()
     assert (staged / "ch03_jacobian.py").read_text() == "CHANGED = 1\n"
+
+
+def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_path):
+    import pty
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(tmp_path / "out"),
+                             "--chapters", CHAPTERS, "--no-html", "--jobs", "1"],
+                            cwd=Path(__file__).resolve().parents[1], stdout=slave, stderr=slave)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:  # the terminal closed: the process has ended
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    proc.wait(timeout=120)
+    os.close(master)
+    text = b"".join(chunks).decode(errors="replace")
+    assert proc.returncode in (0, 1), text
+    assert "] 1/4" in text and "] 4/4" in text and "ETA" in text and "/s" in text, text
