@@ -1,8 +1,9 @@
 """Batch grading of a folder of submissions: discover, stage, grade in parallel, write every output.
 
 Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied
-or safely extracted into OUT/.staging/<learner>/exercises/, graded in a sandboxed child
-(grader.sandbox), and its outputs written atomically into OUT/<learner>/. A learner whose staged
+or safely extracted into OUT/.staging/<learner>/exercises/ and graded by a worker process, in a
+child forked by that worker's sandboxed fork server (grader.forkserver), and its outputs are written
+atomically into OUT/<learner>/. A learner whose staged
 files hash the same as last time is not graded again. The gradebook, JUnit file and class summary
 are rebuilt from the per-learner reports at the end, so an interrupted run loses nothing graded.
 """
@@ -229,8 +230,6 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     """Grade every submission in `submissions` into `out`; returns counts for the end summary."""
     chapters = chapters or [c.id for c in CHAPTERS]
     out.mkdir(parents=True, exist_ok=True)
-    staging = out / ".staging"
-    staging.mkdir(exist_ok=True)
     entries = discover(submissions, roster)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}

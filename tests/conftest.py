@@ -39,6 +39,29 @@ def replace_function(module: str, function: str, new_source: str) -> str:
     return pattern.sub(textwrap.dedent(new_source).strip() + "\n\n\n", text + "\n#end\n", count=1)
 
 
+def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, timeout: float = 120) -> tuple[int, str]:
+    """Run `command` with stdout and stderr on a pseudo-terminal; (exit status, everything it wrote)."""
+    import os
+    import pty
+    import subprocess
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=slave, stderr=slave)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(master, 65536)
+        except OSError:  # the terminal closed: the process has ended
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    proc.wait(timeout=timeout)
+    os.close(master)
+    return proc.returncode, b"".join(chunks).decode(errors="replace")
+
+
 def checks_by_id(chapter) -> dict:
     """A ChapterResult's checks by id."""
     return {c.id: c for c in chapter.checks}

@@ -18,7 +18,7 @@ from click.testing import CliRunner
 
 from grader.batch import StagingError, discover, stage
 from grader.cli import main
-from tests.conftest import build_submission, replace_function
+from tests.conftest import build_submission, replace_function, run_on_terminal
 
 CHAPTERS = "ch03,ch06"
 
@@ -182,24 +182,8 @@ def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
 
 
 def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_path):
-    import pty
-
-    master, slave = pty.openpty()
-    proc = subprocess.Popen([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(tmp_path / "out"),
-                             "--chapters", CHAPTERS, "--no-html", "--jobs", "1"],
-                            cwd=Path(__file__).resolve().parents[1], stdout=slave, stderr=slave)
-    os.close(slave)
-    chunks = []
-    while True:
-        try:
-            chunk = os.read(master, 65536)
-        except OSError:  # the terminal closed: the process has ended
-            break
-        if not chunk:
-            break
-        chunks.append(chunk)
-    proc.wait(timeout=120)
-    os.close(master)
-    text = b"".join(chunks).decode(errors="replace")
-    assert proc.returncode in (0, 1), text
+    returncode, text = run_on_terminal([sys.executable, "-m", "grader", "batch", str(submissions), "--out",
+                                        str(tmp_path / "out"), "--chapters", CHAPTERS, "--no-html", "--jobs", "1"],
+                                       Path(__file__).resolve().parents[1])
+    assert returncode in (0, 1), text
     assert "] 1/4" in text and "] 4/4" in text and "ETA" in text and "/s" in text, text

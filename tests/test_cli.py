@@ -12,6 +12,7 @@ from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
 from grader.cli import main
+from tests.conftest import run_on_terminal
 
 CHECK_KEYS = {"id", "function", "description", "status", "points", "max_points", "message", "expected", "got"}
 
@@ -135,27 +136,12 @@ def test_real_subprocess_usage_error_goes_to_stderr_with_exit_2(repo_root):
 
 def test_no_color_is_respected_even_on_a_terminal(repo_root):
     """Run under a pseudo-terminal: colour by default, none with NO_COLOR."""
-    pty = pytest.importorskip("pty")
+    pytest.importorskip("pty")
     outputs = {}
     for label, extra in (("colour", {}), ("plain", {"NO_COLOR": "1"})):
         env = dict(os.environ)
         env.pop("NO_COLOR", None)
         env.update(extra)
-        master, slave = pty.openpty()
-        proc = subprocess.Popen([sys.executable, "-m", "grader", "ch06", "--solutions"], cwd=repo_root,
-                                env=env, stdout=slave, stderr=slave)
-        os.close(slave)
-        chunks = []
-        while True:
-            try:
-                chunk = os.read(master, 65536)
-            except OSError:
-                break
-            if not chunk:
-                break
-            chunks.append(chunk)
-        proc.wait(timeout=60)
-        os.close(master)
-        outputs[label] = b"".join(chunks).decode()
+        _, outputs[label] = run_on_terminal([sys.executable, "-m", "grader", "ch06", "--solutions"], repo_root, env)
     assert "\x1b[" in outputs["colour"]
     assert "\x1b[" not in outputs["plain"] and "ch06 total" in outputs["plain"]
