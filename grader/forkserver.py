@@ -58,14 +58,14 @@ class ForkServer:
 
     def __init__(self, wrap: CommandWrapper | None = None) -> None:
         self.wrap = wrap
+        self.sandboxed = bool(getattr(wrap, "available", False))  # its own PID namespace and /tmp
         self.process: subprocess.Popen | None = None
         self.socket: socket.socket | None = None
         self._runs = 0
 
     def _launch(self) -> None:
         parent_end, server_end = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-        available = getattr(self.wrap, "available", False)
-        config = {"scratch": self.wrap.scratch_dirs() if available else [], "pid_namespace": bool(available)}
+        config = {"scratch": self.wrap.scratch_dirs() if self.sandboxed else [], "pid_namespace": self.sandboxed}
         command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(server_end.fileno()),
                    json.dumps(config)]
         if self.wrap is not None:
@@ -83,7 +83,7 @@ class ForkServer:
         request_read, request_write = os.pipe()
         result_read, result_write = os.pipe()
         capture_fd = capture_file()
-        root = f"/tmp/grade-run-{self._runs}" if getattr(self.wrap, "available", False) else \
+        root = f"/tmp/grade-run-{self._runs}" if self.sandboxed else \
             os.path.join(temp_dir(), f"grade-run-{os.getpid()}-{self._runs}")
         sent = False
         for _ in range(2):  # a server that died since the last run (a learner killed it) is replaced
@@ -100,7 +100,7 @@ class ForkServer:
             os.close(fd)
         return ForkedChild(self, submission, request_write, result_read, capture_fd, root, sent)
 
-    def _reply(self, timeout: float) -> int | None:
+    def reply(self, timeout: float) -> int | None:
         """The exit status the server reports for the current run; None if it gave none in time."""
         if self.socket is None:
             return None
@@ -114,7 +114,7 @@ class ForkServer:
             return -signal.SIGKILL
         return int(message[5:])
 
-    def _ask_to_kill(self) -> None:
+    def ask_to_kill(self) -> None:
         try:
             self.socket.send(b"kill")
         except (OSError, AttributeError):
@@ -159,7 +159,7 @@ class ForkedChild:
 
     def wait(self, timeout: float) -> None:
         if self._returncode is None:
-            self._returncode = self.server._reply(timeout)
+            self._returncode = self.server.reply(timeout)
 
     @property
     def returncode(self) -> int | None:
@@ -168,8 +168,8 @@ class ForkedChild:
     def stop(self, output_limit: int) -> str:
         """Have the server kill the run and clean up; replace the server if it does not answer."""
         if self._returncode is None:
-            self.server._ask_to_kill()
-            self._returncode = self.server._reply(_REPLY_SECONDS)
+            self.server.ask_to_kill()
+            self._returncode = self.server.reply(_REPLY_SECONDS)
             if self._returncode is None:
                 self.server.close()
                 self._returncode = -signal.SIGKILL

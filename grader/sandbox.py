@@ -43,6 +43,9 @@ class Sandbox:
         self.setpriv = shutil.which("setpriv")
         self.hide = [str(Path(p).resolve()) for p in hide] + _hidden_defaults()
         self.drops_to_nobody = os.geteuid() == 0 and self.setpriv is not None
+        # Root's home, usually 0700, becomes an empty tmpfs when learner code runs as nobody.
+        home = os.path.expanduser("~")
+        self.emptied_home = home if self.drops_to_nobody and home not in ("/", "") and os.path.isdir(home) else None
 
     @property
     def available(self) -> bool:
@@ -57,12 +60,7 @@ class Sandbox:
 
     def scratch_dirs(self) -> list[str]:
         """The only folders learner code can write to inside the sandbox (each a fresh tmpfs)."""
-        return ["/tmp", "/dev/shm"] + ([self._home()] if self._home() else [])
-
-    def _home(self) -> str | None:
-        """Root's home, replaced by an empty tmpfs when learner code runs as nobody (it is usually 0700)."""
-        home = os.path.expanduser("~")
-        return home if self.drops_to_nobody and home not in ("/", "") and os.path.isdir(home) else None
+        return ["/tmp", "/dev/shm"] + ([self.emptied_home] if self.emptied_home else [])
 
     def __call__(self, command: list[str], submission: Submission | None) -> list[str]:
         """`command` inside the sandbox, seeing `submission`'s files read-only (None: no learner's files)."""
@@ -70,9 +68,9 @@ class Sandbox:
             return command
         args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--perms", "01777", "--tmpfs", "/tmp"]
         emptied = ["/tmp"]  # folders replaced by an empty tmpfs: bind targets inside need their parents made
-        if self._home():
-            args += ["--tmpfs", self._home()]
-            emptied.append(self._home())
+        if self.emptied_home:
+            args += ["--tmpfs", self.emptied_home]
+            emptied.append(self.emptied_home)
         # The interpreter, its libraries and the grader package must stay visible even where they
         # live inside an emptied folder (a virtual environment in /tmp, pyenv in root's home).
         needed = {sys.prefix, sys.base_prefix, os.path.dirname(os.path.realpath(sys.executable)),

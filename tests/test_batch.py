@@ -187,3 +187,23 @@ def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_
                                        Path(__file__).resolve().parents[1])
     assert returncode in (0, 1), text
     assert "] 1/4" in text and "] 4/4" in text and "ETA" in text and "/s" in text, text
+
+
+def test_fork_server_and_fresh_interpreters_give_the_same_verdicts(submissions, tmp_path, monkeypatch):
+    """GRADER_FORK_SERVER=off (a fresh sandboxed interpreter per learner, the benchmark's baseline)
+    and the fork server grade every learner alike."""
+    from grader.batch import run_batch
+
+    verdicts = {}
+    for mode in ("fork", "off"):
+        if mode == "off":
+            monkeypatch.setenv("GRADER_FORK_SERVER", "off")
+        out = tmp_path / mode
+        result = run_batch(submissions, out, chapters=CHAPTERS.split(","), jobs=2, seed=4, html=False)
+        verdicts[mode] = {
+            learner: [(c["id"], c["status"], c["message"]) for ch in json.loads((out / learner / "report.json")
+                      .read_text())["chapters"] for c in ch["checks"]]
+            for learner, status in result["statuses"].items() if status == "graded"}
+    assert sorted(verdicts["fork"]) == ["alice", "bob", "carol"]
+    assert verdicts["fork"] == verdicts["off"]
+    assert any(status == "fail" for _, status, _ in verdicts["fork"]["carol"])
