@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from enum import Enum
 
-SCHEMA_VERSION = "1.0"
+SCHEMA_VERSION = "1.1"
 
 
 class Status(str, Enum):
@@ -14,6 +14,12 @@ class Status(str, Enum):
     FAIL = "fail"
     ERROR = "error"  # the chapter could not be graded, or the grader itself broke
     SKIP = "skip"  # not run because something it depends on failed; still counts in max_points
+    RECORDED = "recorded"  # a quiz answer read and well-formed, graded on submission: not in max_points
+
+    @property
+    def counted(self) -> bool:
+        """Judged here: part of score and max_score (a recorded answer is pending instead)."""
+        return self is not Status.RECORDED
 
 
 @dataclass
@@ -55,11 +61,19 @@ class ChapterResult:
     problems: list[str] = field(default_factory=list)  # chapter-level messages (import failures ...)
     plots: dict = field(default_factory=dict)  # learner outputs kept for the report's plots
 
+    hidden_checks: int = 0  # checks of this chapter not run here (graded on submission)
+    hidden_points: float = 0.0
+
     def score_of(self, kind: str | None = None) -> float:
-        return _round(sum(c.points for c in self.checks if kind in (None, c.kind)))
+        return _round(sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted))
 
     def max_score_of(self, kind: str | None = None) -> float:
-        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind)))
+        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
+
+    def pending_score_of(self, kind: str | None = None) -> float:
+        """Points not judged here: recorded quiz answers (and hidden checks, for kind None or 'code')."""
+        recorded = sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted)
+        return _round(recorded + (self.hidden_points if kind in (None, "code") else 0.0))
 
     @property
     def score(self) -> float:
@@ -79,6 +93,9 @@ class ChapterResult:
             "code_max_score": self.max_score_of("code"),
             "quiz_score": self.score_of("quiz"),
             "quiz_max_score": self.max_score_of("quiz"),
+            "pending_score": self.pending_score_of(),
+            "hidden_checks": self.hidden_checks,
+            "hidden_points": _round(self.hidden_points),
             "problems": list(self.problems),
             "checks": [c.to_dict() for c in self.checks],
         }
@@ -101,8 +118,14 @@ class Report:
         return _round(sum(c.max_score for c in self.chapters))
 
     @property
+    def pending_score(self) -> float:
+        """Points that are graded on submission, not here (hidden checks, recorded quiz answers)."""
+        return _round(sum(c.pending_score_of() for c in self.chapters))
+
+    @property
     def all_passed(self) -> bool:
-        return all(c.status == Status.PASS for ch in self.chapters for c in ch.checks) and not any(
+        """Every check judged here passed (says nothing about pending points)."""
+        return all(c.status in (Status.PASS, Status.RECORDED) for ch in self.chapters for c in ch.checks) and not any(
             ch.problems for ch in self.chapters)
 
     @classmethod
@@ -114,7 +137,9 @@ class Report:
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
                                   kind=c.get("kind", "code")) for c in ch.get("checks", [])]
-            chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", []))))
+            chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
+                                          hidden_checks=int(ch.get("hidden_checks", 0)),
+                                          hidden_points=float(ch.get("hidden_points", 0.0))))
         return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"))
 
     def to_dict(self) -> dict:
@@ -125,6 +150,7 @@ class Report:
             "learner": self.learner,
             "score": self.score,
             "max_score": self.max_score,
+            "pending_score": self.pending_score,
             "chapters": [c.to_dict() for c in self.chapters],
         }
 

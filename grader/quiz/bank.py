@@ -19,7 +19,14 @@ from pathlib import Path
 import yaml
 
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when present: 10x faster
-QUIZ_DIR = Path(__file__).resolve().parents[2] / "quizzes"
+def _quiz_dir() -> Path:
+    """The question banks: package data of an installed grader (grader/quizzes), else the checkout's quizzes/."""
+    here = Path(__file__).resolve().parents[1]
+    installed = here / "quizzes"
+    return installed if installed.is_dir() else here.parent / "quizzes"
+
+
+QUIZ_DIR = _quiz_dir()
 KINDS = ("choice", "multi", "numeric", "vector", "matrix", "symbolic")
 
 
