@@ -178,7 +178,8 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     from grader.grading import grade
     from grader.quiz import add_quiz_results
     from grader.render import lms
-    from grader.runner import Limits, Session, Submission
+    from grader.runner import Limits, Session
+    from grader.submission import Submission
     from grader.sandbox import Sandbox
     from grader.spawn import start_child
 

@@ -1,18 +1,17 @@
 """The child side of the process boundary: import the learner's module, call it, report plain data.
 
 This file runs in a separate interpreter (`python -I -S -c ...`, see grader.spawn), or in a child
-forked from grader.forkserver, which then also sends the learner's files with the request. It reads
-one JSON request, points stdout/stderr at the capture file the parent opened, and for each chapter
-imports the learner's module and calls the named functions on the arguments the parent chose.
-Every outcome is written to the result pipe as one JSON line. Only numbers, shapes and type names
-travel back: never pickle, never a learner object.
+forked from grader.forkserver. It reads one JSON request (grader.wire), writes the learner's files
+that came with it into a fresh folder, points stdout/stderr at the capture file the parent opened,
+and for each chapter imports the learner's module and calls the named functions on the arguments
+the parent chose. Every outcome is written to the result pipe as one JSON line. Only numbers,
+shapes and type names travel back: never pickle, never a learner object.
 
 Nothing here decides whether an answer is right; that happens in the parent.
 """
 
 from __future__ import annotations
 
-import binascii
 import importlib
 import importlib.machinery
 import json
@@ -20,58 +19,12 @@ import os
 import signal
 import sys
 
-import numpy as np
+import numpy as np  # noqa: F401  (loaded before any learner code, and before the request arrives)
 
-# Exact numpy scalar types whose value is a real number (subclasses are rejected by `type(x) in`).
-_REAL_SCALAR_TYPES = frozenset(
-    {float, int, np.float16, np.float32, np.float64, np.longdouble,
-     np.int8, np.int16, np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64}
+from grader.wire import (
+    DONE, IMPORT, IMPORT_FAILED, IMPORTED, MISSING_EVENT, RAISED_EVENT, RETURNED, T_OTHER, decode_argument,
+    encode_value,
 )
-_MAX_ELEMENTS = 1_000_000
-_MAX_AS_TEXT = 16
-_MAX_DEPTH = 3
-_MAX_ITEMS = 64
-
-
-def _type_name(value: object) -> str:
-    kind = type(value)
-    module = getattr(kind, "__module__", "") or ""
-    name = getattr(kind, "__qualname__", kind.__name__)
-    return name if module in ("builtins", "") else f"{module}.{name}"
-
-
-def encode(value: object, depth: int = 0) -> dict:
-    """Describe a learner's return value as plain JSON data, without calling any of its methods."""
-    kind = type(value)
-    if kind is np.ndarray:
-        if value.dtype.kind not in "fiu":
-            return {"t": "ndarray-other", "type": f"ndarray of dtype {value.dtype}"}
-        if value.size > _MAX_ELEMENTS:
-            return {"t": "too-large", "type": f"ndarray with {value.size} elements"}
-        encoded = {"t": "ndarray", "dtype": str(value.dtype), "shape": list(value.shape)}
-        if value.size <= _MAX_AS_TEXT:  # small arrays stay readable in the protocol
-            encoded["data"] = np.asarray(value, dtype=np.float64).ravel().tolist()
-        else:  # large ones travel as little-endian float64 bytes: exact and fast both ways
-            raw = np.ascontiguousarray(value, dtype="<f8").tobytes()
-            encoded["f8"] = binascii.b2a_base64(raw, newline=False).decode("ascii")
-        return encoded
-    if kind in _REAL_SCALAR_TYPES:
-        try:
-            return {"t": "scalar", "type": _type_name(value), "data": float(value)}
-        except OverflowError:
-            return {"t": "scalar", "type": _type_name(value), "data": float("inf")}
-    if kind in (tuple, list):
-        if depth >= _MAX_DEPTH or len(value) > _MAX_ITEMS:
-            return {"t": "other", "type": f"{kind.__name__} of {len(value)} items"}
-        return {"t": kind.__name__, "items": [encode(item, depth + 1) for item in value]}
-    if value is None:
-        return {"t": "none", "type": "None"}
-    if kind is str:
-        return {"t": "str", "type": "str", "text": value[:80]}
-    name = _type_name(value)
-    if isinstance(value, np.ndarray):
-        name = f"{name} (an ndarray subclass)"
-    return {"t": "other", "type": name}
 
 
 def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None]:
@@ -126,25 +79,6 @@ class _Catalogue:
             from grader.catalogue import CALLABLES
             self._table = CALLABLES
         return self._table[name]
-
-
-def decode_argument(arg, catalogue: _Catalogue):
-    """Turn the parent's JSON argument into a Python value: arrays, callables, generators."""
-    if isinstance(arg, dict):
-        if "$fn" in arg:
-            return catalogue[arg["$fn"]]
-        if "$array" in arg:
-            return np.array(arg["$array"], dtype=arg.get("dtype", "float64"))
-        if "$rng" in arg:
-            return np.random.default_rng(arg["$rng"])
-        if "$tuple" in arg:
-            return tuple(decode_argument(a, catalogue) for a in arg["$tuple"])
-        if "$float" in arg:
-            return float(arg["$float"])
-        raise ValueError(f"unknown argument form {sorted(arg)}")
-    if isinstance(arg, list):
-        return [decode_argument(a, catalogue) for a in arg]
-    return arg
 
 
 def _emit(stream, record: dict) -> None:
@@ -216,47 +150,59 @@ def _pin_package(root: str, package: str) -> None:
 def run(request: dict, out) -> None:
     root = os.path.realpath(request["root"])
     sys.path.insert(0, root)
+    # the contract's plain form `from ch03_jacobian import ...` (also what runs as a script), last
+    sys.path.append(os.path.join(root, request["package"]))
     sys.dont_write_bytecode = True
     catalogue = _Catalogue()
     for chapter in request["chapters"]:
         name = chapter["chapter"]
-        _emit(out, {"event": "import", "chapter": name})
+        _emit(out, {"event": IMPORT, "chapter": name})
         try:
             _pin_package(root, request["package"])
             module = importlib.import_module(f'{request["package"]}.{chapter["module"]}')
         except SyntaxError as exc:
-            _emit(out, {"event": "import-failed", "chapter": name, "error": _syntax_error(exc, root)})
+            _emit(out, {"event": IMPORT_FAILED, "chapter": name, "error": _syntax_error(exc, root)})
             continue
         except BaseException as exc:  # SystemExit and KeyboardInterrupt from learner code too
-            _emit(out, {"event": "import-failed", "chapter": name, "error": describe_exception(exc, root)})
+            _emit(out, {"event": IMPORT_FAILED, "chapter": name, "error": describe_exception(exc, root)})
             continue
-        _emit(out, {"event": "imported", "chapter": name})
+        _emit(out, {"event": IMPORTED, "chapter": name})
         for call in chapter["calls"]:
             index = call["index"]
             function = getattr(module, call["function"], None)
             if not callable(function):
-                _emit(out, {"event": "missing", "chapter": name, "index": index})
+                _emit(out, {"event": MISSING_EVENT, "chapter": name, "index": index})
                 continue
             try:
                 args = [decode_argument(a, catalogue) for a in call.get("args", [])]
                 kwargs = {k: decode_argument(v, catalogue) for k, v in call.get("kwargs", {}).items()}
                 value = function(*args, **kwargs)
-                record = {"event": "returned", "chapter": name, "index": index, "value": encode(value)}
+                record = {"event": RETURNED, "chapter": name, "index": index, "value": encode_value(value)}
             except BaseException as exc:
-                record = {"event": "raised", "chapter": name, "index": index,
+                record = {"event": RAISED_EVENT, "chapter": name, "index": index,
                           "error": describe_exception(exc, root)}
             try:
                 _emit(out, record)
             except (TypeError, ValueError, OverflowError):
-                _emit(out, {"event": "returned", "chapter": name, "index": index,
-                            "value": {"t": "other", "type": "a value that cannot be encoded"}})
-    _emit(out, {"event": "done"})
+                _emit(out, {"event": RETURNED, "chapter": name, "index": index,
+                            "value": {"t": T_OTHER, "type": "a value that cannot be encoded"}})
+    _flush_learner_output()  # before DONE: the parent may stop the process as soon as it reads it
+    _emit(out, {"event": DONE})
+
+
+def _flush_learner_output() -> None:
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BaseException:  # a learner may have replaced or closed them
+            pass
 
 
 def _write_files(files: dict, root: str) -> None:
     """Write the submission's files (relative path -> base64), sent in the request, under `root`."""
     import base64
 
+    os.makedirs(root, mode=0o700, exist_ok=True)
     for relative, data in files.items():
         path = os.path.join(root, relative)
         if os.path.isabs(relative) or ".." in relative.split("/"):
@@ -270,19 +216,13 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
     """Grade one request and leave the process (never returns)."""
     out = os.fdopen(result_fd, "w", buffering=1)
     request = json.loads(request_text)
-    if "files" in request:  # a forked child (grader.forkserver): the files come with the request
-        _write_files(request["files"], request["root"])
-        os.chdir(request["root"])
+    _write_files(request["files"], request["root"])  # the learner's files come with the request
+    os.chdir(request["root"])
     _redirect_output(capture_fd)
     _apply_limits(request.get("limits", {}))
     run(request, out)
     out.close()
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except BaseException:  # a learner may have replaced or closed them
-            pass
-    os._exit(0)  # skip learner atexit handlers and finalizers
+    os._exit(0)  # skip learner atexit handlers and finalizers  # skip learner atexit handlers and finalizers
 
 
 def main(argv: list[str] | None = None) -> None:

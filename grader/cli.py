@@ -13,8 +13,8 @@ import click
 
 from grader.chapters import CHAPTERS, ChapterInfo, resolve
 from grader import launch
-from grader.runner import Session, Submission
-from grader.submission import SubmissionNotFound, locate
+from grader.runner import Session
+from grader.submission import Submission, SubmissionNotFound, locate
 
 EXIT_ALL_PASSED, EXIT_NOT_ALL_PASSED, EXIT_USAGE = 0, 1, 2
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from grader.returned import RAISED, Returned
+from grader.wire import RAISED, Returned
 
 SHOWN_ENTRIES = 3
 

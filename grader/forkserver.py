@@ -14,7 +14,6 @@ server ends that run as a crash, and the parent starts a new server for the next
 
 from __future__ import annotations
 
-import base64
 import json
 import os
 import selectors
@@ -23,8 +22,6 @@ import socket
 import subprocess
 import sys
 import time
-from pathlib import Path
-
 from grader.spawn import (
     CommandWrapper, become_subreaper, capture_file, child_environment, child_path, kill_orphans, read_capture,
     temp_dir,
@@ -34,22 +31,6 @@ from grader.submission import Submission
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.forkserver import serve; serve()"
 _MESSAGE = 4096
 _REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
-_MAX_FILES_BYTES = 32 << 20
-
-
-def submission_files(submission: Submission) -> dict[str, str]:
-    """The submission package's Python files, relative path -> base64, for a forked child's request."""
-    package = Path(submission.root) / submission.package
-    files, total = {}, 0
-    for path in sorted(package.rglob("*.py")):
-        if path.is_symlink() or not path.is_file():
-            continue
-        data = path.read_bytes()
-        total += len(data)
-        if total > _MAX_FILES_BYTES:
-            break
-        files[path.relative_to(submission.root).as_posix()] = base64.b64encode(data).decode()
-    return files
 
 
 class ForkServer:
@@ -149,8 +130,8 @@ class ForkedChild:
         self._returncode: int | None = None if sent else -signal.SIGKILL
 
     def send(self, request: dict) -> None:
-        """The request, with the submission's files and where the child writes them."""
-        request = dict(request, root=self.root, files=submission_files(self.submission))
+        """The request, with where the child writes the submission's files."""
+        request = dict(request, root=self.root)
         try:
             with open(self.request_fd, "wb", closefd=True) as pipe:
                 pipe.write(json.dumps(request).encode())

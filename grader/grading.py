@@ -9,8 +9,8 @@ from grader import checks as check_registry
 from grader.checks.base import Check, ChapterChecks, Context, Skip
 from grader.compare import Verdict
 from grader.model import ChapterResult, CheckResult, Report, Status
-from grader.returned import Returned
-from grader.runner import Call, ChapterRequest, ChapterRun, Session
+from grader.runner import ChapterRequest, ChapterRun, Session
+from grader.wire import Call, Returned
 
 DEFAULT_SEED = 20261122
 

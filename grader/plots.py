@@ -11,7 +11,7 @@ import numpy as np
 
 from grader.catalogue import CALLABLES
 from grader.compare import value_problem
-from grader.runner import Array, Fn, Rng, call
+from grader.wire import Array, Fn, Rng, call
 
 
 def _value(returned, shape):

@@ -17,9 +17,12 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
-from grader.returned import CRASHED, NOT_RUN, TIMEOUT, Returned, from_event
 from grader.spawn import CommandWrapper, start_child
 from grader.submission import Submission
+from grader.wire import (
+    CRASHED, DONE, IMPORT, IMPORT_FAILED, IMPORTED, MISSING_EVENT, NOT_RUN, RAISED_EVENT, RETURNED, TIMEOUT, Call,
+    Returned, from_event,
+)
 
 
 class ChildHandle(Protocol):
@@ -40,76 +43,6 @@ class ChildHandle(Protocol):
 Launcher = Callable[[Submission], ChildHandle]
 
 _CAPTURE_LIMIT = 64 * 1024
-
-
-# ----------------------------------------------------------------------------- what to call
-
-@dataclass(frozen=True)
-class Fn:
-    """A callable from grader.catalogue, passed to a learner function by name."""
-
-    name: str
-
-
-@dataclass(frozen=True)
-class Rng:
-    """A fresh numpy Generator, np.random.default_rng(seed), built in the child."""
-
-    seed: int
-
-
-@dataclass(frozen=True)
-class Array:
-    """A numpy array argument of a given dtype (plain lists and tuples pass as they are)."""
-
-    values: object
-    dtype: str = "float64"
-
-
-def _encode_argument(arg: object) -> object:
-    if isinstance(arg, Fn):
-        return {"$fn": arg.name}
-    if isinstance(arg, Rng):
-        return {"$rng": int(arg.seed)}
-    if isinstance(arg, Array):
-        return {"$array": _plain(arg.values), "dtype": arg.dtype}
-    if isinstance(arg, tuple):
-        return {"$tuple": [_encode_argument(a) for a in arg]}
-    if isinstance(arg, list):
-        return [_encode_argument(a) for a in arg]
-    if isinstance(arg, float):
-        return arg if arg == arg and abs(arg) != float("inf") else {"$float": repr(arg)}
-    if isinstance(arg, (int, str, bool)) or arg is None:
-        return arg
-    if hasattr(arg, "tolist"):  # a numpy scalar or array from the check: pass as a plain array
-        return {"$array": _plain(arg), "dtype": "float64"}
-    raise TypeError(f"cannot pass {type(arg).__name__} to the child")
-
-
-def _plain(values: object) -> object:
-    return values.tolist() if hasattr(values, "tolist") else values
-
-
-@dataclass(frozen=True)
-class Call:
-    """One call of a learner function on arguments the grader chose."""
-
-    function: str
-    args: tuple = ()
-    kwargs: tuple = ()
-
-    def to_json(self, index: int) -> dict:
-        return {
-            "index": index,
-            "function": self.function,
-            "args": [_encode_argument(a) for a in self.args],
-            "kwargs": {k: _encode_argument(v) for k, v in self.kwargs},
-        }
-
-
-def call(function: str, *args: object, **kwargs: object) -> Call:
-    """Describe a call of the learner's `function(*args, **kwargs)`."""
-    return Call(function, tuple(args), tuple(sorted(kwargs.items())))
 
 
 @dataclass
@@ -208,6 +141,7 @@ class Session:
         self.wrap = wrap
         self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
         self.output = ""
+        self._files: dict[str, str] | None = None
         self._child: _Child | None = _Child(started or self.launcher(submission))
 
     def close(self) -> None:
@@ -238,7 +172,9 @@ class Session:
         for req in pending:
             calls = [c.to_json(i) for i, c in enumerate(req.calls) if runs[req.chapter].results[i] is None]
             chapters.append({"chapter": req.chapter, "module": req.module, "calls": calls})
-        return {"root": str(self.submission.root), "package": self.submission.package,
+        if self._files is None:  # read once per session: every fresh child gets the same files
+            self._files = self.submission.files()
+        return {"package": self.submission.package, "files": self._files,
                 "chapters": chapters, "limits": self.limits.rlimits()}
 
     def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:
@@ -280,24 +216,24 @@ class Session:
                 kind, name, now = event.get("event"), event.get("chapter"), time.monotonic()
                 stage = state["stage"]
                 if stage in ("startup", "between"):
-                    if kind == "done" and position["chapter"] == len(order):
+                    if kind == DONE and position["chapter"] == len(order):
                         finished = True
                         break
-                    if kind == "import" and position["chapter"] < len(order) and name == order[position["chapter"]][0]:
+                    if kind == IMPORT and position["chapter"] < len(order) and name == order[position["chapter"]][0]:
                         state.update(chapter=name, index=None, stage="import", deadline=now + limits.import_seconds,
                                      chapter_end=now + limits.chapter_seconds)
                         continue
                 elif stage == "import" and name == state["chapter"]:
-                    if kind == "import-failed":
+                    if kind == IMPORT_FAILED:
                         error = event.get("error")
                         runs[name].import_error = error if isinstance(error, dict) else {}
                         position.update(chapter=position["chapter"] + 1, call=0)
                         state.update(stage="between", deadline=now + limits.call_seconds)
                         continue
-                    if kind == "imported":
+                    if kind == IMPORTED:
                         start_next_call(now)
                         continue
-                elif stage == "call" and kind in ("returned", "raised", "missing") and name == state["chapter"] \
+                elif stage == "call" and kind in (RETURNED, RAISED_EVENT, MISSING_EVENT) and name == state["chapter"] \
                         and event.get("index") == state["index"]:
                     req = by_name[name]
                     runs[name].results[state["index"]] = from_event(req.calls[state["index"]].function, event)

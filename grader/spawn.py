@@ -107,17 +107,22 @@ def read_capture(fd: int, limit: int) -> str:
 
 
 class SpawnedChild:
-    """A child interpreter started by start_child: its process (group), result pipe and output file."""
+    """A child interpreter started by start_child: its process (group), result pipe, output file, and
+    the folder it writes the learner's files to (`root`; removed at stop when it is on the host)."""
 
-    def __init__(self, process: subprocess.Popen, read_fd: int, capture_fd: int) -> None:
+    def __init__(self, process: subprocess.Popen, read_fd: int, capture_fd: int, root: str,
+                 host_root: bool) -> None:
         self.process = process
         self.read_fd = read_fd
         self.capture_fd = capture_fd
+        self.root = root
+        self.host_root = host_root
 
     def send(self, request: dict) -> None:
-        """Write the whole request to the child's stdin and close it."""
+        """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
         import json
 
+        request = dict(request, root=self.root)
         try:
             self.process.stdin.write(json.dumps(request).encode())
             self.process.stdin.close()
@@ -145,22 +150,35 @@ class SpawnedChild:
         forget(self.process.pid)
         kill_orphans()  # grandchildren that left the process group with setsid
         os.close(self.read_fd)
+        if self.host_root:
+            import shutil
+
+            shutil.rmtree(os.path.dirname(self.root), ignore_errors=True)
         return read_capture(self.capture_fd, output_limit)
 
 
 def start_child(submission, wrap: CommandWrapper | None = None) -> SpawnedChild:
-    """Start a fresh child interpreter for `submission`, wrapped (e.g. sandboxed) by `wrap`."""
+    """Start a fresh child interpreter for `submission`, wrapped (e.g. sandboxed) by `wrap`; the
+    submission's files reach it in the request (grader.wire), written under a folder of its own."""
     read_fd, write_fd = os.pipe()
     capture_fd = capture_file()
     command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
+    sandboxed = bool(getattr(wrap, "available", False))  # then the child has a /tmp of its own
+    if sandboxed:
+        scratch, root = "/tmp", "/tmp/submission"
+    else:
+        import tempfile
+
+        scratch = tempfile.mkdtemp(prefix="grade-", dir=temp_dir())
+        root = os.path.join(scratch, "submission")
     if wrap is not None:
         command = wrap(command, submission)
     process = subprocess.Popen(
         command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         pass_fds=(write_fd, capture_fd), start_new_session=True, env=child_environment(),
-        cwd=str(submission.root),
+        cwd=temp_dir() if sandboxed else scratch,
     )
     os.close(write_fd)
     _LIVE.add(process.pid)
     become_subreaper()  # after the start: the child imports numpy long before learner code runs
-    return SpawnedChild(process, read_fd, capture_fd)
+    return SpawnedChild(process, read_fd, capture_fd, root, host_root=not sandboxed)

@@ -7,6 +7,9 @@ from pathlib import Path
 from typing import NamedTuple
 
 
+MAX_FILES_BYTES = 32 << 20
+
+
 class Submission(NamedTuple):
     """Where the learner's chapter files are: `root/package/chNN_*.py`."""
 
@@ -15,6 +18,27 @@ class Submission(NamedTuple):
 
     def module_file(self, module: str) -> Path:
         return self.root / self.package / f"{module}.py"
+
+    def files(self) -> dict[str, str]:
+        """The package's Python files, relative path -> base64: what the child gets in its request (it
+        never reads the submission's folder itself). Symlinks are not followed; at most MAX_FILES_BYTES."""
+        import base64
+        import os
+
+        package = Path(self.root) / self.package
+        files, total = {}, 0
+        for folder, subfolders, names in os.walk(package):  # never into a symlinked folder
+            subfolders.sort()
+            for name in sorted(names):
+                path = Path(folder) / name
+                if not name.endswith(".py") or path.is_symlink() or not path.is_file():
+                    continue
+                data = path.read_bytes()
+                total += len(data)
+                if total > MAX_FILES_BYTES:
+                    return files
+                files[path.relative_to(self.root).as_posix()] = base64.b64encode(data).decode()
+        return files
 
 
 class SubmissionNotFound(LookupError):

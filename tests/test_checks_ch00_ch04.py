@@ -11,7 +11,8 @@ from grader.chapters import BY_ID
 from grader.checks.ch00 import rice_moments
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Session, Submission
+from grader.runner import Session
+from grader.submission import Submission
 from tests.conftest import checks_by_id, replace_function
 
 CHAPTERS = ["ch00", "ch01", "ch02", "ch03", "ch04"]

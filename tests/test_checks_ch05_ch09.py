@@ -13,7 +13,8 @@ from grader.chapters import BY_ID
 from grader.checks import ch05, ch08, ch09
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Session, Submission
+from grader.runner import Session
+from grader.submission import Submission
 from tests.conftest import checks_by_id, replace_function
 
 CHAPTERS = ["ch05", "ch07", "ch08", "ch09"]

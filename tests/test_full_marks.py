@@ -8,7 +8,8 @@ import pytest
 from grader.chapters import CHAPTERS
 from grader.grading import DEFAULT_SEED, grade
 from grader.model import Status
-from grader.runner import Session, Submission
+from grader.runner import Session
+from grader.submission import Submission
 
 ALL = [c.id for c in CHAPTERS]
 

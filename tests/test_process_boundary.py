@@ -11,7 +11,8 @@ import pytest
 
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Limits, Session, Submission
+from grader.runner import Limits, Session
+from grader.submission import Submission
 from tests.conftest import checks_by_id
 
 FAST = Limits(import_seconds=2.0, call_seconds=2.0, chapter_seconds=8.0)
@@ -176,10 +177,9 @@ def test_child_runs_in_another_process(submission_factory):
     np.array([np.nan, np.inf, -0.0] * 7),
 ])
 def test_arrays_cross_the_process_boundary_exactly(value):
-    from grader.child import encode
-    from grader.returned import VALUE, Returned
+    from grader.wire import VALUE, Returned, encode_value
 
-    wire = json.loads(json.dumps(encode(value)))  # what the pipe carries
+    wire = json.loads(json.dumps(encode_value(value)))  # what the pipe carries
     got = Returned(VALUE, "f", wire).as_array()
     assert type(got) is np.ndarray and got.dtype == np.float64 and got.shape == value.shape
     assert np.array_equal(got, value.astype(np.float64), equal_nan=True)
@@ -187,7 +187,7 @@ def test_arrays_cross_the_process_boundary_exactly(value):
 
 
 def test_a_malformed_array_from_the_child_is_no_value():
-    from grader.returned import VALUE, Returned
+    from grader.wire import VALUE, Returned
 
     for encoded in ({"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "not base64!"},
                     {"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "AAAA"},

@@ -16,7 +16,7 @@ from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
 from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_problem
-from grader.runner import call
+from grader.wire import call
 
 CHECKS = chapter_checks("ch00")
 

@@ -16,7 +16,7 @@ import numpy as np
 from grader.catalogue import CALLABLES
 from grader.checks.base import chapter_checks
 from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
-from grader.runner import Array, Fn, call
+from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch01")
 

@@ -16,7 +16,7 @@ from grader.checks.base import chapter_checks
 from grader.checks.derivatives import (FD_ATOL, FD_RTOL, Derivative, add_derivative_checks, central_difference,
                                        planar_point, vector_form)
 from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, fmt_array, value_problem
-from grader.runner import Fn, call
+from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch02")
 

@@ -13,7 +13,7 @@ from grader.catalogue import polar_jac, polar_vec
 from grader.checks.base import Skip, chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
-from grader.runner import Array, call
+from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch03")
 

@@ -15,7 +15,7 @@ from grader.catalogue import CALLABLES, g_jac, g_stage_vec, polar_jac, polar_vec
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, polar_point, vector_form
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt_array, value_problem
-from grader.runner import Fn, call
+from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch04")
 

@@ -34,7 +34,7 @@ from grader.catalogue import CALLABLES
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, planar_point, polar_point, vector_form
 from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
-from grader.runner import Array, Fn, call
+from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch05")
 

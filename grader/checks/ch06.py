@@ -8,7 +8,7 @@ import solutions.ch06_measurement as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point
 from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, value_problem
-from grader.runner import Array, call
+from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch06")
 

@@ -20,7 +20,7 @@ import solutions.ch07_dynamics as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, time_step, vector_form
 from grader.compare import Entries, all_of, expect, fail, fmt, passed, value_problem
-from grader.runner import Array, call
+from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch07")
 

@@ -42,7 +42,7 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.runner import Array, Rng, call
+from grader.wire import Array, Rng, call
 
 CHECKS = chapter_checks("ch08")
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from grader.checks.base import ChapterChecks, Context, Skip
 from grader.compare import Entries, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
-from grader.runner import Array, call
+from grader.wire import Array, call
 
 STEP = 1e-5
 FD_RTOL = 1e-6

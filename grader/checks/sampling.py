@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from grader.compare import Verdict, fail, passed, value_problem
-from grader.returned import Returned
+from grader.wire import Returned
 
 
 def same_seed_same_value(got: list[Returned], label: str, seed: int, other: int) -> Verdict:

@@ -1,0 +1,328 @@
+"""The process boundary's one home: what crosses between the grading process and the child.
+
+Parent -> child, one JSON request: the learner's files (path -> base64), then per chapter the module
+to import and the calls to make. A call's arguments are plain JSON, or tagged forms: `Fn` (a
+catalogue callable by name), `Rng` (a numpy Generator from a seed), `Array` (a numpy array of a
+dtype), tuples and non-finite floats.
+
+Child -> parent, one JSON line per event, in the order the request asks: IMPORT, then IMPORTED
+or IMPORT_FAILED, then one of RETURNED / RAISED / MISSING per call in order, ..., DONE. A returned
+value travels as type-tagged plain data (`encode_value`); the parent rebuilds only numbers from it
+(`Returned.as_array`), never an object. Nothing is ever pickled.
+
+Light on purpose: the child and `grade`'s launcher import this before numpy (numpy loads lazily).
+"""
+
+from __future__ import annotations
+
+import binascii
+from dataclasses import dataclass
+
+# ------------------------------------------------------------------------------ events (child -> parent)
+
+IMPORT, IMPORTED, IMPORT_FAILED = "import", "imported", "import-failed"
+RETURNED, RAISED_EVENT, MISSING_EVENT = "returned", "raised", "missing"
+DONE = "done"
+MAX_LINE = 64 << 20  # a longer result line is a protocol violation
+
+# value tags of encode_value
+T_NDARRAY, T_SCALAR, T_NONE, T_STR = "ndarray", "scalar", "none", "str"
+T_TUPLE, T_LIST, T_OTHER, T_TOO_LARGE, T_NDARRAY_OTHER = "tuple", "list", "other", "too-large", "ndarray-other"
+
+_MAX_ELEMENTS = 1_000_000
+_MAX_AS_TEXT = 16
+_MAX_DEPTH = 3
+_MAX_ITEMS = 64
+
+
+# ------------------------------------------------------------------------------ arguments (parent -> child)
+
+@dataclass(frozen=True)
+class Fn:
+    """A callable from grader.catalogue, passed to a learner function by name."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Rng:
+    """A fresh numpy Generator, np.random.default_rng(seed), built in the child."""
+
+    seed: int
+
+
+@dataclass(frozen=True)
+class Array:
+    """A numpy array argument of a given dtype (plain lists and tuples pass as they are)."""
+
+    values: object
+    dtype: str = "float64"
+
+
+def _plain(values: object) -> object:
+    return values.tolist() if hasattr(values, "tolist") else values
+
+
+def encode_argument(arg: object) -> object:
+    """An argument the parent chose, as JSON data for the child."""
+    if isinstance(arg, Fn):
+        return {"$fn": arg.name}
+    if isinstance(arg, Rng):
+        return {"$rng": int(arg.seed)}
+    if isinstance(arg, Array):
+        return {"$array": _plain(arg.values), "dtype": arg.dtype}
+    if isinstance(arg, tuple):
+        return {"$tuple": [encode_argument(a) for a in arg]}
+    if isinstance(arg, list):
+        return [encode_argument(a) for a in arg]
+    if isinstance(arg, float):
+        return arg if arg == arg and abs(arg) != float("inf") else {"$float": repr(arg)}
+    if isinstance(arg, (int, str, bool)) or arg is None:
+        return arg
+    if hasattr(arg, "tolist"):  # a numpy scalar or array from the check: pass as a plain float array
+        return {"$array": _plain(arg), "dtype": "float64"}
+    raise TypeError(f"cannot pass {type(arg).__name__} to the child")
+
+
+def decode_argument(arg: object, callables) -> object:
+    """The child's side: JSON argument -> Python value (arrays, catalogue callables, Generators)."""
+    import numpy as np
+
+    if isinstance(arg, dict):
+        if "$fn" in arg:
+            return callables[arg["$fn"]]
+        if "$array" in arg:
+            return np.array(arg["$array"], dtype=arg.get("dtype", "float64"))
+        if "$rng" in arg:
+            return np.random.default_rng(arg["$rng"])
+        if "$tuple" in arg:
+            return tuple(decode_argument(a, callables) for a in arg["$tuple"])
+        if "$float" in arg:
+            return float(arg["$float"])
+        raise ValueError(f"unknown argument form {sorted(arg)}")
+    if isinstance(arg, list):
+        return [decode_argument(a, callables) for a in arg]
+    return arg
+
+
+def show_argument(arg: object) -> str:
+    """How an argument reads in a learner-facing label: 0.5, (3, 4), sqrt, np.array([1, 2])."""
+    from grader.compare import fmt, fmt_array
+
+    if isinstance(arg, Fn):
+        return arg.name
+    if isinstance(arg, Rng):
+        return f"np.random.default_rng({arg.seed})"
+    if isinstance(arg, Array):
+        import numpy as np
+
+        values = np.asarray(arg.values, dtype=float)
+        return f"np.array({fmt_array(values)})" if values.ndim else fmt(values)
+    if isinstance(arg, bool) or arg is None or isinstance(arg, str):
+        return repr(arg)
+    if isinstance(arg, (int, float)):
+        return fmt(arg) if isinstance(arg, float) else str(arg)
+    if isinstance(arg, tuple):
+        return "(" + ", ".join(show_argument(a) for a in arg) + ("," if len(arg) == 1 else "") + ")"
+    if isinstance(arg, list):
+        return "[" + ", ".join(show_argument(a) for a in arg) + "]"
+    if hasattr(arg, "tolist"):
+        import numpy as np
+
+        return fmt_array(np.asarray(arg, dtype=float))
+    return repr(arg)
+
+
+@dataclass(frozen=True)
+class Call:
+    """One call of a learner function on arguments the grader chose."""
+
+    function: str
+    args: tuple = ()
+    kwargs: tuple = ()
+
+    def to_json(self, index: int) -> dict:
+        return {
+            "index": index,
+            "function": self.function,
+            "args": [encode_argument(a) for a in self.args],
+            "kwargs": {k: encode_argument(v) for k, v in self.kwargs},
+        }
+
+    @property
+    def label(self) -> str:
+        """The call as the learner would write it: `H_jacobian(3, 4)`, `propagate_covariance(P, F, Q=Q)`."""
+        shown = [show_argument(a) for a in self.args] + [f"{k}={show_argument(v)}" for k, v in self.kwargs]
+        return f"{self.function}({', '.join(shown)})"
+
+
+def call(function: str, *args: object, **kwargs: object) -> Call:
+    """Describe a call of the learner's `function(*args, **kwargs)`."""
+    return Call(function, tuple(args), tuple(sorted(kwargs.items())))
+
+
+# ------------------------------------------------------------------------------ values (child -> parent)
+
+def _type_name(value: object) -> str:
+    kind = type(value)
+    module = getattr(kind, "__module__", "") or ""
+    name = getattr(kind, "__qualname__", kind.__name__)
+    return name if module in ("builtins", "") else f"{module}.{name}"
+
+
+def encode_value(value: object, depth: int = 0) -> dict:
+    """The child's side: a learner's return value as plain JSON data, without calling any of its methods."""
+    import numpy as np
+
+    kind = type(value)
+    if kind is np.ndarray:
+        if value.dtype.kind not in "fiu":
+            return {"t": T_NDARRAY_OTHER, "type": f"ndarray of dtype {value.dtype}"}
+        if value.size > _MAX_ELEMENTS:
+            return {"t": T_TOO_LARGE, "type": f"ndarray with {value.size} elements"}
+        encoded = {"t": T_NDARRAY, "dtype": str(value.dtype), "shape": list(value.shape)}
+        if value.size <= _MAX_AS_TEXT:  # small arrays stay readable in the protocol
+            encoded["data"] = np.asarray(value, dtype=np.float64).ravel().tolist()
+        else:  # large ones travel as little-endian float64 bytes: exact and fast both ways
+            raw = np.ascontiguousarray(value, dtype="<f8").tobytes()
+            encoded["f8"] = binascii.b2a_base64(raw, newline=False).decode("ascii")
+        return encoded
+    if kind in _real_scalar_types():
+        try:
+            return {"t": T_SCALAR, "type": _type_name(value), "data": float(value)}
+        except OverflowError:
+            return {"t": T_SCALAR, "type": _type_name(value), "data": float("inf")}
+    if kind in (tuple, list):
+        if depth >= _MAX_DEPTH or len(value) > _MAX_ITEMS:
+            return {"t": T_OTHER, "type": f"{kind.__name__} of {len(value)} items"}
+        return {"t": kind.__name__, "items": [encode_value(item, depth + 1) for item in value]}
+    if value is None:
+        return {"t": T_NONE, "type": "None"}
+    if kind is str:
+        return {"t": T_STR, "type": "str", "text": value[:80]}
+    name = _type_name(value)
+    if isinstance(value, np.ndarray):
+        name = f"{name} (an ndarray subclass)"
+    return {"t": T_OTHER, "type": name}
+
+
+_SCALARS: frozenset | None = None
+
+
+def _real_scalar_types() -> frozenset:
+    """Exact types whose value is a real number (subclasses are rejected by `type(x) in`)."""
+    global _SCALARS
+    if _SCALARS is None:
+        import numpy as np
+
+        _SCALARS = frozenset({float, int, np.float16, np.float32, np.float64, np.longdouble, np.int8, np.int16,
+                              np.int32, np.int64, np.uint8, np.uint16, np.uint32, np.uint64})
+    return _SCALARS
+
+
+# ------------------------------------------------------------------------------ outcomes, as the parent sees them
+
+VALUE = "value"
+RAISED = "raised"
+NOT_IMPLEMENTED = "not-implemented"
+MISSING = "missing"
+TIMEOUT = "timeout"
+CRASHED = "crashed"
+NOT_RUN = "not-run"
+
+
+@dataclass(frozen=True)
+class Returned:
+    """The outcome of one call: a value (as the child encoded it) or why there is none."""
+
+    kind: str
+    function: str
+    encoded: dict | None = None
+    error: dict | None = None
+    note: str = ""
+
+    @property
+    def ok(self) -> bool:
+        return self.kind == VALUE
+
+    @property
+    def type_name(self) -> str:
+        if self.encoded is None:
+            return "nothing"
+        if self.encoded["t"] in (T_TUPLE, T_LIST):
+            return f'{self.encoded["t"]} of {len(self.encoded["items"])}'
+        return self.encoded.get("type") or self.encoded["t"]
+
+    @property
+    def text(self) -> str | None:
+        """The returned string (first 80 characters), or None when the value is not a str."""
+        return self.encoded.get("text") if self.ok and self.encoded.get("t") == T_STR else None
+
+    def items(self) -> list[Returned] | None:
+        """The elements of a returned tuple or list, each as its own Returned."""
+        if self.encoded is None or self.encoded["t"] not in (T_TUPLE, T_LIST):
+            return None
+        return [Returned(VALUE, self.function, item) for item in self.encoded["items"]]
+
+    def as_array(self):
+        """Plain float64 array for an exact ndarray or a real scalar (shape ()); None otherwise."""
+        import numpy as np
+
+        enc = self.encoded
+        if enc is None:
+            return None
+        if enc["t"] == T_SCALAR:
+            return np.array(enc["data"], dtype=np.float64)
+        if enc["t"] == T_NDARRAY:
+            shape = tuple(int(n) for n in enc["shape"])
+            if "f8" in enc:  # little-endian float64 bytes, base64 (encode_value)
+                try:
+                    raw = binascii.a2b_base64(enc["f8"])
+                except (binascii.Error, TypeError, ValueError):
+                    return None
+                if len(raw) % 8:
+                    return None
+                data = np.frombuffer(raw, dtype="<f8").astype(np.float64)
+            else:
+                data = np.array(enc["data"], dtype=np.float64)
+            if data.size != int(np.prod(shape, dtype=np.int64)):
+                return None
+            return data.reshape(shape)
+        return None
+
+    def problem(self) -> str:
+        """One learner-facing sentence for a call that gave no value."""
+        name = self.function
+        if self.kind == NOT_IMPLEMENTED:
+            return f"{name} is not implemented yet (it raises NotImplementedError)."
+        if self.kind == MISSING:
+            return f"{name} is not defined in your file (check the spelling against the stub)."
+        if self.kind == RAISED:
+            err = self.error or {}
+            where = f" (line {err['line']})" if err.get("line") else ""
+            return f"{name} raised {err.get('exception')}: {err.get('message')}{where}"
+        if self.kind == TIMEOUT:
+            return f"{name} did not return in time ({self.note}): an endless loop?"
+        if self.kind == CRASHED:
+            return f"the process running {name} ended abruptly ({self.note})."
+        if self.kind == NOT_RUN:
+            return f"{name} was not run: {self.note}"
+        return ""
+
+    @property
+    def traceback(self) -> str:
+        return (self.error or {}).get("traceback", "") if self.kind == RAISED else ""
+
+
+def from_event(function: str, event: dict) -> Returned:
+    """Build a Returned from one child result line (already parsed JSON)."""
+    kind = event.get("event")
+    if kind == RETURNED and isinstance(event.get("value"), dict) and "t" in event["value"]:
+        return Returned(VALUE, function, encoded=event["value"])
+    if kind == RAISED_EVENT and isinstance(event.get("error"), dict):
+        if event["error"].get("not_implemented"):
+            return Returned(NOT_IMPLEMENTED, function, error=event["error"])
+        return Returned(RAISED, function, error=event["error"])
+    if kind == MISSING_EVENT:
+        return Returned(MISSING, function)
+    return Returned(CRASHED, function, note="the child sent a malformed result")
