@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from grader.chapters import BY_ID, CHAPTERS
+from grader.chapters import CHAPTERS
 from grader.cli import main
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
@@ -34,7 +34,7 @@ def _grade(tmp_path, chapter, text, learner="alice"):
 
 def _right(chapter, question, learner="alice"):
     key = bank.keys(chapter)[question.id]
-    return key.value_for(BY_ID[chapter].module, question.values_for(learner, chapter))
+    return key.value_for(chapter, question.values_for(learner, chapter))
 
 
 def test_every_chapter_has_the_lesson_question_and_a_mix_of_kinds():

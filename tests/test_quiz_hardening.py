@@ -194,7 +194,7 @@ def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(tmp_path):
 
 def test_got_is_the_answer_as_written_and_expected_only_when_right(tmp_path):
     question = _question("ch06", "H_at_point")
-    right = bank.keys("ch06")["H_at_point"].value_for("ch06_measurement", question.values_for("alice", "ch06"))
+    right = bank.keys("ch06")["H_at_point"].value_for("ch06", question.values_for("alice", "ch06"))
     written = json.dumps(right.round(6).tolist())
     results, _ = _grade(tmp_path, "ch06", f"H_at_point: {written}\ndbearing_dx: -y/r\n")
     assert results["H_at_point"].got == written and results["H_at_point"].expected is not None
@@ -219,7 +219,7 @@ def test_without_the_keys_folder_answers_are_read_but_not_graded(tmp_path):
 
 def test_without_the_reference_solutions_a_computed_key_is_skipped():
     with pytest.raises(bank.KeyUnavailable):
-        bank.Key(compute={"function": "H_jacobian", "args": []}).value_for("no_such_module_here", {})
+        bank.Key(compute={"function": "no_such_reference", "args": []}).value_for("ch06", {})
 
 
 # ------------------------------------------------------------------------ per-learner numbers

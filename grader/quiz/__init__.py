@@ -87,7 +87,6 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     if keys is None:
         problems.append(f"the answer keys of {chapter} are not installed here (quizzes/keys/); "
                         "answers are read and checked for format but not graded")
-    module = BY_ID[chapter].module
     results = []
     for question in questions:
         values = question.values_for(learner, chapter)
@@ -110,7 +109,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.message = "the answer key is not installed here; your answer is kept"
             continue
         try:
-            right_value = key.value_for(module, values)
+            right_value = key.value_for(chapter, values)
         except bank.KeyUnavailable as exc:
             result.status, result.message = Status.SKIP, str(exc)
             continue

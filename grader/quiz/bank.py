@@ -3,15 +3,14 @@
 A question says what is asked; its key, in a separate file, says what is right, how close is close
 enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
 (seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine);
-their key is computed by the reference implementation in solutions/ (trusted code, imported in
-the grading process), never stored.
+their key is computed by the reference implementation (grader.expected.reference_function, trusted
+code imported in the grading process), never stored.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import importlib
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,18 +81,20 @@ class Key:
     atol: float = 1e-6
     feedback: dict[str, str] = field(default_factory=dict)  # option -> why it is wrong
     wrong: list[dict] = field(default_factory=list)  # known wrong answers: {answer | transform, feedback}
-    compute: dict | None = None  # {function: name in solutions.<module>, args: [param names], item: index}
+    compute: dict | None = None  # {function: a reference of the chapter, args: [param names], item: index}
     explanation: str = ""
 
-    def value_for(self, module: str, values: dict[str, float]) -> object:
-        """The right answer: stored, or computed by the reference implementation for `values`."""
+    def value_for(self, chapter: str, values: dict[str, float]) -> object:
+        """The right answer: stored, or computed for `values` by the chapter's reference function
+        (grader.expected.reference_function); KeyUnavailable where the references are not installed."""
         if self.compute is None:
             return self.answer
+        from grader.expected import ReferenceUnavailable, reference_function
+
         try:
-            reference = importlib.import_module(f"solutions.{module}")
-        except ImportError:
-            raise KeyUnavailable("this question's key is computed by the reference solutions, "
-                                 "which are not installed here; your answer is kept") from None
+            reference = reference_function(chapter, self.compute["function"])
+        except ReferenceUnavailable as exc:
+            raise KeyUnavailable(str(exc)) from None
 
         def resolve(arg: object) -> object:
             if isinstance(arg, list):
@@ -104,7 +105,7 @@ class Key:
                 return CALLABLES[arg[1:]]
             return values[arg] if isinstance(arg, str) else arg
 
-        result = getattr(reference, self.compute["function"])(*[resolve(a) for a in self.compute.get("args", [])])
+        result = reference(*[resolve(a) for a in self.compute.get("args", [])])
         if "item" in self.compute:
             result = result[tuple(self.compute["item"])] if isinstance(self.compute["item"], list) \
                 else result[self.compute["item"]]

@@ -45,13 +45,11 @@ def reference_answers(chapter: str, learner: str = REFERENCE_LEARNER) -> str:
 
     import numpy as np
 
-    from grader.chapters import BY_ID
-
     keys = bank.keys(chapter)
     lines = [f"# Reference answers for {chapter}, learner id '{learner}' (see learner.yaml).",
              "# Made by grader.quiz.templates.reference_answers from the keys."]
     for question in bank.questions(chapter):
-        value = keys[question.id].value_for(BY_ID[chapter].module, question.values_for(learner, chapter))
+        value = keys[question.id].value_for(chapter, question.values_for(learner, chapter))
         value = np.round(np.asarray(value, dtype=float), 8).tolist() if not isinstance(value, (str, list)) else value
         lines.append(f"{question.id}: {json.dumps(value)}")
     return "\n".join(lines) + "\n"
