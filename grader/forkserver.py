@@ -22,11 +22,15 @@ import socket
 import subprocess
 import sys
 import time
+from typing import TYPE_CHECKING
+
 from grader.spawn import (
     CommandWrapper, become_subreaper, capture_file, child_environment, child_path, kill_orphans, read_capture,
     temp_dir,
 )
-from grader.submission import Submission
+
+if TYPE_CHECKING:  # the server runs in the sandbox, where only the child's grader modules exist
+    from grader.submission import Submission
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.forkserver import serve; serve()"
 _MESSAGE = 4096
@@ -50,7 +54,7 @@ class ForkServer:
         command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(server_end.fileno()),
                    json.dumps(config)]
         if self.wrap is not None:
-            command = self.wrap(command, None)
+            command = self.wrap(command)
         self.process = subprocess.Popen(
             command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             pass_fds=(server_end.fileno(),), start_new_session=True, env=child_environment(), cwd=temp_dir())

@@ -1,124 +1,255 @@
-"""Hardened isolation for learner code: the child runs inside bubblewrap when it is installed.
+"""Isolation for learner code: the child runs inside bubblewrap where it is installed.
 
-Inside: no network, read-only root, a fresh /tmp, its own PID namespace (the sandbox's processes
-all die with it), a new session; the reference solutions, quiz keys, the project's own exercises,
-the submissions folder and the output folder are hidden (empty tmpfs over them), and only this
-learner's staged files are bound back, read-only. Run as root, learner code drops to uid/gid
-65534 (nobody) with no capabilities. Without bubblewrap it falls back to the resource limits and
-process-group kill of grader.runner alone, and says so in one line.
+The sandbox is an allow-list. Its root is an empty file system; into it go, read-only, only what
+the child needs: the system's shared libraries, the interpreter and its standard library, the
+packages learner code may import (numpy, sympy and, where installed, jax or torch with what they
+import), and the few grader modules the child itself runs (grader.child, grader.wire,
+grader.catalogue, the fork server). Every other Python package folder appears empty. The learner's
+files are not bound at all: they travel inside the request and the child writes them to its own
+fresh /tmp. So no reference solution, quiz key, check or other learner's file exists in there,
+wherever the course keeps them. Also: no network, its own PID and IPC namespaces (its processes all
+die with it), a new session; run as root, learner code drops to uid/gid 65534 (nobody) with no
+capabilities.
+
+Without bubblewrap the child runs with the resource limits and process-tree kill of grader.runner
+only, as the invoking user, and the isolation line says that it can read what that user can.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib.util
 import os
 import shutil
 import sys
+import sysconfig
 from pathlib import Path
 
-from grader.spawn import GRADER_PARENT, child_path
-from grader.submission import Submission
+from grader.spawn import child_path
 
 NOBODY = 65534
+GRADER_DIR = os.path.dirname(os.path.abspath(__file__))
+# The grader modules the child (and the fork server) import: nothing else of the grader is visible.
+CHILD_MODULES = ("__init__.py", "child.py", "wire.py", "catalogue.py", "forkserver.py", "spawn.py")
+# What learner code may import (the contract: numpy, math, sympy, an autograd library), with what
+# those import in turn.
+LEARNER_PACKAGES = ("numpy", "sympy", "mpmath")
+AUTOGRAD_PACKAGES = ("jax", "torch")
+SYSTEM_LIBRARIES = ("/usr/lib", "/usr/lib64", "/usr/lib32", "/lib", "/lib64", "/lib32")
+SYSTEM_FILES = ("/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d", "/etc/passwd", "/etc/group",
+                "/etc/nsswitch.conf", "/etc/localtime")
+TMP_SIZE = 256 << 20  # the learner's /tmp
 
 
-def _hidden_defaults() -> list[str]:
-    """Folders learner code must not see: references, keys, the project's exercises."""
-    paths = [os.path.join(GRADER_PARENT, name) for name in ("solutions", "quizzes", "exercises", ".git")]
+def _exists(path: str) -> bool:
+    return os.path.lexists(path)
+
+
+def _inside(path: str, folder: str) -> bool:
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+@functools.lru_cache(maxsize=1)
+def _stdlib_dirs() -> tuple[str, ...]:
+    paths = sysconfig.get_paths()
+    found = {os.path.realpath(paths[k]) for k in ("stdlib", "platstdlib") if paths.get(k)}
+    found |= {os.path.realpath(p) for p in sys.path if p.endswith((".zip", "lib-dynload"))}
+    return tuple(sorted(p for p in found if _exists(p)))
+
+
+def _module_locations(name: str) -> list[str]:
+    """The files and folders that make importable top-level module `name`: its package folder (or
+    file), a `name.libs` folder of vendored shared libraries, its *.dist-info."""
     try:
-        import importlib.util
-
-        spec = importlib.util.find_spec("solutions")
-        if spec and spec.submodule_search_locations:
-            paths.extend(spec.submodule_search_locations)
+        spec = importlib.util.find_spec(name)
     except (ImportError, ValueError):
-        pass
-    return [p for p in dict.fromkeys(paths) if os.path.isdir(p)]
+        return []
+    if spec is None:
+        return []
+    if spec.submodule_search_locations:
+        places = [os.path.realpath(p) for p in spec.submodule_search_locations]
+    elif spec.origin and os.path.isabs(spec.origin):
+        places = [os.path.realpath(spec.origin)]
+    else:
+        return []  # built in
+    found = []
+    for place in places:
+        found.append(place)
+        parent = os.path.dirname(place)
+        found += [os.path.join(parent, n) for n in (f"{name}.libs",) if os.path.isdir(os.path.join(parent, n))]
+        try:
+            found += [os.path.join(parent, n) for n in os.listdir(parent)
+                      if n.endswith(".dist-info") and n.split("-")[0].lower().replace("_", "-") == name.lower()]
+        except OSError:
+            pass
+    return found
+
+
+def _autograd_modules() -> set[str]:
+    """Top-level modules of the installed autograd libraries and everything they require."""
+    roots = [name for name in AUTOGRAD_PACKAGES if importlib.util.find_spec(name) is not None]
+    if not roots:
+        return set()
+    import importlib.metadata as metadata
+    import re
+
+    modules: set[str] = set()
+    seen: set[str] = set()
+    pending = list(roots)
+    while pending:
+        name = pending.pop()
+        key = re.sub(r"[-_.]+", "-", name).lower()
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            dist = metadata.distribution(name)
+        except metadata.PackageNotFoundError:
+            continue
+        top = (dist.read_text("top_level.txt") or "").split()
+        if not top:
+            top = sorted({Path(str(f)).parts[0].removesuffix(".py") for f in dist.files or []
+                          if not str(f).startswith(("..", "/")) and ".dist-info" not in Path(str(f)).parts[0]})
+        modules.update(t for t in top if t.isidentifier())
+        for requirement in dist.requires or []:
+            if "extra ==" in requirement:
+                continue
+            match = re.match(r"[A-Za-z0-9][A-Za-z0-9._-]*", requirement)
+            if match:
+                pending.append(match.group(0))
+    return modules
+
+
+@functools.lru_cache(maxsize=1)
+def _site_dirs() -> tuple[str, ...]:
+    """Every folder of third-party packages the child could see: those on its path, and the
+    site-packages inside the standard library's folder (pyenv and other installs keep it there)."""
+    found = [os.path.realpath(p) for p in child_path()]
+    for stdlib in _stdlib_dirs():
+        found += [os.path.join(stdlib, n) for n in ("site-packages", "dist-packages")]
+    stdlib = _stdlib_dirs()
+    return tuple(p for p in dict.fromkeys(found) if os.path.isdir(p) and not (
+        p in stdlib or p.endswith("lib-dynload")))
+
+
+@functools.lru_cache(maxsize=1)
+def learner_packages() -> tuple[str, ...]:
+    """The package folders and files learner code may import, each where it is installed."""
+    names = set(LEARNER_PACKAGES) | _autograd_modules()
+    sites = _site_dirs()
+    places = {p for name in sorted(names) for p in _module_locations(name)}
+    return tuple(sorted(p for p in places if any(_inside(p, s) for s in sites)))
+
+
+def _python_files() -> list[str]:
+    """The interpreter (as invoked and its real file), a venv's pyvenv.cfg, the standard library and
+    the folder of libpython."""
+    executable = os.path.abspath(sys.executable)
+    files = [executable, os.path.realpath(executable)]
+    for folder in (os.path.dirname(executable), os.path.dirname(os.path.dirname(executable))):
+        config = os.path.join(folder, "pyvenv.cfg")
+        if os.path.isfile(config):
+            files.append(config)
+    files += list(_stdlib_dirs())
+    libdir = sysconfig.get_config_var("LIBDIR")
+    library = sysconfig.get_config_var("LDLIBRARY")
+    if libdir and library and os.path.exists(os.path.join(libdir, library)):
+        files += [os.path.join(libdir, n) for n in os.listdir(libdir) if n.startswith(library.split(".so")[0])]
+    return [p for p in dict.fromkeys(files) if _exists(p)]
 
 
 class Sandbox:
-    """A grader.runner CommandWrapper: `Session(submission, wrap=Sandbox(...))`."""
+    """A grader.spawn CommandWrapper: `start_child(submission, wrap=Sandbox())`."""
 
-    def __init__(self, hide: list[str | Path] = ()) -> None:
+    def __init__(self) -> None:
         self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
         self.setpriv = shutil.which("setpriv")
-        self.hide = [str(Path(p).resolve()) for p in hide] + _hidden_defaults()
-        self.drops_to_nobody = os.geteuid() == 0 and self.setpriv is not None
-        # Root's home, usually 0700, becomes an empty tmpfs when learner code runs as nobody.
-        home = os.path.expanduser("~")
-        self.emptied_home = home if self.drops_to_nobody and home not in ("/", "") and os.path.isdir(home) else None
+        self.drops_to_nobody = hasattr(os, "geteuid") and os.geteuid() == 0 and self.setpriv is not None
 
     @property
     def available(self) -> bool:
         return self.bwrap is not None
 
     def describe(self) -> str:
+        """The isolation line: what holds for learner code here."""
         if not self.available:
-            return ("isolation: bubblewrap (bwrap) not found; learner code runs with resource limits and a "
-                    "process-group kill only (apt-get install bubblewrap for the sandbox)")
-        who = "as uid 65534" if self.drops_to_nobody else "as the current user"
-        return f"isolation: bubblewrap sandbox (no network, read-only root, fresh /tmp, others' files hidden), {who}"
+            from grader.course import in_handout
+
+            readable = ("this handout holds no answers" if in_handout()
+                        else "answers included, wherever the references and keys are installed")
+            return ("isolation: no sandbox (bubblewrap not found; apt-get install bubblewrap): learner code runs "
+                    f"as you, with resource limits only, and can read every file you can ({readable})")
+        who = "as uid 65534" if self.drops_to_nobody else "as you"
+        return ("isolation: bubblewrap sandbox, an allow-list: learner code sees the interpreter, numpy/sympy and its "
+                f"own files only (no answers, no other learner, no network), {who}")
 
     def scratch_dirs(self) -> list[str]:
-        """The only folders learner code can write to inside the sandbox (each a fresh tmpfs)."""
-        return ["/tmp", "/dev/shm"] + ([self.emptied_home] if self.emptied_home else [])
+        """The only folders learner code can write to inside the sandbox."""
+        return ["/tmp", "/dev/shm"]
 
-    def __call__(self, command: list[str], submission: Submission | None) -> list[str]:
-        """`command` inside the sandbox, seeing `submission`'s files read-only (None: no learner's files)."""
+    def __call__(self, command: list[str]) -> list[str]:
+        """`command` inside the sandbox."""
         if not self.available:
             return command
-        args = [self.bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--perms", "01777", "--tmpfs", "/tmp"]
-        emptied = ["/tmp"]  # folders replaced by an empty tmpfs: bind targets inside need their parents made
-        if self.emptied_home:
-            args += ["--tmpfs", self.emptied_home]
-            emptied.append(self.emptied_home)
-        # The interpreter, its libraries and the grader package must stay visible even where they
-        # live inside an emptied folder (a virtual environment in /tmp, pyenv in root's home).
-        needed = {sys.prefix, sys.base_prefix, os.path.dirname(os.path.realpath(sys.executable)),
-                  *(p for p in child_path() if p != GRADER_PARENT), os.path.join(GRADER_PARENT, "grader")}
-        inside = sorted(p for p in needed if os.path.exists(p) and any(p.startswith(e + os.sep) for e in emptied))
-        for path in _outermost(inside):
-            args += _parents(path, emptied) + ["--ro-bind", path, path]
-        hidden = []
-        for path in self.hide:
-            if any(path == e or path.startswith(e + os.sep) for e in emptied):
-                continue  # already inside an empty tmpfs
-            args += _parents(path, emptied) + ["--tmpfs", path]
-            hidden.append(path)
-        chdir = "/tmp"
-        if submission is not None:
-            root = chdir = str(Path(submission.root).resolve())
-            args += _parents(root, emptied + hidden) + ["--ro-bind", root, root]
-            hidden = [p for p in hidden if not p.startswith(root + os.sep)]  # no longer a mount point
-        for path in hidden:  # nothing may be left there for the next learner of a fork server
-            args += ["--remount-ro", path]
-        args += ["--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
-                 "--die-with-parent", "--new-session", "--chdir", chdir, "--"]
-        if self.drops_to_nobody:
-            args += [self.setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
-                     "--inh-caps=-all", "--bounding-set=-all"]
-        return args + command
+        return [self.bwrap, *self.arguments(), "--", *self._drop(), *command]
 
+    def _drop(self) -> list[str]:
+        if not self.drops_to_nobody:
+            return []
+        return [self.setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
+                "--inh-caps=-all", "--bounding-set=-all"]
 
-def _parents(path: str, emptied: list[str]) -> list[str]:
-    """bwrap arguments making the folders above `path` inside an emptied folder, traversable (0755)."""
-    args = []
-    for top in emptied:
-        if path.startswith(top + os.sep):
-            relative = Path(path).relative_to(top).parts[:-1]
-            current = top
-            for part in relative:
-                current = os.path.join(current, part)
-                args += ["--perms", "0755", "--dir", current]
-    return args
+    def arguments(self) -> list[str]:
+        """bwrap's arguments: the allow-list of read-only binds, then the private, writable /tmp."""
+        args: list[str] = []
+        bound: list[str] = []
+        made: set[str] = {"/"}
 
+        def parents(path: str) -> None:
+            """Make the folders above `path` traversable (bwrap would make them 0700)."""
+            missing = []
+            folder = os.path.dirname(path)
+            while folder not in made and not any(_inside(folder, b) for b in bound):
+                missing.append(folder)
+                folder = os.path.dirname(folder)
+            for folder in reversed(missing):
+                args.extend(["--perms", "0755", "--dir", folder])
+                made.add(folder)
 
-def _outermost(paths: list[str]) -> list[str]:
-    """Drop paths that lie inside another path of the list."""
-    out: list[str] = []
-    for path in sorted(paths, key=len):
-        if not any(path == p or path.startswith(p + os.sep) for p in out):
-            out.append(path)
-    return out
+        def bind(path: str) -> None:
+            if any(_inside(path, b) for b in bound):
+                return
+            parents(path)
+            if os.path.islink(path) and os.path.dirname(path) == "/":  # /lib -> usr/lib on merged-/usr systems
+                args.extend(["--symlink", os.readlink(path), path])
+                bind(os.path.realpath(path))
+                return
+            args.extend(["--ro-bind", path, path])
+            bound.append(path)
+
+        for path in SYSTEM_LIBRARIES + SYSTEM_FILES:
+            if _exists(path):
+                bind(path)
+        if self.setpriv and self.drops_to_nobody:
+            bind(self.setpriv)
+        for path in _python_files():
+            bind(path)
+        # Every folder of third-party packages is empty in here, then the allowed packages come back.
+        masked = [folder for folder in _site_dirs() if any(_inside(folder, b) for b in bound)]
+        for folder in masked:
+            args.extend(["--tmpfs", folder])
+        for path in learner_packages() + tuple(os.path.join(GRADER_DIR, name) for name in CHILD_MODULES):
+            parents(path)
+            args.extend(["--ro-bind", path, path])
+        for folder in masked:
+            args.extend(["--remount-ro", folder])
+        args.extend(["--dev", "/dev", "--proc", "/proc",
+                     "--perms", "01777", "--size", str(TMP_SIZE), "--tmpfs", "/tmp",
+                     "--remount-ro", "/",
+                     "--setenv", "HOME", "/tmp",
+                     "--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
+                     "--die-with-parent", "--new-session", "--chdir", "/tmp"])
+        return args
 
 
 def learner_sandbox() -> Sandbox | None:

@@ -15,8 +15,8 @@ GRADER_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # The child runs without site (-S, faster start) on the parent's own import path, grader last.
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.child import main; main()"
 
-# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox: (command, submission).
-CommandWrapper = Callable[[list, object], list]
+# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox (grader.sandbox.Sandbox).
+CommandWrapper = Callable[[list], list]
 
 
 def child_path() -> list[str]:
@@ -172,7 +172,7 @@ def start_child(submission, wrap: CommandWrapper | None = None) -> SpawnedChild:
         scratch = tempfile.mkdtemp(prefix="grade-", dir=temp_dir())
         root = os.path.join(scratch, "submission")
     if wrap is not None:
-        command = wrap(command, submission)
+        command = wrap(command)
     process = subprocess.Popen(
         command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         pass_fds=(write_fd, capture_fd), start_new_session=True, env=child_environment(),

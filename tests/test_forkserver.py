@@ -46,7 +46,7 @@ def _strays() -> list[str]:
 def server(tmp_path):
     if not BWRAP and os.environ.get("CI"):
         pytest.fail("CI must have bubblewrap (.ci/run installs it)")
-    forks = ForkServer(Sandbox(hide=[tmp_path]) if BWRAP else None)
+    forks = ForkServer(Sandbox() if BWRAP else None)
     yield forks
     forks.close()
 
