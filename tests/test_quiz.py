@@ -37,6 +37,10 @@ def _right(chapter, question, learner="alice"):
     return key.value_for(chapter, question.values_for(learner, chapter))
 
 
+RIGHT_CHOICE = bank.keys("ch06")["bearing_near_dish"].answer
+RIGHT_FACTS = ", ".join(bank.keys("ch06")["H_facts"].answer)
+
+
 def test_every_chapter_has_the_lesson_question_and_a_mix_of_kinds():
     kinds = set()
     for chapter in ALL:
@@ -167,7 +171,8 @@ def test_hostile_answers_are_rejected_quickly_with_a_message(hostile, says):
 
 
 def test_hostile_answer_in_a_file_is_reported_with_file_line_and_question(tmp_path):
-    text = "bearing_near_dish: a\ndbearing_dx: \"__import__('os').system('touch pwned')\"\nH_facts: a, b, c\n"
+    text = (f"bearing_near_dish: {RIGHT_CHOICE}\ndbearing_dx: \"__import__('os').system('touch pwned')\"\n"
+            f"H_facts: {RIGHT_FACTS}\n")
     results, _ = _grade(tmp_path, "ch06", text)
     message = results["dbearing_dx"].message
     assert "exercises/answers/ch06.yaml, line 2, question dbearing_dx" in message
@@ -177,7 +182,7 @@ def test_hostile_answer_in_a_file_is_reported_with_file_line_and_question(tmp_pa
 
 
 def test_malformed_yaml_costs_only_the_broken_answer(tmp_path):
-    text = "bearing_near_dish: a\nH_at_point: [[1, 2], [3, 4]\nH_facts: a, b, c\n"
+    text = f"bearing_near_dish: {RIGHT_CHOICE}\nH_at_point: [[1, 2], [3, 4]\nH_facts: {RIGHT_FACTS}\n"
     results, problems = _grade(tmp_path, "ch06", text)
     assert any("exercises/answers/ch06.yaml, line" in p and "not valid YAML" in p for p in problems)
     assert results["bearing_near_dish"].status == Status.PASS
@@ -187,7 +192,7 @@ def test_malformed_yaml_costs_only_the_broken_answer(tmp_path):
 
 
 def test_unknown_question_id_and_unparsable_answer_name_file_and_line(tmp_path):
-    text = "bearing_near_dish: a\nbearing_near_dihs: b\nbearing_variance: one half\n"
+    text = f"bearing_near_dish: {RIGHT_CHOICE}\nbearing_near_dihs: b\nbearing_variance: one half\n"
     results, problems = _grade(tmp_path, "ch06", text)
     assert any("line 2: unknown question id 'bearing_near_dihs'" in p for p in problems)
     assert "exercises/answers/ch06.yaml, line 3, question bearing_variance" in results["bearing_variance"].message

@@ -20,6 +20,7 @@ from grader.model import Status
 from grader.quiz import bank, grade_quiz, learner_id, symbolic
 from grader.quiz.judge import judge
 from grader.quiz.symbolic import AnswerError, equivalent, number, parse
+from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
 
 ALL = [c.id for c in CHAPTERS]
 SYMBOLIC = [(c, q) for c in ALL for q in bank.questions(c) if q.kind == "symbolic"]
@@ -132,7 +133,7 @@ def test_alias_bomb_is_refused_and_the_rest_graded(tmp_path):
     text = 'a0: &a0 ["1","1","1","1","1","1","1","1","1"]\n'
     for i in range(1, 12):
         text += f"a{i}: &a{i} [" + ",".join([f"*a{i - 1}"] * 9) + "]\n"
-    text += "H_at_point: *a11\nbearing_near_dish: a\n"
+    text += f"H_at_point: *a11\nbearing_near_dish: {RIGHT_CHOICE}\n"
     started = time.perf_counter()
     results, problems = _grade(tmp_path, "ch06", text)
     assert time.perf_counter() - started < 2.0
@@ -144,7 +145,7 @@ def test_alias_bomb_is_refused_and_the_rest_graded(tmp_path):
 
 @pytest.mark.parametrize("depth", [50, 30_000])
 def test_deeply_nested_answer_is_refused_without_crashing(tmp_path, depth):
-    text = "bearing_near_dish: a\nH_at_point: " + "[" * depth + "]" * depth + "\nH_facts: a, b, c\n"
+    text = f"bearing_near_dish: {RIGHT_CHOICE}\nH_at_point: " + "[" * depth + "]" * depth + f"\nH_facts: {RIGHT_FACTS}\n"
     results, _ = _grade(tmp_path, "ch06", text)
     assert "exercises/answers/ch06.yaml, line 2, question H_at_point" in results["H_at_point"].message
     assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
@@ -169,7 +170,8 @@ def test_oversized_file_is_reported_not_read(tmp_path):
 
 
 def test_bytes_that_are_not_utf8_cost_only_their_answer(tmp_path):
-    results, _ = _grade(tmp_path, "ch06", b"bearing_near_dish: a\ndbearing_dx: \xff\xfe\nH_facts: a, b, c\n")
+    text = f"bearing_near_dish: {RIGHT_CHOICE}\ndbearing_dx: \xff\xfe\nH_facts: {RIGHT_FACTS}\n"
+    results, _ = _grade(tmp_path, "ch06", text.encode("latin-1"))
     assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
     assert "line 2, question dbearing_dx" in results["dbearing_dx"].message
     assert "ASCII" in results["dbearing_dx"].message
@@ -209,7 +211,7 @@ def test_without_the_keys_folder_answers_are_read_but_not_graded(tmp_path):
     quiz_dir.mkdir()
     for path in bank.QUIZ_DIR.glob("ch*.yaml"):
         shutil.copy(path, quiz_dir / path.name)
-    results, problems = _grade(tmp_path, "ch06", "bearing_near_dish: a\nH_facts: zz\n", quiz_dir=quiz_dir)
+    results, problems = _grade(tmp_path, "ch06", f"bearing_near_dish: {RIGHT_CHOICE}\nH_facts: zz\n", quiz_dir=quiz_dir)
     assert any("keys" in p and "not installed" in p for p in problems)
     assert results["bearing_near_dish"].status == Status.SKIP and "key is not installed" in results[
         "bearing_near_dish"].message
