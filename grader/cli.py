@@ -194,22 +194,9 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     from grader.quiz import answers_dir, learner_id, quiz_report
 
     if show:
-        from grader.quiz import bank
+        from grader.quiz.templates import show_text
 
-        who, source = learner_id(answers_dir(submission.root, submission.package), learner, submission.package)
-        click.echo(f"Questions for learner {who} (from {source}); answer in "
-                   f"{submission.package}/answers/chNN.yaml\n")
-        for info in picked:
-            click.echo(f"{info.id}  {info.title}")
-            for question in bank.questions(info.id):
-                click.echo(f"  [{question.id}] ({question.kind}, {question.points:g} points)")
-                text = question.text_for(question.values_for(who, info.id))
-                click.echo("    " + text.replace("\n", "\n    "))
-                for letter, option in question.options.items():
-                    click.echo(f"      {letter}) {option}")
-                if question.answer_format:
-                    click.echo(f"    format: {question.answer_format}")
-            click.echo("")
+        click.echo(show_text([c.id for c in picked], submission.root, submission.package, learner), nl=False)
         return
     report, _ = quiz_report([c.id for c in picked], submission.root, submission.package,
                             str(submission.root), learner)

@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +23,18 @@ from grader.quiz.templates import reference_answers, template
 
 ALL = [c.id for c in CHAPTERS]
 QUESTIONS = [(c, q) for c in ALL for q in bank.questions(c)]
+REPO = Path(__file__).resolve().parents[1]
+# `python -m grader` with the quiz banks and keys read from argv[1] (as a handout reads its own)
+_WITH_QUIZ_DIR = ("import runpy, sys; from pathlib import Path; import grader.quiz.bank as bank; "
+                  "bank.QUIZ_DIR = Path(sys.argv.pop(1)); runpy.run_module('grader', run_name='__main__', alter_sys=True)")
+
+
+def run_grade(*args, quiz_dir=None):
+    """The real `grade` CLI in a fresh interpreter (`python -m grader ARGS`); with `quiz_dir`, its
+    quiz code reads the banks and keys there."""
+    command = [sys.executable, "-m", "grader"] if quiz_dir is None else [sys.executable, "-c", _WITH_QUIZ_DIR, str(quiz_dir)]
+    return subprocess.run([*command, *map(str, args)], cwd=REPO, capture_output=True, text=True, timeout=120,
+                          check=False)
 
 
 def _grade(tmp_path, chapter, text, learner="alice"):
@@ -37,8 +50,15 @@ def _right(chapter, question, learner="alice"):
     return key.value_for(chapter, question.values_for(learner, chapter))
 
 
-RIGHT_CHOICE = bank.keys("ch06")["bearing_near_dish"].answer
-RIGHT_FACTS = ", ".join(bank.keys("ch06")["H_facts"].answer)
+def shown(chapter, qid, canonical, learner="alice"):
+    """What `learner` writes for the bank's options `canonical` ("a" or "a, c"): their own letters."""
+    question = next(q for q in bank.questions(chapter) if q.id == qid)
+    letter_of = {c: s for s, c in question.lettering(learner, chapter).items()}
+    return ", ".join(letter_of[c.strip()] for c in canonical.split(","))
+
+
+RIGHT_CHOICE = shown("ch06", "bearing_near_dish", bank.keys("ch06")["bearing_near_dish"].answer)  # alice's
+RIGHT_FACTS = shown("ch06", "H_facts", ", ".join(bank.keys("ch06")["H_facts"].answer))
 
 
 def test_every_chapter_has_the_lesson_question_and_a_mix_of_kinds():
@@ -94,9 +114,9 @@ def test_every_known_wrong_answer_gets_its_targeted_feedback(chapter, question):
 
 
 def test_multi_select_partial_credit_and_nothing_for_selecting_everything(tmp_path):
-    results, _ = _grade(tmp_path, "ch06", "H_facts: a, b\n")
+    results, _ = _grade(tmp_path, "ch06", f"H_facts: {shown('ch06', 'H_facts', 'a, b')}\n")
     assert results["H_facts"].points == pytest.approx(2 / 3)
-    results, _ = _grade(tmp_path, "ch06", "H_facts: a, b, d\n")
+    results, _ = _grade(tmp_path, "ch06", f"H_facts: {shown('ch06', 'H_facts', 'a, b, d')}\n")
     assert results["H_facts"].points == pytest.approx(1 / 3)
     assert "perpendicular" not in results["H_facts"].message and "local linearization" in results["H_facts"].message
     results, _ = _grade(tmp_path, "ch06", "H_facts: a, b, c, d, e\n")

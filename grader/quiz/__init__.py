@@ -71,7 +71,7 @@ def _short(text: str, width: int = 100) -> str:
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
                quiz_dir: Path = bank.QUIZ_DIR) -> tuple[list[CheckResult], list[str]]:
     """The quiz results of one chapter, and chapter-level problems (file, line, question)."""
-    from grader.quiz.judge import fmt_value, judge
+    from grader.quiz.judge import fmt_value, judge, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
     keys = bank.keys(chapter, quiz_dir)
@@ -90,6 +90,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     results = []
     for question in questions:
         values = question.values_for(learner, chapter)
+        lettering = question.lettering(learner, chapter)
         result = CheckResult(id=f"quiz_{question.id}", function=question.id,
                              description=_short(question.text_for(values)), status=Status.FAIL,
                              points=0.0, max_points=question.points, kind="quiz")
@@ -114,8 +115,8 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.status, result.message = Status.SKIP, str(exc)
             continue
         try:
-            verdict = judge(question, key, answer.value,
-                            right_value, bank.variant_seed("points", chapter, question.id))
+            verdict = judge(question, key, answer.value, right_value,
+                            bank.variant_seed("points", chapter, question.id), lettering)
         except AnswerError as exc:
             result.message = f"{where}: {exc}"
             continue
@@ -123,7 +124,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
         result.status = Status.PASS if verdict.right else Status.FAIL
         result.message = verdict.feedback
         if verdict.right:  # the key appears in the output only once the learner has it
-            result.expected = fmt_value(right_value)
+            result.expected = fmt_value(shown_key(question, right_value, lettering))
     return results, problems
 
 

@@ -4,7 +4,9 @@ A question says what is asked; its key, in a separate file, says what is right, 
 enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
 (seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine);
 their key is computed by the reference implementation (grader.expected.reference_function, trusted
-code imported in the grading process), never stored.
+code imported in the grading process), never stored. The options of a choice or multi question are
+shown to each learner in their own order (another SHA-256 seed), so the letter of the right option
+differs between learners; keys and feedback name the options by their canonical letters.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import random
+import string
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,11 +40,14 @@ class KeyUnavailable(RuntimeError):
     """A key that cannot be computed here (the reference implementation is not installed)."""
 
 
-def variant_seed(learner: str, chapter: str, question: str) -> int:
-    """The seed of one learner's numbers for one question: stable across runs, machines and
-    Python versions (hashlib, not the salted built-in hash())."""
-    digest = hashlib.sha256(f"{learner}\x00{chapter}\x00{question}".encode()).digest()
-    return int.from_bytes(digest[:8], "big")
+OPTIONS_SALT = "options"  # variant_seed salt of the option order (the numbers use no salt)
+
+
+def variant_seed(learner: str, chapter: str, question: str, salt: str = "") -> int:
+    """The seed of one learner's variant of one question (its numbers; with `salt` "options", its
+    option order): stable across runs, machines and Python versions (hashlib, not hash())."""
+    text = f"{learner}\x00{chapter}\x00{question}" + (f"\x00{salt}" if salt else "")
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big")
 
 
 @dataclass
@@ -71,7 +77,15 @@ class Question:
         return values
 
     def text_for(self, values: dict[str, float]) -> str:
+        """The prompt with this learner's numbers filled in."""
         return self.prompt.format(**{k: f"{v:g}" for k, v in values.items()}) if values else self.prompt
+
+    def lettering(self, learner: str, chapter: str) -> dict[str, str]:
+        """Shown letter -> canonical letter, in the order this learner sees the options: a, b, c ...
+        for a permutation of the bank's options seeded by variant_seed(..., OPTIONS_SALT)."""
+        order = list(self.options)
+        random.Random(variant_seed(learner, chapter, self.id, OPTIONS_SALT)).shuffle(order)
+        return dict(zip(string.ascii_lowercase, order))
 
 
 @dataclass

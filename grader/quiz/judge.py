@@ -1,9 +1,12 @@
-"""Judge one answer against its key: a verdict with points in [0, 1] of the question's worth."""
+"""Read one answer in its question's terms (read_answer: no key, no sympy) and judge it against its
+key (judge: a verdict with points in [0, 1] of the question's worth).
+
+Letters are read as the learner saw them (the question's lettering for that learner) and judged as
+the bank's canonical letters, in which keys and feedback are written."""
 
 from __future__ import annotations
 
 import ast
-import math
 import re
 from dataclasses import dataclass
 
@@ -28,16 +31,17 @@ class Judgement:
     right: bool = False
 
 
-def _letters(value: object, question: Question) -> list[str]:
+def _letters(value: object, lettering: dict[str, str]) -> list[str]:
+    """The letters of an answer as shown to the learner (keys of `lettering`), in the order written."""
     if isinstance(value, (list, tuple)):
         items = [str(v) for v in value]
     else:
         items = re.split(r"[\s,;]+", str(value).strip())
     letters = [item.strip().strip(").").lower() for item in items if item.strip()]
-    unknown = [letter for letter in letters if letter not in question.options]
+    unknown = [letter for letter in letters if letter not in lettering]
     if unknown or not letters:
         shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
-        raise AnswerError(f"choose from {', '.join(question.options)} (got {shown})")
+        raise AnswerError(f"choose from {', '.join(lettering)} (got {shown})")
     return letters
 
 
@@ -90,32 +94,64 @@ def _transformed(key: np.ndarray, transform: str) -> np.ndarray | None:
     raise ValueError(f"unknown transform {transform}")
 
 
-def judge(question: Question, key: Key, value: object, right_value: object, seed: int) -> Judgement:
-    """Raises AnswerError when the answer cannot be read."""
+def identity_lettering(question: Question) -> dict[str, str]:
+    """The bank's own letters: each shown letter is its canonical letter."""
+    return {letter: letter for letter in question.options}
+
+
+def read_answer(question: Question, value: object, lettering: dict[str, str] | None = None) -> object:
+    """The answer in the question's terms, needing neither its key nor sympy: the canonical letters
+    (choice: one; multi: a set) of the options the learner picked by their shown letters, a float
+    array of the question's shape (numeric, vector, matrix), or the whitelisted expression text in
+    the question's symbols. AnswerError says why an answer cannot be read."""
     kind = question.kind
-    if kind == "choice":
-        letters = _letters(value, question)
+    if kind in ("choice", "multi"):
+        lettering = lettering or identity_lettering(question)
+        letters = _letters(value, lettering)
+        if kind == "multi":
+            return {lettering[letter] for letter in letters}
         if len(letters) != 1:
             raise AnswerError("choose exactly one option")
-        if letters[0] == str(right_value).lower():
+        return lettering[letters[0]]
+    if kind == "numeric":
+        if isinstance(value, (list, dict)):
+            raise AnswerError("expected one number, got a list")
+        return np.array(number(value))
+    if kind in ("vector", "matrix"):
+        return _array(value, question.shape)
+    if kind == "symbolic":
+        if isinstance(value, (list, dict)):
+            raise AnswerError("expected one expression, got a list")
+        check_text(str(value), question.symbols)
+        return str(value)
+    raise AnswerError(f"unknown question kind {kind}")
+
+
+def judge(question: Question, key: Key, value: object, right_value: object, seed: int,
+          lettering: dict[str, str] | None = None) -> Judgement:
+    """The verdict on `value` (letters as shown through `lettering`, default the bank's own) against
+    `right_value`; feedback of a wrong option names it by its shown letter. AnswerError when the
+    answer cannot be read."""
+    lettering = lettering or identity_lettering(question)
+    got = read_answer(question, value, lettering)
+    kind = question.kind
+    if kind == "choice":
+        if got == str(right_value).lower():
             return Judgement(1.0, key.explanation, True)
-        return Judgement(0.0, key.feedback.get(letters[0], "not this one"))
+        return Judgement(0.0, key.feedback.get(got, "not this one"))
     if kind == "multi":
-        picked = set(_letters(value, question))
         right = {str(v).lower() for v in right_value}
-        if picked == set(question.options):
+        if got == set(question.options):
             return Judgement(0.0, "selecting every option earns nothing: choose the true statements")
-        hits, misses = len(picked & right), len(picked - right)
+        hits, misses = len(got & right), len(got - right)
         fraction = max(0.0, (hits - misses) / len(right))
-        notes = [f"{letter}) {key.feedback[letter]}" for letter in sorted(picked - right) if letter in key.feedback]
-        missed = sorted(right - picked)
+        notes = [f"{shown}) {key.feedback[canonical]}" for shown, canonical in lettering.items()
+                 if canonical in got - right and canonical in key.feedback]
+        missed = right - got
         if missed:
             notes.append(f"{len(missed)} true statement(s) not selected")
-        return Judgement(fraction, "; ".join(notes) or key.explanation, picked == right)
+        return Judgement(fraction, "; ".join(notes) or key.explanation, got == right)
     if kind in ("numeric", "vector", "matrix"):
-        if kind == "numeric" and isinstance(value, (list, dict)):
-            raise AnswerError("expected one number, got a list")
-        got = np.array(number(value)) if kind == "numeric" else _array(value, question.shape)
         want = np.asarray(right_value, dtype=float)
         if got.shape != want.shape:
             raise AnswerError(f"expected {want.size} number(s), got {got.size}")
@@ -129,23 +165,24 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
                     np.all(np.abs(got - candidate) <= key.atol + key.rtol * np.abs(candidate)):
                 return Judgement(0.0, wrong["feedback"])
         return Judgement(0.0, "not within the tolerance of the right value")
-    if kind == "symbolic":
-        if isinstance(value, (list, dict)):
-            raise AnswerError("expected one expression, got a list")
-        text = str(value)
-        if equivalent(text, str(right_value), question.symbols, question.domain, seed):
-            return Judgement(1.0, key.explanation, True)
-        for wrong in key.wrong:
-            if equivalent(text, str(wrong["answer"]), question.symbols, question.domain, seed):
-                return Judgement(0.0, wrong["feedback"])
-        return Judgement(0.0, "not equivalent to the right expression")
-    raise AnswerError(f"unknown question kind {kind}")
+    if equivalent(got, str(right_value), question.symbols, question.domain, seed):
+        return Judgement(1.0, key.explanation, True)
+    for wrong in key.wrong:
+        if equivalent(got, str(wrong["answer"]), question.symbols, question.domain, seed):
+            return Judgement(0.0, wrong["feedback"])
+    return Judgement(0.0, "not equivalent to the right expression")
+
+
+def shown_key(question: Question, right_value: object, lettering: dict[str, str]) -> object:
+    """A right answer as the learner sees it: the shown letter(s) of the right option(s)."""
+    if question.kind not in ("choice", "multi"):
+        return right_value
+    shown = {canonical: letter for letter, canonical in lettering.items()}
+    if question.kind == "choice":
+        return shown[str(right_value).lower()]
+    return sorted(shown[str(v).lower()] for v in right_value)
 
 
 def fmt_value(value: object) -> object:
     """A right answer as plain data for the report (shown only once the learner got it right)."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, float) and math.isfinite(value):
-        return value
-    return value
+    return value.tolist() if isinstance(value, np.ndarray) else value

@@ -1,4 +1,7 @@
-"""The learner's answer template of a chapter, made from its question bank (no keys in it)."""
+"""What learners see of a question bank (never a key): the answer templates in exercises/answers/,
+the questions of `grade quiz chNN --show` with one learner's numbers and option letters, and, made
+from the keys, the reference answers in solutions/answers/ (learner 'reference').
+"""
 
 from __future__ import annotations
 
@@ -8,10 +11,11 @@ from pathlib import Path
 from grader.quiz import bank
 
 REFERENCE_LEARNER = "reference"
+WIDTH = 94
 
 FORMATS = {
-    "choice": "one letter, e.g. b",
-    "multi": "the letters of every true statement, e.g. a, c",
+    "choice": "the letter of one option",
+    "multi": "the letters of every true statement, separated by commas",
     "numeric": "a number, e.g. 0.6 or 3/5",
     "vector": "numbers separated by commas, e.g. 4, 1",
     "matrix": "rows in brackets, e.g. [[0.6, 0.8], [-0.16, 0.12]]",
@@ -19,37 +23,69 @@ FORMATS = {
 }
 
 
+def hint(question: bank.Question) -> str:
+    """The question's answer format: its own `format`, else the default of its kind."""
+    return question.answer_format or FORMATS[question.kind]
+
+
 def template(chapter: str) -> str:
+    """The learner's empty answer file of `chapter`: every question with its prompt (numbers as
+    <name>), its options as bullets without letters (letters differ per learner) and its format."""
     lines = [f"# Quiz answers for {chapter}. Fill in each answer after the colon; quote answers",
-             f"# that contain a colon or start with [ if YAML complains. `grade quiz {chapter} --show` prints the questions",
-             "# with your own numbers (parametrised questions differ per learner id).", ""]
+             "# that contain a colon or start with [ if YAML complains. Set your learner id in learner.yaml first:",
+             f"# `grade quiz {chapter} --show` then prints the questions with your own numbers and your own",
+             "# letters for the options (both differ per learner id).", ""]
     for question in bank.questions(chapter):
         prompt = question.prompt
         for name in question.params:
             prompt = prompt.replace("{" + name + "}", f"<{name}>")
-        lines.extend("# " + line for line in textwrap.wrap(prompt, 94))
+        lines.extend("# " + line for line in textwrap.wrap(prompt, WIDTH))
         if question.params:
             lines.append(f"#   (your own numbers for <{'>, <'.join(question.params)}>: grade quiz {chapter} --show)")
-        for letter, option in question.options.items():
-            lines.extend(textwrap.wrap(f"{letter}) {option}", 94, initial_indent="#   ",
-                                       subsequent_indent="#      "))
-        lines.append(f"# format: {question.answer_format or FORMATS[question.kind]}")
+        for option in question.options.values():
+            lines.extend(textwrap.wrap(f"- {option}", WIDTH, initial_indent="#   ", subsequent_indent="#     "))
+        if question.options:
+            lines.append(f"#   (your letters for these options: grade quiz {chapter} --show)")
+        lines.append(f"# format: {hint(question)}")
         lines.append(f"{question.id}:")
         lines.append("")
     return "\n".join(lines)
 
 
+def show_text(chapters: list[str], root: Path, package: str, learner: str | None) -> str:
+    """`grade quiz CHAPTER... --show`: the questions with this learner's numbers and option letters."""
+    from grader.chapters import BY_ID
+    from grader.quiz import answers_dir, learner_id
+
+    who, source = learner_id(answers_dir(root, package), learner, package)
+    lines = [f"Questions for learner {who} (from {source}); answer in {package}/answers/chNN.yaml", ""]
+    for chapter in chapters:
+        lines.append(f"{chapter}  {BY_ID[chapter].title}")
+        for question in bank.questions(chapter):
+            lines.append(f"  [{question.id}] ({question.kind}, {question.points:g} points)")
+            lines.append("    " + question.text_for(question.values_for(who, chapter)).replace("\n", "\n    "))
+            lines.extend(f"      {letter}) {question.options[canonical]}"
+                         for letter, canonical in question.lettering(who, chapter).items())
+            lines.append(f"    format: {hint(question)}")
+        lines.append("")
+    return "\n".join(lines) + "\n"
+
+
 def reference_answers(chapter: str, learner: str = REFERENCE_LEARNER) -> str:
-    """The reference answers file of a chapter for `learner` (solutions/answers/chNN.yaml)."""
+    """The reference answers file of a chapter for `learner` (solutions/answers/chNN.yaml), with
+    that learner's numbers and option letters."""
     import json
 
     import numpy as np
+
+    from grader.quiz.judge import shown_key
 
     keys = bank.keys(chapter)
     lines = [f"# Reference answers for {chapter}, learner id '{learner}' (see learner.yaml).",
              "# Made by grader.quiz.templates.reference_answers from the keys."]
     for question in bank.questions(chapter):
         value = keys[question.id].value_for(chapter, question.values_for(learner, chapter))
+        value = shown_key(question, value, question.lettering(learner, chapter))
         value = np.round(np.asarray(value, dtype=float), 8).tolist() if not isinstance(value, (str, list)) else value
         lines.append(f"{question.id}: {json.dumps(value)}")
     return "\n".join(lines) + "\n"
