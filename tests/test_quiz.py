@@ -29,12 +29,12 @@ _WITH_QUIZ_DIR = ("import runpy, sys; from pathlib import Path; import grader.qu
                   "bank.QUIZ_DIR = Path(sys.argv.pop(1)); runpy.run_module('grader', run_name='__main__', alter_sys=True)")
 
 
-def run_grade(*args, quiz_dir=None):
-    """The real `grade` CLI in a fresh interpreter (`python -m grader ARGS`); with `quiz_dir`, its
-    quiz code reads the banks and keys there."""
-    command = [sys.executable, "-m", "grader"] if quiz_dir is None else [sys.executable, "-c", _WITH_QUIZ_DIR, str(quiz_dir)]
-    return subprocess.run([*command, *map(str, args)], cwd=REPO, capture_output=True, text=True, timeout=120,
-                          check=False)
+def run_grade(*args, quiz_dir=None, flags=()):
+    """The real `grade` CLI in a fresh interpreter (`python [FLAGS] -m grader ARGS`); with `quiz_dir`,
+    its quiz code reads the banks and keys there."""
+    command = ["-m", "grader"] if quiz_dir is None else ["-c", _WITH_QUIZ_DIR, str(quiz_dir)]
+    return subprocess.run([sys.executable, *flags, *command, *map(str, args)], cwd=REPO, capture_output=True,
+                          text=True, timeout=120, check=False)
 
 
 def _grade(tmp_path, chapter, text, learner="alice"):

@@ -68,13 +68,20 @@ def _short(text: str, width: int = 100) -> str:
     return text if len(text) <= width else text[:width - 3] + "..."
 
 
+RECORDED_MESSAGE = "recorded; graded when you submit"
+
+
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
-               quiz_dir: Path = bank.QUIZ_DIR) -> tuple[list[CheckResult], list[str]]:
-    """The quiz results of one chapter, and chapter-level problems (file, line, question)."""
-    from grader.quiz.judge import fmt_value, judge, shown_key
+               quiz_dir: Path | None = None) -> tuple[list[CheckResult], list[str]]:
+    """The quiz results of one chapter, and chapter-level problems (file, line, question).
+
+    A question whose key is here is judged. One whose key is not (no keys file, not in it, or
+    computed by references that are not installed) has its answer read and format-checked
+    without sympy and is RECORDED when well-formed: graded on submission, not in max_score."""
+    from grader.quiz.judge import fmt_value, judge, read_answer, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
-    keys = bank.keys(chapter, quiz_dir)
+    keys = bank.keys(chapter, quiz_dir) or {}
     shown = f"{shown_folder}/{chapter}.yaml"
     answers = read(answers_folder / f"{chapter}.yaml", shown)
     problems = list(answers.problems)
@@ -84,9 +91,6 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             problems.append(f"{shown}, line {answer.line}: unknown question id {qid!r} "
                             f"(the questions are {', '.join(sorted(known))})")
     problems.extend(message for qid, message in answers.unreadable.items() if qid not in known)
-    if keys is None:
-        problems.append(f"the answer keys of {chapter} are not installed here (quizzes/keys/); "
-                        "answers are read and checked for format but not graded")
     results = []
     for question in questions:
         values = question.values_for(learner, chapter)
@@ -103,22 +107,20 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.message = "not answered yet"
             continue
         result.got = answer.text
-        where = f"{shown}, line {answer.line}, question {question.id}"
-        key = None if keys is None else keys.get(question.id)
-        if key is None:
-            result.status = Status.SKIP
-            result.message = "the answer key is not installed here; your answer is kept"
-            continue
+        key = keys.get(question.id)
         try:
-            right_value = key.value_for(chapter, values)
-        except bank.KeyUnavailable as exc:
-            result.status, result.message = Status.SKIP, str(exc)
-            continue
+            right_value = None if key is None else key.value_for(chapter, values)
+        except bank.KeyUnavailable:
+            key = None
         try:
+            if key is None:
+                read_answer(question, answer.value, lettering)
+                result.status, result.message = Status.RECORDED, RECORDED_MESSAGE
+                continue
             verdict = judge(question, key, answer.value, right_value,
                             bank.variant_seed("points", chapter, question.id), lettering)
         except AnswerError as exc:
-            result.message = f"{where}: {exc}"
+            result.message = f"{shown}, line {answer.line}, question {question.id}: {exc}"
             continue
         result.points = question.points * verdict.fraction
         result.status = Status.PASS if verdict.right else Status.FAIL

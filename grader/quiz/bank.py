@@ -21,6 +21,8 @@ from pathlib import Path
 import yaml
 
 SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when present: 10x faster
+
+
 def _quiz_dir() -> Path:
     """The question banks: package data of an installed grader (grader/quizzes), else the checkout's quizzes/."""
     here = Path(__file__).resolve().parents[1]
@@ -28,7 +30,7 @@ def _quiz_dir() -> Path:
     return installed if installed.is_dir() else here.parent / "quizzes"
 
 
-QUIZ_DIR = _quiz_dir()
+QUIZ_DIR = _quiz_dir()  # the default of every quiz_dir argument, read at call time
 KINDS = ("choice", "multi", "numeric", "vector", "matrix", "symbolic")
 
 
@@ -134,9 +136,14 @@ def _load(path: Path) -> object:
         raise BankError(f"{path}: line {mark.line + 1 if mark else '?'}: {exc.problem}") from None
 
 
+def questions(chapter: str, quiz_dir: Path | None = None) -> list[Question]:
+    """The chapter's questions in `quiz_dir` (default QUIZ_DIR), read once per process; do not
+    modify the list."""
+    return _questions(chapter, quiz_dir or QUIZ_DIR)
+
+
 @functools.lru_cache(maxsize=32)
-def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
-    """The chapter's questions (read once per process; do not modify the list)."""
+def _questions(chapter: str, quiz_dir: Path) -> list[Question]:
     path = quiz_dir / f"{chapter}.yaml"
     data = _load(path)
     out = []
@@ -154,9 +161,14 @@ def questions(chapter: str, quiz_dir: Path = QUIZ_DIR) -> list[Question]:
     return out
 
 
+def keys(chapter: str, quiz_dir: Path | None = None) -> dict[str, Key] | None:
+    """The chapter's keys in `quiz_dir` (default QUIZ_DIR), or None when its keys file is not
+    shipped (read once per process; do not modify the dict)."""
+    return _keys(chapter, quiz_dir or QUIZ_DIR)
+
+
 @functools.lru_cache(maxsize=32)
-def keys(chapter: str, quiz_dir: Path = QUIZ_DIR) -> dict[str, Key] | None:
-    """The chapter's keys, or None when the keys folder is not shipped (read once per process)."""
+def _keys(chapter: str, quiz_dir: Path) -> dict[str, Key] | None:
     path = quiz_dir / "keys" / f"{chapter}.yaml"
     if not path.exists():
         return None
