@@ -11,6 +11,7 @@ differs between learners; keys and feedback name the options by their canonical 
 
 from __future__ import annotations
 
+import copy
 import functools
 import hashlib
 import random
@@ -161,6 +162,17 @@ def _questions(chapter: str, quiz_dir: Path) -> list[Question]:
     return out
 
 
+@functools.lru_cache(maxsize=32)
+def _raw_keys(chapter: str, quiz_dir: Path) -> dict | None:
+    path = quiz_dir / "keys" / f"{chapter}.yaml"
+    if not path.exists():
+        return None
+    data = _load(path) or {}
+    if not isinstance(data, dict):
+        raise BankError(f"{path}: expected `question_id:` entries")
+    return data
+
+
 def keys(chapter: str, quiz_dir: Path | None = None) -> dict[str, Key] | None:
     """The chapter's keys in `quiz_dir` (default QUIZ_DIR), or None when its keys file is not
     shipped (read once per process; do not modify the dict)."""
@@ -169,13 +181,20 @@ def keys(chapter: str, quiz_dir: Path | None = None) -> dict[str, Key] | None:
 
 @functools.lru_cache(maxsize=32)
 def _keys(chapter: str, quiz_dir: Path) -> dict[str, Key] | None:
-    path = quiz_dir / "keys" / f"{chapter}.yaml"
-    if not path.exists():
+    data = _raw_keys(chapter, quiz_dir)
+    if data is None:
         return None
-    data = _load(path) or {}
     return {str(qid): Key(
         answer=raw.get("answer"), rtol=float(raw.get("rtol", 1e-3)), atol=float(raw.get("atol", 1e-6)),
         feedback={str(k): str(v) for k, v in (raw.get("feedback") or {}).items()},
         wrong=list(raw.get("wrong") or []), compute=raw.get("compute"),
         explanation=str(raw.get("explanation", "")).strip(),
     ) for qid, raw in data.items()}
+
+
+def public_keys(chapter: str, quiz_dir: Path | None = None) -> dict:
+    """The keys of `chapter` that may ship in an immediate-feedback handout: every key that needs
+    no reference computation (no `compute:`), as plain data shaped like quizzes/keys/chNN.yaml
+    (yaml.safe_dump it there and keys() reads it back). Empty when the keys are not installed."""
+    data = _raw_keys(chapter, quiz_dir or QUIZ_DIR) or {}
+    return {qid: copy.deepcopy(raw) for qid, raw in data.items() if "compute" not in raw}
