@@ -1,6 +1,10 @@
 """What learners see of a question bank (never a key): the answer templates in exercises/answers/,
 the questions of `grade quiz chNN --show` with one learner's numbers and option letters, and, made
 from the keys, the reference answers in solutions/answers/ (learner 'reference').
+
+Format hints show the syntax of an answer with examples in backticks; no example is a right or a
+known wrong answer of its question (tests/test_quiz_hints.py), and letter answers have no example
+at all, since every letter is right for some learner.
 """
 
 from __future__ import annotations
@@ -16,10 +20,10 @@ WIDTH = 94
 FORMATS = {
     "choice": "the letter of one option",
     "multi": "the letters of every true statement, separated by commas",
-    "numeric": "a number, e.g. 0.6 or 3/5",
-    "vector": "numbers separated by commas, e.g. 4, 1",
-    "matrix": "rows in brackets, e.g. [[0.6, 0.8], [-0.16, 0.12]]",
-    "symbolic": "an expression, e.g. x/sqrt(x^2 + y^2)",
+    "numeric": "a number, e.g. `-40` or `1/500`",
+    "vector": "numbers separated by commas, e.g. `12, -0.5`",
+    "matrix": "rows in brackets, e.g. `[[2, -1], [0.5, 3]]`",
+    "symbolic": "an expression, e.g. `(x - 2*y)/sqrt(x^2 + 1)`",
 }
 
 
