@@ -1,8 +1,10 @@
-"""Chapter quizzes: grade a learner's answer file against the question bank and its keys.
+"""Chapter quizzes: grade a learner's answer file against the question bank and its keys, and
+record (format-checked, graded on submission) the answers whose key is not here.
 
 Quiz results are CheckResult(kind="quiz") in the same ChapterResult as the code checks. No learner
 code runs here: answers are data, read from YAML and parsed behind a whitelist (symbolic.py).
-`add_quiz_results` is the one entry point of `grade chNN`; `quiz_report` that of `grade quiz`.
+`add_quiz_results` is the one entry point of `grade chNN`; `quiz_report` that of `grade quiz`;
+`templates.show_text` that of `grade quiz --show`.
 """
 
 from __future__ import annotations
