@@ -191,7 +191,7 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     """Grade only the quiz of CHAPTER... (answers in exercises/answers/chNN.yaml)."""
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
-    from grader.quiz import answers_dir, learner_id, quiz_report
+    from grader.quiz import quiz_report
 
     if show:
         from grader.quiz.templates import show_text

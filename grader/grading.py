@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Generator
 
 from grader import checks as check_registry
+from grader import expected
 from grader.checks.base import Check, ChapterChecks, Context, Skip
 from grader.compare import Verdict
 from grader.model import ChapterResult, CheckResult, Report, Status
@@ -23,7 +24,8 @@ class _Pending:
     generator: Generator | None
     wanted: object  # the yielded structure of Calls
     slots: list[int]  # indices into the chapter's call list, in flattening order
-    setup_error: str = ""
+    setup_error: str = ""  # a grader bug while planning (its trace)
+    unavailable: str = ""  # the expected values cannot be had here (e.g. a handout asked for another seed)
 
 
 def _trace() -> str:
@@ -58,11 +60,15 @@ def _rebuild(structure: object, values: list[Returned]) -> object:
 
 
 def _start(name: str, body, ctx: Context, calls: list[Call]) -> _Pending:
+    """Plan one check: run it up to its yield (it asks the reference for its expected values now)."""
     generator = body(ctx)
     try:
-        wanted = next(generator)
+        with expected.planning(ctx.chapter, ctx.check_id, ctx.seed):
+            wanted = next(generator)
         flat: list[Call] = []
         _flatten(wanted, flat)
+    except expected.ReferenceUnavailable as exc:
+        return _Pending(name, None, None, [], unavailable=str(exc))
     except Exception:
         return _Pending(name, None, None, [], setup_error=_trace())
     start = len(calls)
@@ -130,7 +136,8 @@ def _result(check: Check, status: Status, points: float, message: str, verdict: 
 
 def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
     if pending.generator is None:
-        return _result(check, Status.ERROR, 0.0, f"grader error while preparing this check:\n{pending.setup_error}")
+        return _result(check, Status.ERROR, 0.0, f"not graded here: {pending.unavailable}" if pending.unavailable
+                       else f"grader error while preparing this check:\n{pending.setup_error}")
     try:
         verdict = _finish(pending, run)
     except Skip as skip:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
+from grader.expected import reference
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
 from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_problem
@@ -21,23 +22,7 @@ from grader.wire import call
 CHECKS = chapter_checks("ch00")
 
 STANDARD_ERRORS = 5.0
-
-
-def rice_moments(r: float, sigma: float) -> tuple[float, float]:
-    """E[R] and Var[R] for R = |m + sigma Z|, Z standard normal in 2-D, |m| = r.
-
-    E[R] = sigma sqrt(pi/2) e^-t ((1 + 2t) I0(t) + 2t I1(t)) with t = r^2 / (4 sigma^2); the scaled
-    Bessel functions e^-t I_k(t) = (1/pi) int_0^pi e^(t (cos u - 1)) cos(k u) du are integrated by
-    the trapezoid rule, exact to rounding for this smooth periodic integrand.
-    """
-    t = r * r / (4 * sigma * sigma)
-    u = np.linspace(0.0, np.pi, 4001)
-    weights = np.full(u.size, 1.0 / (u.size - 1))
-    weights[[0, -1]] *= 0.5
-    base = np.exp(t * (np.cos(u) - 1.0))
-    i0, i1 = float(weights @ base), float(weights @ (base * np.cos(u)))
-    mean = sigma * np.sqrt(np.pi / 2) * ((1 + 2 * t) * i0 + 2 * t * i1)
-    return float(mean), float(2 * sigma * sigma + r * r - mean * mean)
+REF = reference("ch00")
 
 
 def _show(values) -> str:
@@ -54,12 +39,11 @@ def range_reading_worked_example(ctx):
 @CHECKS.check("range_reading", points=1)
 def range_reading_random_points(ctx):
     """range_reading = sqrt(x^2 + y^2) at random points in all four quadrants, and at integers"""
-    points = [planar_point(ctx.rng) for _ in range(6)]
-    got = yield {"float": [call("range_reading", float(x), float(y)) for x, y in points],
-                 "int": call("range_reading", -5, 12)}
-    verdicts = [expect(g, np.hypot(x, y), label=f"range_reading({fmt(x)}, {fmt(y)})", rtol=1e-9)
-                for g, (x, y) in zip(got["float"], points)]
-    verdicts.append(expect(got["int"], 13.0, label="range_reading(-5, 12)", rtol=1e-12))
+    calls = [call("range_reading", float(x), float(y)) for x, y in (planar_point(ctx.rng) for _ in range(6))]
+    calls.append(call("range_reading", -5, 12))
+    expected = [REF.range_reading(*c.args) for c in calls]
+    got = yield calls
+    verdicts = [expect(g, want, label=c.label, rtol=1e-9) for g, want, c in zip(got, expected, calls)]
     return all_of(verdicts)
 
 
@@ -78,37 +62,33 @@ def superposition_gap_random_points(ctx):
     cases = []
     for form in forms:
         p, q = planar_point(rng), planar_point(rng)
-        while np.hypot(*(p + q)) - np.hypot(*p) - np.hypot(*q) > -0.1:  # p, q not nearly parallel
+        gap = REF.superposition_gap(p, q)
+        while gap > -0.1:  # p, q not nearly parallel
             q = planar_point(rng)
-        cases.append((p, q, form))
-    got = yield [call("superposition_gap", vector_form(p, form), vector_form(q, form)) for p, q, form in cases]
-    verdicts = []
-    for g, (p, q, form) in zip(got, cases):
-        expected = np.hypot(*(p + q)) - np.hypot(*p) - np.hypot(*q)
-        label = f"superposition_gap({_show(p)}, {_show(q)}) with {form}s"
-        verdicts.append(expect(g, expected, label=label, rtol=1e-9, atol=1e-12))
-    return all_of(verdicts)
+            gap = REF.superposition_gap(p, q)
+        cases.append((p, q, form, gap))
+    got = yield [call("superposition_gap", vector_form(p, form), vector_form(q, form)) for p, q, form, _ in cases]
+    return all_of([expect(g, gap, label=f"superposition_gap({_show(p)}, {_show(q)}) with {form}s", rtol=1e-9, atol=1e-12)
+                   for g, (p, q, form, gap) in zip(got, cases)])
 
 
-def _shift_verdict(returned, mean, sigma: float, n: int, label: str):
-    """Within STANDARD_ERRORS standard errors of the exact mean shift E[R] - r."""
+def _shift_verdict(returned, law: tuple, n: int, label: str):
+    """Within STANDARD_ERRORS standard errors of the exact mean shift E[R] - r (law: REF.shift_law)."""
     problem = value_problem(returned, (), label)
     if problem:
         return fail(problem)
-    r = float(np.hypot(*mean))
-    expected_range, variance = rice_moments(r, sigma)
-    expected = expected_range - r
-    tolerance = STANDARD_ERRORS * np.sqrt(variance / n)
-    return compare_arrays(returned.as_array(), expected, label=f"{label} (about sigma^2/(2r) = "
-                          f"{fmt(sigma * sigma / (2 * r))}; statistical, {STANDARD_ERRORS:g} standard errors)",
-                          rtol=0.0, atol=float(tolerance))
+    shift, spread, approximation = law
+    return compare_arrays(returned.as_array(), shift, label=f"{label} (about sigma^2/(2r) = {fmt(approximation)}; "
+                          f"statistical, {STANDARD_ERRORS:g} standard errors)",
+                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)))
 
 
 @CHECKS.check("mean_shift", points=2)
 def mean_shift_worked_example(ctx):
     """mean_shift((3, 4), sigma=1, n=100000) is about 0.10: the cloud's mean range moves outward"""
+    law = REF.shift_law((3.0, 4.0), 1.0)
     got = yield call("mean_shift", (3, 4), 1.0, 100_000, 0)
-    return _shift_verdict(got, (3.0, 4.0), 1.0, 100_000, "mean_shift((3, 4), 1, 100000, seed=0)")
+    return _shift_verdict(got, law, 100_000, "mean_shift((3, 4), 1, 100000, seed=0)")
 
 
 @CHECKS.check("mean_shift", points=2)
@@ -121,9 +101,10 @@ def mean_shift_random_inputs(ctx):
         mean = planar_point(rng, 2.0, 4.0)
         sigma = float(rng.choice([rng.uniform(0.5, 0.8), rng.uniform(1.25, 1.6)]))  # never 1
         cases.append((mean, sigma, int(rng.integers(30_000, 60_000)), int(rng.integers(2**31)), form))
+    laws = [REF.shift_law(m, s) for m, s, *_ in cases]
     got = yield [call("mean_shift", vector_form(m, form), s, n, seed) for m, s, n, seed, form in cases]
-    return all_of([_shift_verdict(g, m, s, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})")
-                   for g, (m, s, n, seed, form) in zip(got, cases)])
+    return all_of([_shift_verdict(g, law, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})")
+                   for g, law, (m, s, n, seed, form) in zip(got, laws, cases)])
 
 
 @CHECKS.check("mean_shift", points=1)

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from grader.catalogue import CALLABLES
 from grader.checks.base import chapter_checks
+from grader.expected import reference
 from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
 from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch01")
+REF = reference("ch01")
 
 L = Entries("L")
 ERROR = Entries("error")
@@ -33,19 +34,6 @@ FUNCTIONS = {
     "exp": ("exp", "exp", "exp"),
     "log": ("log", "reciprocal", None),
 }
-
-
-def _f(name: str):
-    return CALLABLES[name]
-
-
-def tangent(names: tuple, a: float, x) -> np.ndarray:
-    f, fprime = _f(names[0]), _f(names[1])
-    return f(a) + fprime(a) * (np.asarray(x, dtype=float) - a)
-
-
-def actual_error(names: tuple, a: float, x) -> np.ndarray:
-    return np.abs(_f(names[0])(np.asarray(x, dtype=float)) - tangent(names, a, x))
 
 
 def _sin_point(rng: np.random.Generator) -> float:
@@ -100,11 +88,11 @@ def tangent_line_worked_example(ctx):
 def tangent_line_random_inputs(ctx):
     """tangent_line = f(a) + f'(a)(x - a) for sqrt, sin, a cubic, exp and log at random a, x (floats and arrays)"""
     cases = _cases(ctx.rng)
+    expected = [REF.tangent_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
     got = yield [call("tangent_line", Fn(FUNCTIONS[fn][0]), Fn(FUNCTIONS[fn][1]), a, passed_x)
                  for fn, a, x, passed_x in cases]
-    return all_of([expect(g, tangent(FUNCTIONS[fn], a, x), label=_label("tangent_line", FUNCTIONS[fn], a, x),
-                          rtol=1e-9, atol=1e-12, entries=L)
-                   for g, (fn, a, x, _) in zip(got, cases)])
+    return all_of([expect(g, want, label=_label("tangent_line", FUNCTIONS[fn], a, x), rtol=1e-9, atol=1e-12, entries=L)
+                   for g, want, (fn, a, x, _) in zip(got, expected, cases)])
 
 
 @CHECKS.check("linearization_error", points=2)
@@ -125,11 +113,12 @@ def linearization_error_worked_example(ctx):
 def linearization_error_random_inputs(ctx):
     """linearization_error = |f(x) - L(x)| (never negative) for several f at random a, x (floats and arrays)"""
     cases = _cases(ctx.rng)
+    expected = [REF.error_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
     got = yield [call("linearization_error", Fn(FUNCTIONS[fn][0]), Fn(FUNCTIONS[fn][1]), a, passed_x)
                  for fn, a, x, passed_x in cases]
-    return all_of([expect(g, actual_error(FUNCTIONS[fn], a, x), rtol=1e-9, atol=1e-12, entries=ERROR,
+    return all_of([expect(g, want, rtol=1e-9, atol=1e-12, entries=ERROR,
                           label=_label("linearization_error", FUNCTIONS[fn], a, x))
-                   for g, (fn, a, x, _) in zip(got, cases)])
+                   for g, want, (fn, a, x, _) in zip(got, expected, cases)])
 
 
 @CHECKS.check("linearization_error", points=1)
@@ -170,10 +159,11 @@ def taylor_error_estimate_random_inputs(ctx):
     """taylor_error_estimate = 0.5 |f''(a)| delta^2 at random a and delta (f'' of either sign, delta of either sign)"""
     rng = ctx.rng
     cases = [(fn, _point(rng, fn), float(_offsets(rng, 1)[0])) for fn in ("sqrt", "sin", "cubic", "exp", "sin")]
+    expected = [REF.estimate_of(FUNCTIONS[fn][2], a, delta) for fn, a, delta in cases]
     got = yield [call("taylor_error_estimate", Fn(FUNCTIONS[fn][2]), a, delta) for fn, a, delta in cases]
-    return all_of([expect(g, 0.5 * abs(_f(FUNCTIONS[fn][2])(a)) * delta**2, rtol=1e-9, atol=1e-12,
+    return all_of([expect(g, want, rtol=1e-9, atol=1e-12,
                           label=f"taylor_error_estimate({FUNCTIONS[fn][2]}, a={fmt(a)}, delta={fmt(delta)})")
-                   for g, (fn, a, delta) in zip(got, cases)])
+                   for g, want, (fn, a, delta) in zip(got, expected, cases)])
 
 
 @CHECKS.check("taylor_error_estimate", points=1)
@@ -181,8 +171,9 @@ def taylor_error_estimate_matches_actual_error(ctx):
     """for small delta (1e-3) taylor_error_estimate matches the tangent line's actual error |f(a+delta) - L(a+delta)| to 1%"""
     rng = ctx.rng
     cases = [(fn, _point(rng, fn), float(rng.choice([-1, 1]) * 1e-3)) for fn in ("sqrt", "sin", "cubic", "exp")]
+    actual = [REF.error_of(*FUNCTIONS[fn][:2], a, a + delta) for fn, a, delta in cases]
     got = yield [call("taylor_error_estimate", Fn(FUNCTIONS[fn][2]), a, delta) for fn, a, delta in cases]
-    return all_of([expect(g, actual_error(FUNCTIONS[fn], a, a + delta), rtol=1e-2, atol=0.0,
+    return all_of([expect(g, want, rtol=1e-2, atol=0.0,
                           label=f"taylor_error_estimate({FUNCTIONS[fn][2]}, a={fmt(a)}, delta={fmt(delta)}) "
                                 f"vs the actual error of the tangent line of {fn}")
-                   for g, (fn, a, delta) in zip(got, cases)])
+                   for g, want, (fn, a, delta) in zip(got, actual, cases)])

@@ -9,17 +9,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from grader.catalogue import polar_jac, polar_vec
 from grader.checks.base import Skip, chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch03")
+REF = reference("ch03")
 
 P = Entries("p", rows=("x", "y"))
 J = Entries("J", rows=("x", "y"), cols=("r", "theta"), derivative=True)
-SQRT3 = np.sqrt(3.0)
 
 
 def _points(rng: np.random.Generator, n: int = 6) -> list:
@@ -33,36 +33,35 @@ def _label(function: str, r: float, theta: float) -> str:
 @CHECKS.check("polar_to_cartesian", points=1)
 def polar_worked_example(ctx):
     """polar_to_cartesian(4, pi/3) is (2, 3.4641)"""
+    want = REF.polar_to_cartesian(4, np.pi / 3)
     got = yield call("polar_to_cartesian", 4, np.pi / 3)
-    return expect(got, [2.0, 2 * SQRT3], label="polar_to_cartesian(4, pi/3)", entries=P, rtol=1e-9)
+    return expect(got, want, label="polar_to_cartesian(4, pi/3)", entries=P, rtol=1e-9)
 
 
 @CHECKS.check("polar_to_cartesian", points=1)
 def polar_random_points(ctx):
     """polar_to_cartesian = (r cos theta, r sin theta) at random points in all four quadrants (theta in radians)"""
-    points = _points(ctx.rng)
-    got = yield {"float": [call("polar_to_cartesian", float(r), float(t)) for r, t in points],
-                 "int": call("polar_to_cartesian", Array(3, "int64"), 2)}
-    verdicts = [expect(g, polar_vec(p), label=_label("polar_to_cartesian", *p), entries=P, rtol=1e-9, atol=1e-12)
-                for g, p in zip(got["float"], points)]
-    verdicts.append(expect(got["int"], polar_vec((3, 2)), label="polar_to_cartesian(np.int64(3), 2)", entries=P,
-                           rtol=1e-9))
-    return all_of(verdicts)
+    calls = [call("polar_to_cartesian", float(r), float(t)) for r, t in _points(ctx.rng)]
+    expected = [REF.polar_to_cartesian(*c.args) for c in calls] + [REF.polar_to_cartesian(3, 2)]
+    calls.append(call("polar_to_cartesian", Array(3, "int64"), 2))
+    got = yield calls
+    return all_of([expect(g, want, label=c.label, entries=P, rtol=1e-9, atol=1e-12)
+                   for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("polar_to_cartesian_jacobian", points=2)
 def jacobian_worked_example(ctx):
     """J at (4, pi/3) is [[0.5, -3.4641], [0.8660, 2.0]]"""
+    want = REF.polar_to_cartesian_jacobian(4, np.pi / 3)
     got = yield call("polar_to_cartesian_jacobian", 4, np.pi / 3)
-    return expect(got, [[0.5, -2 * SQRT3], [SQRT3 / 2, 2.0]], label="polar_to_cartesian_jacobian(4, pi/3)",
-                  entries=J, rtol=1e-9)
+    return expect(got, want, label="polar_to_cartesian_jacobian(4, pi/3)", entries=J, rtol=1e-9)
 
 
 add_derivative_checks(CHECKS, Derivative(
     forward="polar_to_cartesian", jacobian="polar_to_cartesian_jacobian", entries=J,
     args=lambda p, extra: (float(p[0]), float(p[1])),
-    reference_forward=lambda p, extra: polar_vec(p),
-    reference_jacobian=lambda p, extra: polar_jac(p),
+    reference_forward=lambda p, extra: REF.polar_to_cartesian(*p),
+    reference_jacobian=lambda p, extra: REF.polar_to_cartesian_jacobian(*p),
     cases=lambda rng: [(p, ()) for p in _points(rng)],
 ))
 
@@ -78,20 +77,21 @@ def area_scale_worked_example(ctx):
 def area_scale_is_r(ctx):
     """area_scale = det J = r at random points (signed: a negative r gives a negative det)"""
     rng = ctx.rng
-    points = _points(rng) + [np.array([-rng.uniform(0.5, 3.0), angle(rng)])]
-    got = yield [call("area_scale", float(r), float(t)) for r, t in points]
-    return all_of([expect(g, r, label=_label("area_scale", r, t), rtol=1e-9, atol=1e-12)
-                   for g, (r, t) in zip(got, points)])
+    calls = [call("area_scale", float(r), float(t)) for r, t in _points(rng) + [(-rng.uniform(0.5, 3.0), angle(rng))]]
+    expected = [REF.area_scale(*c.args) for c in calls]
+    got = yield calls
+    return all_of([expect(g, want, label=c.label, rtol=1e-9, atol=1e-12) for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("area_scale", points=1)
 def area_scale_is_det_of_your_jacobian(ctx):
     """area_scale equals the determinant of your own polar_to_cartesian_jacobian"""
     points = _points(ctx.rng, 4)
+    scales = [REF.area_scale(float(r), float(t)) for r, t in points]
     got = yield [{"det": call("area_scale", float(r), float(t)), "J": call("polar_to_cartesian_jacobian", float(r), float(t))}
                  for r, t in points]
     verdicts = []
-    for g, (r, t) in zip(got, points):
+    for g, (r, t), scale in zip(got, points, scales):
         label = _label("area_scale", r, t)
         problem = value_problem(g["det"], (), label)
         if problem:
@@ -100,9 +100,9 @@ def area_scale_is_det_of_your_jacobian(ctx):
         if problem:
             raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J.")
         own_det = float(np.linalg.det(g["J"].as_array()))
-        if not np.isclose(own_det, r, rtol=1e-9, atol=1e-12):
+        if not np.isclose(own_det, scale, rtol=1e-9, atol=1e-12):
             raise Skip(f"the determinant of your {_label('polar_to_cartesian_jacobian', r, t)} is {fmt(own_det)}, "
-                       f"not r = {fmt(r)}: fix J first (see its checks).")
+                       f"not {fmt(scale)}: fix J first (see its checks).")
         verdicts.append(compare_arrays(g["det"].as_array(), own_det, label=label, rtol=1e-9, atol=1e-12,
                                        expected_name="det of your J"))
     return all_of(verdicts)

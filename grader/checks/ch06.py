@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-import solutions.ch06_measurement as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point
 from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, value_problem
+from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch06")
+REF = reference("ch06")
 
 Z = Entries("z", rows=("range", "bearing"))
 H = Entries("H", rows=("range", "bearing"), cols=("x", "y"), derivative=True)
@@ -24,31 +25,33 @@ def _points(rng: np.random.Generator, n: int = 6) -> list:
 @CHECKS.check("range_bearing", points=1)
 def range_bearing_worked_example(ctx):
     """range_bearing at the lesson's point (3, 4) gives (5, 0.9273)"""
+    want = REF.range_bearing(3, 4)
     got = yield call("range_bearing", 3, 4)
-    return expect(got, [5.0, np.arctan2(4, 3)], label="range_bearing(3, 4)", entries=Z, rtol=1e-9)
+    return expect(got, want, label="range_bearing(3, 4)", entries=Z, rtol=1e-9)
 
 
 @CHECKS.check("range_bearing", points=2)
 def range_bearing_all_quadrants(ctx):
     """range_bearing at random points in all four quadrants (bearing is atan2, in [-pi, pi])"""
-    points = _points(ctx.rng, 8)
-    got = yield [call("range_bearing", float(x), float(y)) for x, y in points]
-    return all_of([expect(g, ref.range_bearing(x, y), label=f"range_bearing({x:.6g}, {y:.6g})",
-                          entries=Z, rtol=1e-9) for g, (x, y) in zip(got, points)])
+    calls = [call("range_bearing", float(x), float(y)) for x, y in _points(ctx.rng, 8)]
+    expected = [REF.range_bearing(*c.args) for c in calls]
+    got = yield calls
+    return all_of([expect(g, want, label=c.label, entries=Z, rtol=1e-9) for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("H_jacobian", points=2)
 def H_worked_example(ctx):
     """H at the lesson's point (3, 4) is [[0.6, 0.8], [-0.16, 0.12]]"""
+    want = REF.H_jacobian(3, 4)
     got = yield call("H_jacobian", 3, 4)
-    return expect(got, [[0.6, 0.8], [-0.16, 0.12]], label="H_jacobian(3, 4)", entries=H, rtol=1e-9)
+    return expect(got, want, label="H_jacobian(3, 4)", entries=H, rtol=1e-9)
 
 
 add_derivative_checks(CHECKS, Derivative(
     forward="range_bearing", jacobian="H_jacobian", entries=H,
     args=lambda p, extra: (float(p[0]), float(p[1])),
-    reference_forward=lambda p, extra: ref.range_bearing(p[0], p[1]),
-    reference_jacobian=lambda p, extra: ref.H_jacobian(p[0], p[1]),
+    reference_forward=lambda p, extra: REF.range_bearing(p[0], p[1]),
+    reference_jacobian=lambda p, extra: REF.H_jacobian(p[0], p[1]),
     cases=lambda rng: [(p, ()) for p in _points(rng)],
 ))
 
@@ -56,17 +59,16 @@ add_derivative_checks(CHECKS, Derivative(
 @CHECKS.check("H_jacobian", points=1)
 def H_rows_orthogonal(ctx):
     """H H^T = diag(1, 1/r^2): the range row is a unit vector, the bearing row is orthogonal to it"""
-    points = _points(ctx.rng, 5)
-    got = yield [call("H_jacobian", float(x), float(y)) for x, y in points]
+    calls = [call("H_jacobian", float(x), float(y)) for x, y in _points(ctx.rng, 5)]
+    grams = [REF.measurement_covariance(*c.args, 1.0) for c in calls]  # H H^T = H (1^2 I) H^T
+    got = yield calls
     verdicts = []
-    for g, (x, y) in zip(got, points):
-        label = f"H_jacobian({x:.6g}, {y:.6g})"
-        problem = value_problem(g, (2, 2), label)
+    for g, gram, c in zip(got, grams, calls):
+        problem = value_problem(g, (2, 2), c.label)
         if problem:
             return Verdict(False, problem)
         h = g.as_array()
-        r2 = x * x + y * y
-        verdicts.append(compare_arrays(h @ h.T, np.diag([1.0, 1.0 / r2]), label=f"H H^T from your {label}",
+        verdicts.append(compare_arrays(h @ h.T, gram, label=f"H H^T from your {c.label}",
                                        entries=Entries("H H^T"), rtol=1e-6, atol=1e-9))
     return all_of(verdicts)
 
@@ -74,8 +76,8 @@ def H_rows_orthogonal(ctx):
 @CHECKS.check("H_jacobian", points=1)
 def H_integer_and_array_inputs(ctx):
     """H accepts integers and numpy scalars: H_jacobian(-4, 3) and H_jacobian(np.int64(-4), 3)"""
+    expected = REF.H_jacobian(-4, 3)
     got = yield [call("H_jacobian", -4, 3), call("H_jacobian", Array(-4, "int64"), 3)]
-    expected = ref.H_jacobian(-4.0, 3.0)
     return all_of([expect(g, expected, label="H_jacobian(-4, 3)", entries=H) for g in got])
 
 
@@ -89,19 +91,19 @@ def H_raises_at_origin(ctx):
 @CHECKS.check("measurement_covariance", points=1)
 def covariance_worked_example(ctx):
     """measurement_covariance(3, 4, sigma=1) is diag(1, 0.04)"""
+    want = REF.measurement_covariance(3, 4, 1.0)
     got = yield call("measurement_covariance", 3, 4, 1.0)
-    return expect(got, np.diag([1.0, 0.04]), label="measurement_covariance(3, 4, 1)", entries=R)
+    return expect(got, want, label="measurement_covariance(3, 4, 1)", entries=R)
 
 
 @CHECKS.check("measurement_covariance", points=2)
 def covariance_random_points(ctx):
     """measurement_covariance = H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2) at random points and sigmas"""
     rng = ctx.rng
-    cases = [(p, float(rng.uniform(0.1, 2.0))) for p in _points(rng, 6)]
-    got = yield [call("measurement_covariance", float(p[0]), float(p[1]), s) for p, s in cases]
-    return all_of([expect(g, ref.measurement_covariance(p[0], p[1], s),
-                          label=f"measurement_covariance({p[0]:.6g}, {p[1]:.6g}, {s:.6g})", entries=R)
-                   for g, (p, s) in zip(got, cases)])
+    calls = [call("measurement_covariance", float(x), float(y), float(rng.uniform(0.1, 2.0))) for x, y in _points(rng, 6)]
+    expected = [REF.measurement_covariance(*c.args) for c in calls]
+    got = yield calls
+    return all_of([expect(g, want, label=c.label, entries=R) for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("measurement_covariance", points=1)

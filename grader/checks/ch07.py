@@ -16,13 +16,14 @@ from __future__ import annotations
 
 import numpy as np
 
-import solutions.ch07_dynamics as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, time_step, vector_form
 from grader.compare import Entries, all_of, expect, fail, fmt, passed, value_problem
+from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch07")
+REF = reference("ch07")
 
 STATE = ("x", "y", "theta")
 NEW_STATE = ("x'", "y'", "theta'")
@@ -63,8 +64,9 @@ def _show(values) -> str:
 @CHECKS.check("motion_model", points=1)
 def motion_model_worked_example(ctx):
     """motion_model((0, 0, pi/6), v=2, omega=0.5, dt=0.1) is (0.1732, 0.1, 0.5736)"""
+    want = REF.motion_model((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
     got = yield call("motion_model", (0, 0, np.pi / 6), 2.0, 0.5, 0.1)
-    return expect(got, ref.motion_model((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1),
+    return expect(got, want,
                   label="motion_model((0, 0, pi/6), 2, 0.5, 0.1)", rtol=RTOL, atol=ATOL, entries=S)
 
 
@@ -74,28 +76,29 @@ def motion_model_random_inputs(ctx):
     rng = ctx.rng
     cases = [(_state(rng), *_controls(rng), form) for form in ("tuple", "list", "array", "list", "tuple", "array")]
     cases.append((np.array([2.0, -1.0, 1.0]), -1.5, 0.7, 0.25, "int array"))
+    expected = [REF.motion_model(s, v, w, dt) for s, v, w, dt, _ in cases]
     got = yield [call("motion_model", vector_form(s, form), v, w, dt) for s, v, w, dt, form in cases]
-    return all_of([expect(g, ref.motion_model(s, v, w, dt), rtol=RTOL, atol=ATOL, entries=S,
+    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S,
                           label=f"motion_model({_show(s)}, v={fmt(v)}, omega={fmt(w)}, dt={fmt(dt)})")
-                   for g, (s, v, w, dt, form) in zip(got, cases)])
+                   for g, want, (s, v, w, dt, form) in zip(got, expected, cases)])
 
 
 # ------------------------------------------------------------------------------ F_jacobian
 
 @CHECKS.check("F_jacobian", points=2)
 def F_worked_example(ctx):
-    """F at state (0, 0, pi/6), v=2, dt=0.1: F[0,2] = -v sin(th) dt = -0.1, F[1,2] = v cos(th) dt = 0.1732"""
+    """F at state (0, 0, pi/6), v=2, omega=0.5, dt=0.1 has F[0,2] = -0.1 and F[1,2] = 0.1732"""
+    want = REF.F_jacobian((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
     got = yield call("F_jacobian", (0, 0, np.pi / 6), 2.0, 0.5, 0.1)
-    expected = [[1.0, 0.0, -0.1], [0.0, 1.0, 0.2 * np.cos(np.pi / 6)], [0.0, 0.0, 1.0]]
-    return expect(got, expected, label="F_jacobian((0, 0, pi/6), v=2, omega=0.5, dt=0.1)",
+    return expect(got, want, label="F_jacobian((0, 0, pi/6), v=2, omega=0.5, dt=0.1)",
                   rtol=RTOL, atol=ATOL, entries=F)
 
 
 add_derivative_checks(CHECKS, Derivative(
     forward="motion_model", jacobian="F_jacobian", entries=F,
     args=lambda p, extra: (tuple(float(v) for v in p), *extra),
-    reference_forward=lambda p, extra: ref.motion_model(p, *extra),
-    reference_jacobian=lambda p, extra: ref.F_jacobian(p, *extra),
+    reference_forward=lambda p, extra: REF.motion_model(p, *extra),
+    reference_jacobian=lambda p, extra: REF.F_jacobian(p, *extra),
     cases=lambda rng: [(_state(rng), _controls(rng)) for _ in range(6)],
 ))
 
@@ -104,9 +107,9 @@ add_derivative_checks(CHECKS, Derivative(
 def F_integer_and_array_states(ctx):
     """F_jacobian takes the state as a list, a numpy array or an integer array: F_jacobian([1, -2, 2], -1.5, 0.3, 0.2)"""
     state = [1, -2, 2]
+    expected = REF.F_jacobian(state, -1.5, 0.3, 0.2)
     got = yield [call("F_jacobian", state, -1.5, 0.3, 0.2), call("F_jacobian", Array(state, "int64"), -1.5, 0.3, 0.2),
                  call("F_jacobian", Array([1.0, -2.0, 2.0]), -1.5, 0.3, 0.2)]
-    expected = ref.F_jacobian(np.array(state, dtype=float), -1.5, 0.3, 0.2)
     forms = ("a list of ints", "an int64 array", "a float array")
     return all_of([expect(g, expected, label=f"F_jacobian([1, -2, 2] as {form}, -1.5, 0.3, 0.2)",
                           rtol=RTOL, atol=ATOL, entries=F) for g, form in zip(got, forms)])
@@ -127,7 +130,7 @@ def _transpose_sensitive_F(rng: np.random.Generator, P: np.ndarray, singular: bo
         f = rng.uniform(-2, 2, (n, n))
         if singular:
             f[-1] = rng.uniform(-1, 1) * f[0] + rng.uniform(-1, 1) * f[1]
-        right, wrong = f @ P @ f.T, f.T @ P @ f
+        right, wrong = REF.propagate_covariance(P, f), REF.propagate_covariance(P, f.T)
         if np.max(np.abs(right - wrong)) >= TRANSPOSE_GAP * np.max(np.abs(right)):
             return f
 
@@ -138,18 +141,19 @@ def _label(P, F, Q=None, how: str = "") -> str:
     return text + ("" if Q is None else f", Q = {_mat(Q)}")
 
 
-def _matrix(values: np.ndarray, form: str):
-    return values.tolist() if form == "list" else Array(values.tolist())
+def _matrix(values: np.ndarray, form: str) -> Array:
+    """A matrix argument: a float array, or (form "int") an integer array when its entries are whole."""
+    return Array(values.tolist(), "int64" if form == "int" else "float64")
 
 
 @CHECKS.check("propagate_covariance", points=2)
 def propagate_worked_example(ctx):
     """propagate_covariance(diag(0.04, 0.04, 0.01), F of the worked example) = [[0.0401, -0.000173, -0.001], ...]"""
     P = np.diag([0.04, 0.04, 0.01])
-    Fm = ref.F_jacobian((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
+    Fm = REF.F_jacobian((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
+    expected = REF.propagate_covariance(P, Fm)  # [[0.0401, -0.000173, -0.001], [-0.000173, 0.0403, 0.001732], ...]
     got = yield [call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist())),
                  call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist()), None)]
-    expected = Fm @ P @ Fm.T  # [[0.0401, -0.000173, -0.001], [-0.000173, 0.0403, 0.001732], [-0.001, 0.001732, 0.01]]
     return all_of([expect(g, expected, label=f"propagate_covariance(diag(0.04, 0.04, 0.01), F{how})",
                           rtol=RTOL, atol=ATOL, entries=_cov_entries(3))
                    for g, how in zip(got, ("", ", None"))])
@@ -160,17 +164,21 @@ def propagate_random_matrices(ctx):
     """propagate_covariance = F P F^T (+ Q) for random non-symmetric F and SPD non-diagonal P, Q (n = 2, 3, 4)"""
     rng = ctx.rng
     cases = []
-    for n, with_q, form in ((3, False, "array"), (3, True, "list"), (2, True, "array"), (4, False, "list"),
-                            (3, True, "array"), (2, False, "array")):
+    for n, with_q in ((3, False), (3, True), (2, True), (4, False), (3, True), (2, False)):
         P = spd(rng, n, rng.uniform(0.05, 2.0))
-        cases.append((P, _transpose_sensitive_F(rng, P), spd(rng, n, 0.1) if with_q else None, form))
+        cases.append((P, _transpose_sensitive_F(rng, P), spd(rng, n, 0.1) if with_q else None, "float"))
     state, controls = _state(rng), _controls(rng)
     P = spd(rng, 3, 0.1)
-    cases.append((P, ref.F_jacobian(state, *controls), spd(rng, 3, 0.01), "array"))  # the motion model's own F
+    cases.append((P, REF.F_jacobian(state, *controls), spd(rng, 3, 0.01), "float"))  # the motion model's own F
+    P = np.diag(rng.integers(1, 5, 3).astype(float))  # integer matrices: the contract allows integer arrays
+    F_int = rng.integers(-2, 3, (3, 3)).astype(float) + np.diag([1.0, 0.0, 0.0])
+    cases.append((P, F_int, np.eye(3), "int"))
+    expected = [REF.propagate_covariance(P, Fm, Q) for P, Fm, Q, _ in cases]
     got = yield [call("propagate_covariance", _matrix(P, form), _matrix(Fm, form),
                       *(() if Q is None else (_matrix(Q, form),))) for P, Fm, Q, form in cases]
-    return all_of([expect(g, ref.propagate_covariance(P, Fm, Q), label=_label(P, Fm, Q), rtol=RTOL, atol=ATOL,
-                          entries=_cov_entries(P.shape[0])) for g, (P, Fm, Q, form) in zip(got, cases)])
+    return all_of([expect(g, want, label=_label(P, Fm, Q) + (" (integer arrays)" if form == "int" else ""),
+                          rtol=RTOL, atol=ATOL, entries=_cov_entries(P.shape[0]))
+                   for g, want, (P, Fm, Q, form) in zip(got, expected, cases)])
 
 
 @CHECKS.check("propagate_covariance", points=1)
@@ -181,10 +189,10 @@ def propagate_adds_q_only_when_given(ctx):
     Fm = _transpose_sensitive_F(rng, P)
     Q = spd(rng, 3, 0.2)
     a, f, q = Array(P.tolist()), Array(Fm.tolist()), Array(Q.tolist())
+    plain, noisy = REF.propagate_covariance(P, Fm), REF.propagate_covariance(P, Fm, Q)
     got = yield [call("propagate_covariance", a, f), call("propagate_covariance", a, f, None),
                  call("propagate_covariance", a, f, Q=None), call("propagate_covariance", a, f, q),
                  call("propagate_covariance", a, f, Q=q)]
-    plain, noisy = Fm @ P @ Fm.T, Fm @ P @ Fm.T + Q
     hows = ("", ", None", ", Q=None", ", Q", ", Q=Q")
     return all_of([expect(g, want, label=_label(P, Fm, Q if i >= 3 else None, how),
                           rtol=RTOL, atol=ATOL, entries=_cov_entries(3))

@@ -22,12 +22,8 @@ computed here from the learner's output.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 
-import solutions.ch06_measurement as ch06
-import solutions.ch08_lab as ref
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
@@ -42,14 +38,16 @@ from grader.compare import (
     passed,
     value_problem,
 )
+from grader.expected import reference
 from grader.wire import Array, Rng, call
 
 CHECKS = chapter_checks("ch08")
+REF = reference("ch08")
 
 RTOL, ATOL = 1e-9, 1e-12
 STANDARD_ERRORS = 5.0
 SPREAD = 6.0
-SIMULATED_CLOUDS = 20
+SIMULATED_CLOUDS = 20  # clouds simulated for each case of the mismatch statistic (solutions/oracle/ch08.py)
 SYMMETRY = 1e-9
 MEAS = ("range", "bearing")
 S_LIN = Entries("S_lin", rows=MEAS, cols=MEAS)
@@ -140,12 +138,16 @@ def _cloud(rng: np.random.Generator, center, sigma: float, n: int) -> np.ndarray
     return np.asarray(center, dtype=float) + sigma * rng.standard_normal((n, 2))
 
 
-def _measure_verdict(returned, samples: np.ndarray, ref_bearing: float, label: str):
-    expected = ref.measure_samples(samples, ref_bearing)
-    verdict = expect(returned, expected, label=label, rtol=RTOL, atol=ATOL, entries=_measure_entries(len(samples)))
+def _measure_expected(samples: np.ndarray, ref_bearing: float) -> tuple:
+    """(the right measurements, the raw atan2 bearings a missing unwrap gives), asked while planning."""
+    return REF.measure_samples(samples, ref_bearing), REF.raw_bearings(samples)
+
+
+def _measure_verdict(returned, wanted: tuple, label: str):
+    expected, raw = wanted
+    verdict = expect(returned, expected, label=label, rtol=RTOL, atol=ATOL, entries=_measure_entries(len(expected)))
     if not verdict.passed and returned.as_array() is not None and returned.as_array().shape == expected.shape:
         got = returned.as_array()
-        raw = np.arctan2(samples[:, 1], samples[:, 0])
         if np.allclose(got[:, 1], raw, rtol=RTOL, atol=1e-9) and not np.allclose(raw, expected[:, 1]):
             verdict.message += ("\n  (these are the raw atan2 bearings: move each by whole turns, "
                                 "b + 2 pi round((ref_bearing - b) / 2 pi), to lie within pi of ref_bearing)")
@@ -156,8 +158,9 @@ def _measure_verdict(returned, samples: np.ndarray, ref_bearing: float, label: s
 def measure_samples_worked_example(ctx):
     """measure_samples([[3, 4], [-1, -0.01]], 3.1) is [[5, 0.9273], [1.00005, 3.1516]]"""
     samples = np.array([[3.0, 4.0], [-1.0, -0.01]])
-    got = yield call("measure_samples", [[3, 4], [-1, -0.01]], 3.1)
-    return _measure_verdict(got, samples, 3.1, "measure_samples([[3, 4], [-1, -0.01]], 3.1)")
+    wanted = _measure_expected(samples, 3.1)
+    got = yield call("measure_samples", Array(samples.tolist()), 3.1)
+    return _measure_verdict(got, wanted, "measure_samples(np.array([[3, 4], [-1, -0.01]]), 3.1)")
 
 
 @CHECKS.check("measure_samples", points=2)
@@ -176,11 +179,11 @@ def measure_samples_unwraps_around_ref_bearing(ctx):
     center = planar_point(rng, 2.0, 5.0)  # ref_bearing a whole turn away: bearings move by 2 pi
     cases.append((_cloud(rng, center, 0.3, 10), float(np.arctan2(center[1], center[0]) + rng.choice([-2, 2]) * np.pi),
                   "ref_bearing one turn away"))
-    got = yield [call("measure_samples", Array(s.tolist()) if i % 2 == 0 else s.tolist(), b)
-                 for i, (s, b, _) in enumerate(cases)]
-    return all_of([_measure_verdict(g, s, b, f"measure_samples({len(s)} samples around {_show(s.mean(axis=0))}, "
-                                             f"ref_bearing={fmt(b)}) ({what})")
-                   for g, (s, b, what) in zip(got, cases)])
+    wanted = [_measure_expected(s, b) for s, b, _ in cases]
+    got = yield [call("measure_samples", Array(s.tolist()), b) for s, b, _ in cases]
+    return all_of([_measure_verdict(g, w, f"measure_samples({len(s)} samples around {_show(s.mean(axis=0))}, "
+                                          f"ref_bearing={fmt(b)}) ({what})")
+                   for g, w, (s, b, what) in zip(got, wanted, cases)])
 
 
 # ------------------------------------------------------------------------------ linearized_measurement_cov
@@ -199,10 +202,11 @@ def linearized_cov_random_points(ctx):
     rng = ctx.rng
     cases = [(float(x), float(y), _sigma(rng)) for x, y in (planar_point(rng) for _ in range(5))]
     cases.append((-2, 5, 1.5))
-    got = yield [call("linearized_measurement_cov", x, y, s) for x, y, s in cases]
-    return all_of([expect(g, ref.linearized_measurement_cov(x, y, s), rtol=RTOL, atol=ATOL, entries=S_LIN,
-                          label=f"linearized_measurement_cov({fmt(x)}, {fmt(y)}, {fmt(s)})")
-                   for g, (x, y, s) in zip(got, cases)])
+    calls = [call("linearized_measurement_cov", x, y, s) for x, y, s in cases]
+    expected = [REF.linearized_measurement_cov(*c.args) for c in calls]
+    got = yield calls
+    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S_LIN, label=c.label)
+                   for g, want, c in zip(got, expected, calls)])
 
 
 # ------------------------------------------------------------------------------ sample_covariance
@@ -216,39 +220,20 @@ def sample_covariance_matches_np_cov(ctx):
         mix = np.array([[1.0, 0.0], [rng.uniform(0.4, 0.9), rng.uniform(0.2, 0.5)]]) * rng.uniform(0.5, 3.0)
         z = rng.uniform(-5, 5, 2) + rng.standard_normal((n, 2)) @ mix.T
         cases.append(z)
-    got = yield [call("sample_covariance", Array(z.tolist()) if i != 2 else z.tolist()) for i, z in enumerate(cases)]
+    expected = [REF.sample_covariance(z) for z in cases]
+    got = yield [call("sample_covariance", Array(z.tolist())) for z in cases]
     verdicts = []
-    for i, (g, z) in enumerate(zip(got, cases)):
-        label = f"sample_covariance({len(z)} x 2 {'list' if i == 2 else 'array'} z with mean {_show(z.mean(axis=0))})"
-        v = expect(g, np.cov(z.T), label=label, rtol=RTOL, atol=ATOL, entries=S_COV)
+    for g, want, z in zip(got, expected, cases):
+        label = f"sample_covariance({len(z)} x 2 array z with mean {_show(z.mean(axis=0))})"
+        v = expect(g, want, label=label, rtol=RTOL, atol=ATOL, entries=S_COV)
         n = len(z)
-        if not v.passed and v.got is not None and np.shape(v.got) == (2, 2) and np.allclose(v.got, np.cov(z.T) * (n - 1) / n):
+        if not v.passed and v.got is not None and np.shape(v.got) == (2, 2) and np.allclose(v.got, want * (n - 1) / n):
             v.message += f"\n  (that is the biased covariance: divide by n - 1 = {n - 1}, not by n = {n})"
         verdicts.append(v)
     return all_of(verdicts)
 
 
 # ------------------------------------------------------------------------------ linearization_mismatch
-
-@functools.lru_cache(maxsize=64)
-def mismatch_distribution(x: float, y: float, sigma: float, n: int,
-                          clouds: int = SIMULATED_CLOUDS) -> tuple[float, float]:
-    """Mean and standard deviation of the mismatch statistic over simulated clouds of n samples.
-
-    Seeded from the case itself and cached, so a batch pays for each case once.
-    """
-    rng = np.random.default_rng([int(abs(v) * 1e6) for v in (x, y, sigma)] + [n, clouds])
-    points = np.array([x, y]) + sigma * rng.standard_normal((clouds, n, 2))
-    bearings = np.arctan2(points[..., 1], points[..., 0])
-    ref_bearing = np.arctan2(y, x)
-    bearings = bearings + 2 * np.pi * np.round((ref_bearing - bearings) / (2 * np.pi))
-    z = np.stack([np.hypot(points[..., 0], points[..., 1]), bearings], axis=-1)
-    centred = z - z.mean(axis=1, keepdims=True)
-    s_mc = centred.transpose(0, 2, 1) @ centred / (n - 1)
-    s_lin = ref.linearized_measurement_cov(x, y, sigma)
-    values = np.linalg.norm(s_mc - s_lin, axis=(1, 2)) / np.linalg.norm(s_lin)
-    return float(values.mean()), float(values.std(ddof=1))
-
 
 @CHECKS.check("linearization_mismatch", points=2)
 def mismatch_far_small_near_large(ctx):
@@ -287,14 +272,14 @@ def mismatch_matches_simulation(ctx):
              (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 0.5, 6000),
              (*(float(v) for v in planar_point(rng, 0.5, 0.8)), 0.8, 5000)]
     seeds = _seeds(rng, len(cases))
+    distributions = [REF.mismatch_distribution(*case) for case in cases]
     got = yield [call("linearization_mismatch", x, y, s, n, seed) for (x, y, s, n), seed in zip(cases, seeds)]
     verdicts = []
-    for g, (x, y, s, n), seed in zip(got, cases, seeds):
+    for g, (x, y, s, n), seed, (mean, spread) in zip(got, cases, seeds, distributions):
         label = f"linearization_mismatch({fmt(x)}, {fmt(y)}, {fmt(s)}, {n}, seed={seed})"
         problem = value_problem(g, (), label)
         if problem:
             return fail(problem)
-        mean, spread = mismatch_distribution(x, y, s, n)
         v = compare_arrays(g.as_array(), mean, label=f"{label} (statistical: the mean over {SIMULATED_CLOUDS} simulated "
                                                      f"clouds +- {SPREAD:g} standard deviations {fmt(spread)})",
                            rtol=0.0, atol=SPREAD * spread)
@@ -318,15 +303,13 @@ def _ekf_case(rng: np.random.Generator, x: np.ndarray, z_point: np.ndarray | Non
              float(rng.choice([-1, 1]) * rng.uniform(0.2, 0.5)))
     if z_point is None:
         z_point = x + rng.uniform(-0.4, 0.4, 2)
-    z = ch06.range_bearing(*z_point) + np.array([rng.normal(0, 0.05), rng.normal(0, 0.01)])
+    z = REF.range_bearing(*z_point) + np.array([rng.normal(0, 0.05), rng.normal(0, 0.01)])
     return x, P, z, R
 
 
 def _ekf_call(x, P, z, R, form: str = "array"):
-    if form == "list":
-        return call("ekf_update", [float(v) for v in x], P.tolist(), [float(v) for v in z], R.tolist())
-    return call("ekf_update", vector_form(x, "tuple" if form == "tuple" else "array"), Array(P.tolist()),
-                vector_form(z, "tuple" if form == "tuple" else "array"), Array(R.tolist()))
+    """x and z as a list, tuple or array; P and R always arrays (the contract's matrix arguments)."""
+    return call("ekf_update", vector_form(x, form), Array(P.tolist()), vector_form(z, form), Array(R.tolist()))
 
 
 def _ekf_label(x, P, z, R) -> str:
@@ -344,11 +327,12 @@ def ekf_parts(returned, label: str):
     return items
 
 
-def _ekf_verdict(returned, case, label: str):
+def _ekf_verdict(returned, case, wanted: tuple, label: str):
+    """(x_new, P_new) against wanted = REF.ekf_update(*case)."""
     parts = ekf_parts(returned, label)
     if not isinstance(parts, list):
         return parts
-    x_new, P_new = ref.ekf_update(*case)
+    x_new, P_new = wanted
     scale = float(np.max(np.abs(case[1])))
     x_verdict = expect(parts[0], x_new, label=f"x_new of {label}", rtol=RTOL, atol=ATOL, entries=X_NEW)
     if not x_verdict.passed:
@@ -363,8 +347,9 @@ def ekf_update_random_states(ctx):
     cases = [(np.array([3.0, 4.0]), 0.1 * np.eye(2), np.array([5.1, 0.93]), np.diag([0.01, 0.001]))]
     cases += [_ekf_case(rng, planar_point(rng, 1.0, 4.5)) for _ in range(5)]
     forms = ["list", "array", "tuple", "list", "array", "tuple"]
+    wanted = [REF.ekf_update(*case) for case in cases]
     got = yield [_ekf_call(*case, form) for case, form in zip(cases, forms)]
-    return all_of([_ekf_verdict(g, case, _ekf_label(*case)) for g, case in zip(got, cases)])
+    return all_of([_ekf_verdict(g, case, w, _ekf_label(*case)) for g, case, w in zip(got, cases, wanted)])
 
 
 @CHECKS.check("ekf_update", points=1)
@@ -376,12 +361,13 @@ def ekf_update_wraps_bearing_innovation(ctx):
         x = np.array([-rng.uniform(2.0, 4.0), side * rng.uniform(0.05, 0.2)])  # bearing near +pi or -pi
         z_point = np.array([x[0] + rng.uniform(-0.2, 0.2), -side * rng.uniform(0.1, 0.3)])  # across the axis
         case = _ekf_case(rng, x, z_point)
-        case[2][1] = np.arctan2(z_point[1], z_point[0])  # the bearing exactly as atan2 gives it: the other sign
+        case[2][1] = REF.range_bearing(*z_point)[1]  # the bearing exactly as atan2 gives it: the other sign
         cases.append(case)
+    wanted = [REF.ekf_update(*case) for case in cases]
     got = yield [_ekf_call(*case) for case in cases]
     verdicts = []
-    for g, case in zip(got, cases):
-        v = _ekf_verdict(g, case, _ekf_label(*case))
+    for g, case, w in zip(got, cases, wanted):
+        v = _ekf_verdict(g, case, w, _ekf_label(*case))
         if not v.passed and "x_new" in v.message:
             v.message += ("\n  (the predicted bearing and the measured one are on either side of +-pi: wrap the "
                           "innovation z - h to [-pi, pi))")

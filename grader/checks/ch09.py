@@ -1,16 +1,16 @@
 """Chapter 9: choose your tool: finite-difference gradient and Hessian, and reading the Hessian.
 
-gradient_fd is compared with the analytic gradient of catalogue functions (a quadratic, a bowl, a
-3-D cubic and Rosenbrock) with the finite-difference tolerance 1e-6 + 1e-6 |g| of
+gradient_fd is compared with the exact gradient of catalogue functions (y sin x + x^2/2, a bowl,
+a 3-D cubic and Rosenbrock) with the finite-difference tolerance 1e-6 + 1e-6 |g| of
 grader/checks/derivatives.py: at h = 1e-5 truncation h^2/6 M3 and rounding eps M0/h stay below
 2e-7 on the sampled domain (|x| <= 1.5 for Rosenbrock).
 
 hessian_fd is the central difference of a central-difference gradient, both with step h, so
 (derivation as in derivatives.py, applied twice): truncation h^2/6 from each level, h^2/3 M4 in
-all (M4 bounds fourth derivatives: 0 for the quadratics and the cubic, 2400 for Rosenbrock), and
+all (M4 bounds fourth derivatives: 0 for the quadratic and the cubic, 2400 for Rosenbrock), and
 the gradient's rounding error eps (M0 + |x| M1)/h differenced once more over 2h, eps (M0 + |x| M1)/h^2
 (M0: the size of f's terms, M1: of its gradient). The tolerance is twice the sum of both, with a
-factor 4 on the rounding for the argument roundings: 2.3e-6 for x^2 + x y at (1, 2), up to 1.6e-3
+factor 4 on the rounding for the argument roundings: about 3e-6 at the worked example, up to 1.6e-3
 for Rosenbrock (entries up to 2700); a forward outer difference is off by h/2 |f'''|, at least 3e-4
 for the cubic and Rosenbrock. The output must be exactly symmetric, bit for bit: (J + J^T)/2 is (IEEE
 addition commutes), an unsymmetrised finite-difference Hessian nearly never is at the larger steps
@@ -26,13 +26,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from grader.catalogue import CALLABLES
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, planar_point, vector_form
 from grader.compare import Entries, Verdict, all_of, expect, fail, fmt, fmt_array, passed, value_problem
+from grader.expected import reference
 from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch09")
+REF = reference("ch09")
 
 EPS = float(np.finfo(float).eps)
 NAMES = ("x", "y", "z")
@@ -45,40 +46,6 @@ def _grad_entries(n: int) -> Entries:
 
 def _hess_entries(n: int) -> Entries:
     return Entries("Hessian", rows=NAMES[:n], cols=NAMES[:n])
-
-
-def rosenbrock_grad(p) -> np.ndarray:
-    x, y = np.asarray(p, dtype=float)
-    return np.array([-2 * (1 - x) - 400 * x * (y - x * x), 200 * (y - x * x)])
-
-
-def rosenbrock_hessian(p) -> np.ndarray:
-    x, y = np.asarray(p, dtype=float)
-    return np.array([[2 - 400 * (y - x * x) + 800 * x * x, -400 * x], [-400 * x, 200.0]])
-
-
-# catalogue f -> (gradient, Hessian, size of f's terms, bound on fourth derivatives)
-FUNCTIONS = {
-    "example_f_vec": (CALLABLES["example_grad_vec"], lambda p: np.array([[2.0, 1.0], [1.0, 0.0]]),
-                      lambda x, y: x * x + abs(x * y), 0.0),
-    "bowl_vec": (CALLABLES["bowl_grad_vec"], lambda p: np.array([[2.0, 0.5], [0.5, 2.0]]),
-                 lambda x, y: x * x + 0.5 * abs(x * y) + y * y, 0.0),
-    "saddle3_vec": (CALLABLES["saddle3_grad_vec"],
-                    lambda p: np.array([[2.0, 0.0, 3.0], [0.0, -2.0, -1.0], [3.0, -1.0, 6 * float(p[2])]]),
-                    lambda x, y, z: x * x + y * y + 3 * abs(x * z) + abs(z) ** 3 + abs(y * z), 0.0),
-    "rosenbrock_vec": (rosenbrock_grad, rosenbrock_hessian,
-                       lambda x, y: (1 - x) ** 2 + 100 * (abs(y) + x * x) ** 2, 2400.0),
-}
-
-
-def hessian_tolerance(name: str, point: np.ndarray, h: float) -> float:
-    """Twice the truncation h^2/3 M4 plus rounding 4 eps (M0 + (|x| + 2h) M1) / h^2 (M0, M1 over the box x +- 2h)."""
-    grad, _, size, m4 = FUNCTIONS[name]
-    box = [np.zeros_like(point)] + [2 * h * (2 * np.array(s, dtype=float) - 1) for s in np.ndindex(*(2,) * point.size)]
-    m0 = max(float(size(*(point + d))) for d in box)
-    m1 = max(float(np.sum(np.abs(grad(point + d)))) for d in box)
-    reach = float(np.max(np.abs(point))) + 2 * h
-    return 2 * (h * h / 3 * m4 + 4 * EPS * (m0 + reach * m1) / (h * h))
 
 
 def _mat(m) -> str:
@@ -104,10 +71,11 @@ def _point(rng: np.random.Generator, name: str) -> np.ndarray:
 def gradient_fd_random_points(ctx):
     """gradient_fd matches the analytic gradient of four functions (2-D and 3-D) at random points, given h or not"""
     rng = ctx.rng
-    plan = [("example_f_vec", "tuple", None), ("bowl_vec", "list", None), ("saddle3_vec", "array", None),
+    plan = [("wave_vec", "tuple", None), ("bowl_vec", "list", None), ("saddle3_vec", "array", None),
             ("rosenbrock_vec", "list", None), ("saddle3_vec", "tuple", 1e-4), ("rosenbrock_vec", "array", "h=1e-6"),
-            ("example_f_vec", "array", None)]
+            ("wave_vec", "array", None)]
     cases = [(name, _point(rng, name), form, h) for name, form, h in plan]
+    expected = [REF.gradient_of(name, p) for name, p, _, _ in cases]
     calls = []
     for name, p, form, h in cases:
         args = (Fn(name), vector_form(p, form))
@@ -115,26 +83,24 @@ def gradient_fd_random_points(ctx):
                      call("gradient_fd", *args, h=1e-6) if isinstance(h, str) else call("gradient_fd", *args, h))
     got = yield calls
     verdicts = []
-    for g, (name, p, form, h) in zip(got, cases):
+    for g, want, (name, p, form, h) in zip(got, expected, cases):
         step = "" if h is None else (", h=1e-6" if isinstance(h, str) else f", {fmt(h)}")
-        verdicts.append(expect(g, FUNCTIONS[name][0](p), label=f"gradient_fd({name}, {_show(p)}{step})",
+        verdicts.append(expect(g, want, label=f"gradient_fd({name}, {_show(p)}{step})",
                                rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(p.size)))
     return all_of(verdicts)
 
 
 @CHECKS.check("gradient_fd", points=1)
 def gradient_fd_integer_input(ctx):
-    """gradient_fd converts integer x to float first: x^2 + x y at [1, 2], (1, 2) and np.array([1, 2]) gives (4, 1)"""
-    got = yield [call("gradient_fd", Fn("example_f_vec"), Array([1, 2], "int64")),
-                 call("gradient_fd", Fn("example_f_vec"), [1, 2]),
-                 call("gradient_fd", Fn("example_f_vec"), (1, 2)),
-                 call("gradient_fd", Fn("saddle3_vec"), Array([1, -2, 1], "int64"))]
-    labels = ("gradient_fd(x^2 + x y, np.array([1, 2]) of int64)", "gradient_fd(x^2 + x y, [1, 2])",
-              "gradient_fd(x^2 + x y, (1, 2))", "gradient_fd(saddle3_vec, np.array([1, -2, 1]) of int64)")
-    expected = ([4.0, 1.0], [4.0, 1.0], [4.0, 1.0], CALLABLES["saddle3_grad_vec"]([1, -2, 1]))
+    """gradient_fd converts integer x to float first: integer points as an int64 array, a list and a tuple"""
+    cases = [("wave_vec", [1, 2], Array([1, 2], "int64")), ("wave_vec", [-2, 1], [-2, 1]),
+             ("rosenbrock_vec", [1, -1], (1, -1)), ("saddle3_vec", [1, -2, 1], Array([1, -2, 1], "int64"))]
+    expected = [REF.gradient_of(name, point) for name, point, _ in cases]
+    calls = [call("gradient_fd", Fn(name), passed) for name, _, passed in cases]
+    got = yield calls
     verdicts = []
-    for g, want, label in zip(got, expected, labels):
-        v = expect(g, want, label=label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)))
+    for g, want, c in zip(got, expected, calls):
+        v = expect(g, want, label=c.label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)))
         if not v.passed and v.got is not None and np.shape(v.got) == np.shape(want) and not np.any(v.got):
             v.message += "\n  (all zeros: an integer array cannot hold x + h; convert x to float first)"
         verdicts.append(v)
@@ -143,16 +109,22 @@ def gradient_fd_integer_input(ctx):
 
 # ------------------------------------------------------------------------------ hessian_fd
 
-def _hessian_verdict(returned, name: str, p: np.ndarray, h: float, label: str) -> Verdict:
-    tol = hessian_tolerance(name, p, h)
-    return expect(returned, FUNCTIONS[name][1](p), label=label, rtol=0.0, atol=tol, entries=_hess_entries(p.size))
+def _hessian_expected(name: str, p: np.ndarray, h: float) -> tuple:
+    """(the exact Hessian, the tolerance a right hessian_fd with step h meets), asked while planning."""
+    return REF.hessian_of(name, p), REF.hessian_tolerance(name, p, h)
+
+
+def _hessian_verdict(returned, wanted: tuple, label: str) -> Verdict:
+    hessian, tolerance = wanted
+    return expect(returned, hessian, label=label, rtol=0.0, atol=tolerance, entries=_hess_entries(len(hessian)))
 
 
 @CHECKS.check("hessian_fd", points=1)
 def hessian_fd_worked_example(ctx):
-    """hessian_fd of x^2 + x y at (1, 2) is [[2, 1], [1, 0]]"""
-    got = yield call("hessian_fd", Fn("example_f_vec"), (1, 2))
-    return _hessian_verdict(got, "example_f_vec", np.array([1.0, 2.0]), 1e-4, "hessian_fd(x^2 + x y, (1, 2))")
+    """hessian_fd at (1, 2) of a function with the Hessian of x^2 + x y there is [[2, 1], [1, 0]]"""
+    wanted = _hessian_expected("hessian_twin_vec", np.array([1.0, 2.0]), 1e-4)
+    got = yield call("hessian_fd", Fn("hessian_twin_vec"), (1, 2))
+    return _hessian_verdict(got, wanted, "hessian_fd(f, (1, 2)) for an f with the Hessian of x^2 + x y there")
 
 
 @CHECKS.check("hessian_fd", points=2)
@@ -162,6 +134,7 @@ def hessian_fd_random_points(ctx):
     plan = [("saddle3_vec", "tuple", None), ("rosenbrock_vec", "list", None), ("bowl_vec", "array", None),
             ("saddle3_vec", "array", 1e-3), ("rosenbrock_vec", "tuple", "h=1e-3"), ("saddle3_vec", "list", None)]
     cases = [(name, _point(rng, name), form, h) for name, form, h in plan]
+    wanted = [_hessian_expected(name, p, 1e-4 if h is None else 1e-3) for name, p, _, h in cases]
     calls = []
     for name, p, form, h in cases:
         args = (Fn(name), vector_form(p, form))
@@ -169,10 +142,9 @@ def hessian_fd_random_points(ctx):
                      call("hessian_fd", *args, h=1e-3) if isinstance(h, str) else call("hessian_fd", *args, h))
     got = yield calls
     verdicts = []
-    for g, (name, p, form, h) in zip(got, cases):
-        step = 1e-4 if h is None else 1e-3
+    for g, w, (name, p, form, h) in zip(got, wanted, cases):
         shown = "" if h is None else (", h=1e-3" if isinstance(h, str) else ", 0.001")
-        verdicts.append(_hessian_verdict(g, name, p, step, f"hessian_fd({name}, {_show(p)}{shown})"))
+        verdicts.append(_hessian_verdict(g, w, f"hessian_fd({name}, {_show(p)}{shown})"))
     return all_of(verdicts)
 
 
@@ -229,12 +201,6 @@ def with_eigenvalues(rng: np.random.Generator, eigenvalues) -> np.ndarray:
     return 0.5 * (m + m.T)
 
 
-def _matrix_form(m: np.ndarray, form: str):
-    if form == "tuple":
-        return tuple(tuple(float(v) for v in row) for row in m)
-    return m.tolist() if form == "list" else Array(m.tolist())
-
-
 def _classify_label(m: np.ndarray, eigenvalues=None) -> str:
     text = f"classify_critical_point({_mat(m)})"
     return text if eigenvalues is None else f"{text} (eigenvalues {', '.join(f'{v:.3g}' for v in eigenvalues)})"
@@ -243,8 +209,9 @@ def _classify_label(m: np.ndarray, eigenvalues=None) -> str:
 @CHECKS.check("classify_critical_point", points=1)
 def classify_worked_example(ctx):
     """classify_critical_point([[2, 1], [1, 0]]) is "saddle" (the Hessian of x^2 + x y)"""
-    got = yield call("classify_critical_point", [[2, 1], [1, 0]])
-    return expect_text(got, "saddle", label="classify_critical_point([[2, 1], [1, 0]])")
+    want = REF.classify_critical_point(np.array([[2.0, 1.0], [1.0, 0.0]]))
+    got = yield call("classify_critical_point", Array([[2, 1], [1, 0]], "int64"))
+    return expect_text(got, want, label="classify_critical_point(np.array([[2, 1], [1, 0]]))")
 
 
 @CHECKS.check("classify_critical_point", points=2)
@@ -260,9 +227,10 @@ def classify_all_kinds(ctx):
             ("degenerate", [*spread(2), 0.0], "list"), ("degenerate", [-spread(1)[0], 0.0, -spread(1)[0]], "array"),
             ("saddle", [spread(1)[0], 0.0, -spread(1)[0]], "tuple"), ("minimum", spread(2, 0.01, 0.1), "list"),
             ("maximum", [-v for v in spread(2, 20.0, 50.0)], "array")]
-    cases = [(kind, eig, with_eigenvalues(rng, eig), form) for kind, eig, form in plan]
-    got = yield [call("classify_critical_point", _matrix_form(m, form)) for _, _, m, form in cases]
-    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, (kind, eig, m, _) in zip(got, cases)])
+    cases = [(eig, with_eigenvalues(rng, eig)) for _, eig, _ in plan]
+    expected = [REF.classify_critical_point(m) for _, m in cases]
+    got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
+    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, kind, (eig, m) in zip(got, expected, cases)])
 
 
 @CHECKS.check("classify_critical_point", points=1)
@@ -272,9 +240,10 @@ def classify_zero_threshold(ctx):
     plan = [("degenerate", [0.5, 8e-9]), ("minimum", [0.5, 3e-8]), ("maximum", [-0.5, -3e-8]),
             ("degenerate", [-0.5, -8e-9, -0.3]), ("degenerate", [1e3, 5e-6]), ("minimum", [1e3, 3e-5]),
             ("degenerate", [1e3, -5e-6, 2.0]), ("saddle", [1e3, -3e-5])]
-    cases = [(kind, eig, with_eigenvalues(rng, eig)) for kind, eig in plan]
-    got = yield [call("classify_critical_point", Array(m.tolist())) for _, _, m in cases]
-    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, (kind, eig, m) in zip(got, cases)])
+    cases = [(eig, with_eigenvalues(rng, eig)) for _, eig in plan]
+    expected = [REF.classify_critical_point(m) for _, m in cases]
+    got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
+    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, kind, (eig, m) in zip(got, expected, cases)])
 
 
 @CHECKS.check("classify_critical_point", points=1)
@@ -288,9 +257,10 @@ def classify_symmetrises_its_input(ctx):
              ("minimum", np.array([[2.0, 3.0], [-3.0, 2.0]])),  # symmetric part 2 I
              ("maximum", np.array([[-1.0, 2.0], [-2.0, -1.0]])),  # symmetric part -I
              ("degenerate", symmetric + skew)]
-    got = yield [call("classify_critical_point", m.tolist()) for _, m in cases]
+    expected = [REF.classify_critical_point(m) for _, m in cases]
+    got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
     verdicts = []
-    for g, (kind, m) in zip(got, cases):
+    for g, kind, (_, m) in zip(got, expected, cases):
         sym = 0.5 * (m + m.T)
         v = expect_text(g, kind, label=_classify_label(m))
         if not v.passed and g.ok:

@@ -102,15 +102,15 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
 
     def vs_reference(ctx: Context):
         cases = d.cases(ctx.rng)
+        expected = [central_difference(lambda p: d.reference_forward(p, case[1]), case[0]) for case in cases]
         got = yield [call(d.jacobian, *d.args(*case)) for case in cases]
         verdicts = []
-        for case, returned in zip(cases, got):
-            expected = central_difference(lambda p: d.reference_forward(p, case[1]), case[0])
+        for case, returned, want in zip(cases, got, expected):
             label = d.label(d.jacobian, case)
-            problem = value_problem(returned, expected.shape, label)
+            problem = value_problem(returned, want.shape, label)
             if problem:
-                return Verdict(False, problem, expected)
-            v = compare_arrays(returned.as_array(), expected, label=label, rtol=FD_RTOL, atol=FD_ATOL,
+                return Verdict(False, problem, want)
+            v = compare_arrays(returned.as_array(), want, label=label, rtol=FD_RTOL, atol=FD_ATOL,
                                entries=d.entries, expected_name="expected")
             if not v.passed:
                 v.message = f"{v.message}\n  (wrong in {_columns_text(v.details['wrong'], d.entries)})"
@@ -122,6 +122,7 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
 
     def vs_own(ctx: Context):
         cases = d.cases(ctx.rng)
+        forward_values = [np.asarray(d.reference_forward(point, extra), float) for point, extra in cases]
         wanted = []
         for point, extra in cases:
             h = steps(point)
@@ -135,9 +136,8 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
                            "at": d.forward_call(point, extra), "plus": plus, "minus": minus})
         got = yield wanted
         verdicts = []
-        for (point, extra), g in zip(cases, got):
+        for (point, extra), g, forward_out in zip(cases, got, forward_values):
             label = d.label(d.jacobian, (point, extra))
-            forward_out = np.asarray(d.reference_forward(point, extra), float)
             problem = value_problem(g["jac"], forward_out.shape + (point.size,), label)
             if problem:  # the derivative itself gives no value: its own failure, whatever the forward map does
                 return Verdict(False, problem)

@@ -195,10 +195,7 @@ def _draw_jacobian_circle(ax, jac, ok, center, radius, image=None):
 def _draw_ch03(ax, d):
     ok = d["learner"] is not None
     r, t, rad = d["r"], d["theta"], d["radius"]
-    angles = np.linspace(0, 2 * np.pi, 100)
-    image = np.array([[(r + rad * np.cos(a)) * np.cos(t + rad * np.sin(a)),
-                       (r + rad * np.cos(a)) * np.sin(t + rad * np.sin(a))] for a in angles])
-    _draw_jacobian_circle(ax, d["learner"] if ok else d["reference"], ok, d["center"], rad, image)
+    _draw_jacobian_circle(ax, d["learner"] if ok else d["reference"], ok, d["center"], rad, d["image"])
     ax.set(title="A small (r, theta) circle mapped to (x, y)")
     return ok, f"A circle of radius {rad} around (r, theta) = ({r}, {t}) mapped by the polar map (black) and by J " \
                "(dashed); " + _whose(ok, "polar_to_cartesian_jacobian")
@@ -256,13 +253,13 @@ def _draw_ch08(fig, d):
     for ax, name, title in zip(axes, ("far", "close"), ("far: (3, 4)", "close: (0.3, 0.2)")):
         case = d[name]
         z = np.array(case["z"])
-        ax.plot(z[:, 0], z[:, 1], ".", ms=2, color="#9ca3af" if case["samples_are_reference"] else LEARNER)
+        ax.plot(z[:, 0], z[:, 1], ".", ms=2, color="#9ca3af" if case["z_is_reference"] else LEARNER)
         cov_ok = case["cov"] is not None
         _ellipse(ax, case["center"], case["cov"] if cov_ok else case["cov_ref"], color=REFERENCE if not cov_ok else "black")
-        ok = ok and cov_ok and not case["samples_are_reference"]
+        ok = ok and cov_ok and not case["z_is_reference"]
         ax.set(xlabel="range", ylabel="bearing", title=title)
     return ok, "Monte Carlo measurement clouds with the 2-sigma linearized ellipse, far from and close to the dish; " \
-        + _whose(ok, "sample_positions and linearized_measurement_cov")
+        + _whose(ok, "measure_samples and linearized_measurement_cov")
 
 
 def _draw_ch09(ax, d):
@@ -274,7 +271,7 @@ def _draw_ch09(ax, d):
     ax.contour(X, Y, Q, levels=12, cmap="coolwarm")
     kind = d["kind"] or d["kind_ref"]
     ax.set(aspect="equal", title=f"Quadratic model from the Hessian: {kind}")
-    return ok, "Contours of the quadratic model 0.5 v^T H v of x^2 + xy with H from " + \
+    return ok, "Contours of the quadratic model 0.5 v^T H v with H at (1, 2) from " + \
         ("your hessian_fd" if ok else "the reference (your hessian_fd gave no usable value)") + \
         f"; your classify_critical_point says: {d['kind'] or 'nothing usable'}"
 
