@@ -27,7 +27,8 @@ def gradient_fd(f, x, h=1e-5):
 def hessian_fd(f, x, h=1e-4):
     """The n x n Hessian of f as the Jacobian of its gradient, symmetrised.
 
-    Formula: H = jacobian_fd(lambda v: gradient_fd(f, v, h), x, h), then (H + H^T) / 2.
+    Idea: the Hessian is the Jacobian of the gradient: difference your gradient_fd the way chapter 5's
+    jacobian_fd differences a vector function (both with step h), then symmetrise, (H + H^T) / 2.
     Arguments: f a scalar function of one vector; x a vector; h the step.
     Returns: a numpy array of shape (n, n), symmetric.
     Example: hessian_fd(lambda v: v[0]**2 + v[0]*v[1], (1, 2)) -> [[2, 1], [1, 0]]

@@ -56,7 +56,7 @@ def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
     for path in sorted(folder.iterdir()):
         if path.name.startswith("."):
             continue
-        if path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip"):
+        if path.is_symlink() or path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip"):
             stem = path.stem if path.is_file() else path.name
             learner = SAFE_ID.sub("_", names.get(path.name) or names.get(stem) or stem)
             taken = {e.learner for e in entries}
@@ -85,18 +85,24 @@ def stage(entry: Entry, staging: Path) -> Path:
     package = root / "exercises"
     files: dict[str, bytes] = {"__init__.py": b""}
     total = 0
+    if entry.source.is_symlink():
+        raise StagingError("is a symbolic link; a submission is a real folder or .zip file (links are never "
+                           "followed: one could point at the references)")
     if entry.source.is_dir():
-        for path in sorted(entry.source.rglob("*")):
-            if path.is_symlink() or not path.is_file():
-                continue
-            target = _wanted(str(path.relative_to(entry.source)))
-            if target is None:
-                continue
-            size = path.stat().st_size
-            if size > MAX_FILE_BYTES:
-                raise StagingError(f"{path.name} is {size} bytes; at most {MAX_FILE_BYTES} are read")
-            files[target] = path.read_bytes()
-            total += size
+        for folder, subfolders, names in os.walk(entry.source):  # never into a symlinked folder
+            subfolders.sort()
+            for name in sorted(names):
+                path = Path(folder) / name
+                if path.is_symlink() or not path.is_file():
+                    continue
+                target = _wanted(str(path.relative_to(entry.source)))
+                if target is None:
+                    continue
+                size = path.stat().st_size
+                if size > MAX_FILE_BYTES:
+                    raise StagingError(f"{path.name} is {size} bytes; at most {MAX_FILE_BYTES} are read")
+                files[target] = path.read_bytes()
+                total += size
     else:
         try:
             archive = zipfile.ZipFile(entry.source)
@@ -175,8 +181,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
 
     A submission whose staged files hash as at its last grading is not graded again."""
     from grader.forkserver import ForkServer
-    from grader.grading import grade
-    from grader.quiz import add_quiz_results
+    from grader.pipeline import Request, build_report
     from grader.render import lms
     from grader.runner import Limits, Session
     from grader.submission import Submission
@@ -202,9 +207,8 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         else:  # one fork server per worker; it sees no learner's files, they come with each request
             _worker_state["launcher"] = ForkServer(sandbox).start
     submission = Submission(root, "exercises")
-    report = grade(Session(submission, Limits(**limits), launcher=_worker_state["launcher"]), chapters, seed=seed,
-                   with_plots=plots, submission_label=learner)
-    add_quiz_results(report, submission.root, submission.package, learner)
+    session = Session(submission, Limits(**limits), launcher=_worker_state["launcher"])
+    report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots, label=learner))
     data = report.to_dict()
     data["batch"] = {"hash": digest, "seconds": round(time.monotonic() - started, 3),
                      "learner_output": report.learner_output[:4000]}

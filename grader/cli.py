@@ -85,7 +85,8 @@ def chapter_and_submission_options(command):
 
 @main.command("run")
 @chapter_and_submission_options
-@click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
+@click.option("--seed", type=int, default=None,
+              help="Seed for the random test inputs (default: the public seed; a handout grades only at it).")
 @click.option("-v", "--verbose", is_flag=True, help="Show tracebacks and what your code printed.")
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers "
               "(default: exercises/answers/learner.yaml, else 'anonymous').")
@@ -98,6 +99,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
                 no_quiz: bool, no_sandbox: bool, html_path: str | None) -> None:
     """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
     picked = chapters_from(chapters)
+    seed = _seed_here(seed)
     submission = find_submission(submission_dir, use_solutions)
     # the child may already run (grader.launch); else start it now, to overlap our imports below
     session = launch.take(submission)
@@ -118,22 +120,45 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.render.html import preload
 
         threading.Thread(target=preload, daemon=True).start()
-    try:
-        from grader.grading import DEFAULT_SEED, grade
+    from grader.pipeline import Request, build_report
 
-        report = grade(session, [c.id for c in picked], seed=DEFAULT_SEED if seed is None else seed,
-                       with_plots=html_path is not None)
+    try:
+        report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
+                                               plots=html_path is not None))
     finally:
         session.close()
-    if not no_quiz:
-        from grader.quiz import add_quiz_results
-
-        add_quiz_results(report, submission.root, submission.package, learner)
     if html_path is not None:
         from grader.render import html
 
         write_atomically(html_path, html.render(report))
     _emit(report, output_format, verbose)
+
+
+def _seed_here(seed: int | None) -> int:
+    """The seed to grade at: the public one unless given; a handout has check data for that one only."""
+    from grader import course
+
+    public = course.PUBLIC_SEED
+    if seed is None or seed == public:
+        return public
+    if course.in_handout():
+        raise click.BadParameter(f"this handout grades at its public seed ({public}) only: its expected "
+                                 "values were recorded there; other seeds are used when your submission is graded",
+                                 param_hint="--seed")
+    return seed
+
+
+def _instructor_course(config: str | None, command: str):
+    """The instructor's course configuration; a usage error in a handout or for a broken file."""
+    from grader import course
+
+    if course.in_handout():
+        raise click.UsageError(f"{command} runs on the instructor's side, with the references; this is a learner's "
+                               "handout")
+    try:
+        return course.current(config)
+    except course.CourseError as exc:
+        raise click.BadParameter(str(exc), param_hint="--course") from None
 
 
 def _preload_quiz() -> None:
@@ -168,18 +193,28 @@ def _emit(report, output_format: str, verbose: bool) -> None:
 
 
 @main.command("list")
-def list_command() -> None:
+@click.option("--checks", "show_checks", is_flag=True, help="Also every check's id, points and what it checks.")
+def list_command(show_checks: bool) -> None:
     """List the chapters, their functions and points."""
-    from grader import checks
+    from grader import checks, course
+    from grader.pipeline import hidden_ids
 
+    the_course = course.current() if course.in_handout() else course.Course()
     for info in CHAPTERS:
         chapter = checks.load(info.id)
-        click.echo(f"{info.id}  {info.title}  ({chapter.max_score:g} points)  exercises/{info.module}.py")
+        hidden = hidden_ids(the_course, (info.id,))
+        here = [c for c in chapter.checks if f"{info.id}/{c.id}" not in hidden]
+        total = sum(c.points for c in here)
+        extra = f" + {sum(c.points for c in chapter.checks) - total:g} in hidden checks" if hidden else ""
+        click.echo(f"{info.id}  {info.title}  ({total:g} points{extra})  exercises/{info.module}.py")
         functions: dict[str, float] = {}
-        for check in chapter.checks:
+        for check in here:
             functions[check.function] = functions.get(check.function, 0) + check.points
         for function, points in functions.items():
             click.echo(f"    {function:<28} {points:g} points")
+            if show_checks:
+                for check in (c for c in here if c.function == function):
+                    click.echo(f"        {check.id:<44} {check.points:g}  {check.description}")
 
 
 @main.command("quiz")
@@ -203,6 +238,26 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     _emit(report, output_format, verbose=False)
 
 
+@main.command("release")
+@click.argument("out", type=click.Path(file_okay=False))
+@click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="The course configuration (default: solutions/course.yaml beside the references).")
+@click.option("--force", is_flag=True, help="Replace what OUT holds.")
+def release_command(out: str, course_file: str | None, force: bool) -> None:
+    """Build the learners' handout in OUT: stubs, answer templates, the grader as a wheel and a README;
+    no reference solution, quiz key or reference answer in any of it."""
+    from pathlib import Path
+
+    from grader import release
+
+    the_course = _instructor_course(course_file, "grade release")
+    try:
+        built = release.build(Path(out), the_course, force=force)
+    except release.ReleaseError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(release.describe(built))
+
+
 @main.command("batch")
 @click.argument("submissions", type=click.Path(exists=True, file_okay=False))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Output folder.")
@@ -210,23 +265,27 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
               help="CSV with columns submission,learner mapping folder/zip names to learner ids.")
 @click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
 @click.option("--jobs", type=int, default=None, help="Parallel workers (default: all cores).")
-@click.option("--seed", type=int, default=None, help="Seed for the random test inputs (default fixed).")
+@click.option("--seed", type=int, default=None,
+              help="Seed for the random test inputs (default: the course seed of solutions/course.yaml).")
+@click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="The course configuration (default: solutions/course.yaml beside the references).")
 @click.option("--no-html", is_flag=True, help="Skip the per-learner report.html.")
 @click.option("--plots", is_flag=True, help="Draw plots in each report.html (about 2 s per learner).")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
-                  seed: int | None, no_html: bool, plots: bool) -> None:
-    """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports."""
+                  seed: int | None, course_file: str | None, no_html: bool, plots: bool) -> None:
+    """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
+    at the course seed, hidden checks included."""
     from pathlib import Path
 
     from grader.batch import progress_bar, run_batch
-    from grader.grading import DEFAULT_SEED
     from grader.sandbox import Sandbox
 
     picked = chapters_from(tuple(chapter_list.split(",")))
+    the_course = _instructor_course(course_file, "grade batch")
     click.echo(Sandbox().describe(), err=True)
     result = run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
                        roster=Path(roster) if roster else None, jobs=jobs,
-                       seed=DEFAULT_SEED if seed is None else seed, html=not no_html, plots=plots,
+                       seed=the_course.grading_seed if seed is None else seed, html=not no_html, plots=plots,
                        progress=progress_bar())
     counts = ", ".join(f"{n} {status}" for status, n in sorted(result["counts"].items()))
     click.echo(f"{len(result['statuses'])} submissions: {counts}; graded {result['graded_now']} in "

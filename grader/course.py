@@ -14,7 +14,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-PUBLIC_SEED = 20261122  # the seed of `grade chNN` at home; the handout's check data is recorded at it
+PUBLIC_SEED = 20261122  # the seed of `grade chNN`, at home and in the project; a handout's data is recorded at it
 QUIZ_FEEDBACK = ("recorded", "immediate")
 DATA_DIR = Path(__file__).resolve().parent / "data"
 HANDOUT_FILE = DATA_DIR / "handout.json"
@@ -94,7 +94,7 @@ def _from_handout(path: Path) -> Course:
         raise CourseError(f"{path}: the handout's course data cannot be read ({exc}); reinstall the handout") from None
 
 
-_FIELDS = {"course", "seed", "public_seed", "quiz_feedback", "hidden"}
+_FIELDS = {"course", "seed", "quiz_feedback", "hidden"}
 
 
 def _from_yaml(path: Path) -> Course:
@@ -123,12 +123,12 @@ def _from_yaml(path: Path) -> Course:
         raise CourseError(f"{path}: hidden is a list of chapter/check ids, e.g. [ch06/H_rows_orthogonal]")
     try:
         seed = None if data.get("seed") is None else int(data["seed"])
-        public_seed = int(data.get("public_seed", PUBLIC_SEED))
     except (TypeError, ValueError):
-        raise CourseError(f"{path}: seed and public_seed are whole numbers") from None
-    if seed is not None and seed == public_seed:
-        raise CourseError(f"{path}: the course seed equals the public seed; hard-coded public values would pass")
-    return Course(id=str(data.get("course", Course.id)), public_seed=public_seed, seed=seed,
+        raise CourseError(f"{path}: seed is a whole number") from None
+    if seed == PUBLIC_SEED:
+        raise CourseError(f"{path}: the course seed equals the public seed {PUBLIC_SEED}; hard-coded public values "
+                          "would pass")
+    return Course(id=str(data.get("course", Course.id)), seed=seed,
                   quiz_feedback=feedback, hidden=frozenset(hidden), source=str(path))
 
 

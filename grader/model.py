@@ -70,10 +70,14 @@ class ChapterResult:
     def max_score_of(self, kind: str | None = None) -> float:
         return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
 
-    def pending_score_of(self, kind: str | None = None) -> float:
-        """Points not judged here: recorded quiz answers (and hidden checks, for kind None or 'code')."""
-        recorded = sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted)
-        return _round(recorded + (self.hidden_points if kind in (None, "code") else 0.0))
+    def recorded_score_of(self, kind: str | None = None) -> float:
+        """The points of answers recorded here and graded on submission."""
+        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted))
+
+    @property
+    def pending_score(self) -> float:
+        """Points not judged here: recorded quiz answers and hidden checks."""
+        return _round(self.recorded_score_of() + self.hidden_points)
 
     @property
     def score(self) -> float:
@@ -93,7 +97,7 @@ class ChapterResult:
             "code_max_score": self.max_score_of("code"),
             "quiz_score": self.score_of("quiz"),
             "quiz_max_score": self.max_score_of("quiz"),
-            "pending_score": self.pending_score_of(),
+            "pending_score": self.pending_score,
             "hidden_checks": self.hidden_checks,
             "hidden_points": _round(self.hidden_points),
             "problems": list(self.problems),
@@ -120,7 +124,7 @@ class Report:
     @property
     def pending_score(self) -> float:
         """Points that are graded on submission, not here (hidden checks, recorded quiz answers)."""
-        return _round(sum(c.pending_score_of() for c in self.chapters))
+        return _round(sum(c.pending_score for c in self.chapters))
 
     @property
     def all_passed(self) -> bool:

@@ -201,9 +201,11 @@ class Sandbox:
 
     def arguments(self) -> list[str]:
         """bwrap's arguments: the allow-list of read-only binds, then the private, writable /tmp."""
-        args: list[str] = []
+        # /tmp first: the interpreter or its packages may live under it (a venv in /tmp) and are bound in below
+        args: list[str] = ["--dev", "/dev", "--proc", "/proc", "--perms", "01777", "--size", str(TMP_SIZE),
+                           "--tmpfs", "/tmp"]
         bound: list[str] = []
-        made: set[str] = {"/"}
+        made: set[str] = {"/", "/tmp"}
 
         def parents(path: str) -> None:
             """Make the folders above `path` traversable (bwrap would make them 0700)."""
@@ -243,9 +245,7 @@ class Sandbox:
             args.extend(["--ro-bind", path, path])
         for folder in masked:
             args.extend(["--remount-ro", folder])
-        args.extend(["--dev", "/dev", "--proc", "/proc",
-                     "--perms", "01777", "--size", str(TMP_SIZE), "--tmpfs", "/tmp",
-                     "--remount-ro", "/",
+        args.extend(["--remount-ro", "/",
                      "--setenv", "HOME", "/tmp",
                      "--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
                      "--die-with-parent", "--new-session", "--chdir", "/tmp"])

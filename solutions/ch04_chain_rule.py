@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solutions.ch03_jacobian import polar_to_cartesian, polar_to_cartesian_jacobian
+from .ch03_jacobian import polar_to_cartesian, polar_to_cartesian_jacobian
 
 
 def g_stage(u) -> np.ndarray:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solutions.ch06_measurement import H_jacobian, range_bearing
+from .ch06_measurement import H_jacobian, range_bearing
 
 
 def sample_positions(mean, sigma, n, rng) -> np.ndarray:

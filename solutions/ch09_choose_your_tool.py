@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from solutions.ch05_finite_differences import jacobian_fd
+from .ch05_finite_differences import jacobian_fd
 
 
 def gradient_fd(f, x, h=1e-5) -> np.ndarray:

@@ -61,7 +61,7 @@ def test_well_formed_answers_are_recorded_with_their_points_pending(tmp_path, ha
         assert result.got == WELL_FORMED[question.id] and result.expected is None
     chapter = ChapterResult("ch06", "", list(results.values()))
     assert chapter.max_score_of("quiz") == 0
-    assert chapter.pending_score_of("quiz") == sum(q.points for q in bank.questions("ch06"))
+    assert chapter.recorded_score_of("quiz") == sum(q.points for q in bank.questions("ch06"))
 
 
 @pytest.mark.parametrize("qid, answer, reason", [

@@ -177,7 +177,7 @@ def planar_point(rng: np.random.Generator, r_min: float = 0.8, r_max: float = 4.
     """A point (x, y) with r in [r_min, r_max] and its angle away from the axes and diagonals."""
     r = rng.uniform(r_min, r_max)
     theta = angle(rng)
-    return np.array([r * np.cos(theta), r * np.sin(theta)])
+    return r * np.array([np.cos(theta), np.sin(theta)])  # r times the unit vector at angle theta
 
 
 def polar_point(rng: np.random.Generator, r_max: float = 5.0) -> np.ndarray:

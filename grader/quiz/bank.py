@@ -162,10 +162,13 @@ def _questions(chapter: str, quiz_dir: Path) -> list[Question]:
     return out
 
 
+KEY_FOLDERS = ("keys", "practice")  # the instructor's keys; the practice keys an immediate-feedback handout ships
+
+
 @functools.lru_cache(maxsize=32)
 def _raw_keys(chapter: str, quiz_dir: Path) -> dict | None:
-    path = quiz_dir / "keys" / f"{chapter}.yaml"
-    if not path.exists():
+    path = next((p for p in (quiz_dir / f / f"{chapter}.yaml" for f in KEY_FOLDERS) if p.exists()), None)
+    if path is None:
         return None
     data = _load(path) or {}
     if not isinstance(data, dict):

@@ -31,9 +31,9 @@ h1{font-size:1.6em;margin:.2em 0}h2{margin:1.6em 0 .4em;border-bottom:2px solid 
 table{border-collapse:collapse;margin:.5em 0}td,th{padding:4px 10px;border-bottom:1px solid #e5e7eb;text-align:left}
 .summary td.num,.summary th.num{text-align:right;font-variant-numeric:tabular-nums}
 .check{background:#fff;border:1px solid #e5e7eb;border-left:5px solid #9ca3af;border-radius:6px;padding:8px 12px;margin:8px 0}
-.pass{border-left-color:#16a34a}.fail{border-left-color:#dc2626}.error{border-left-color:#9333ea}.skip{border-left-color:#ca8a04}
+.pass{border-left-color:#16a34a}.fail{border-left-color:#dc2626}.error{border-left-color:#9333ea}.skip{border-left-color:#ca8a04}.recorded{border-left-color:#0e7490}
 .status{font-weight:700;text-transform:uppercase;font-size:.8em;margin-right:.6em}
-.pass .status{color:#16a34a}.fail .status{color:#dc2626}.error .status{color:#9333ea}.skip .status{color:#ca8a04}
+.pass .status{color:#16a34a}.fail .status{color:#dc2626}.error .status{color:#9333ea}.skip .status{color:#ca8a04}.recorded .status{color:#0e7490}
 .points{float:right;color:#6b7280}
 pre{white-space:pre-wrap;background:#f3f4f6;padding:6px 8px;border-radius:4px;font-size:.9em;margin:.4em 0}
 table.matrix td{border:1px solid #d1d5db;font-family:ui-monospace,monospace;text-align:right}
@@ -54,14 +54,16 @@ figure img{max-width:100%;height:auto}figcaption{color:#374151;font-size:.9em}
 <td class="num" data-quiz="{{ ch.chapter }}">{{ num(ch.score_of('quiz')) }} / {{ num(ch.max_score_of('quiz')) }}</td>
 <td class="num" data-total="{{ ch.chapter }}">{{ num(ch.score) }} / {{ num(ch.max_score) }}</td></tr>{% endfor %}
 <tr><th colspan="4">Total</th><th class="num" id="total">{{ num(report.score) }} / {{ num(report.max_score) }}</th></tr></table>
+<p id="verdict">{{ verdict }}</p>
 </section>
 {% for ch in report.chapters %}
 <section class="chapter" id="{{ ch.chapter }}"><h2>{{ ch.chapter }} &middot; {{ ch.title }}</h2>
 {% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
+{% if ch.hidden_checks %}<p class="note">{{ ch.hidden_checks }} hidden check(s) ({{ num(ch.hidden_points) }} points) run when you submit.</p>{% endif %}
 {% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
 <figcaption>{{ fig.caption }}</figcaption></figure>{% endfor %}
 {% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
-{% if checks %}<h3>{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}</h3>
+{% if checks %}<h3>{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h3>
 {% for c in checks %}<div class="check {{ c.status.value }}"><span class="status">{{ c.status.value }}</span>{{ c.description }}
 <span class="points">{{ num(c.points) }} / {{ num(c.max_points) }}</span>
 {% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
@@ -339,7 +341,10 @@ def _template():
 
 def render(report: Report) -> str:
     """The report as one self-contained HTML page."""
-    return _template().render(report=report, figures=_all_figures(report), num=_num, values=_values)
+    from grader.render.text import verdict_line
+
+    return _template().render(report=report, figures=_all_figures(report), num=_num, values=_values,
+                              verdict=verdict_line(report))
 
 
 def _all_figures(report: Report) -> dict[str, list[_Figure]]:

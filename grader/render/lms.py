@@ -33,11 +33,12 @@ def junit(reports: list[tuple[str, Report]]) -> str:
         suite = ElementTree.SubElement(suites, "testsuite", name=learner, tests=str(len(checks)),
                                        failures=str(sum(c.status == Status.FAIL for _, c in checks)),
                                        errors=str(sum(c.status == Status.ERROR for _, c in checks)),
-                                       skipped=str(sum(c.status == Status.SKIP for _, c in checks)))
+                                       skipped=str(sum(c.status in (Status.SKIP, Status.RECORDED) for _, c in checks)))
         for chapter, check in checks:
             case = ElementTree.SubElement(suite, "testcase", classname=f"{learner}.{chapter.chapter}",
                                           name=f"{check.kind}:{check.id}")
-            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped"}.get(check.status)
+            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
+                   Status.RECORDED: "skipped"}.get(check.status)
             if tag:
                 ElementTree.SubElement(case, tag, message=check.message.splitlines()[0][:200] if check.message else "")
     return ElementTree.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"

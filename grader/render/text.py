@@ -7,8 +7,9 @@ import click
 from grader.model import CheckResult, Report, Status
 
 _MARKS = {Status.PASS: ("✓", "PASS"), Status.FAIL: ("✗", "FAIL"), Status.ERROR: ("!", "ERR "),
-          Status.SKIP: ("-", "SKIP")}
-_COLOURS = {Status.PASS: "green", Status.FAIL: "red", Status.ERROR: "magenta", Status.SKIP: "yellow"}
+          Status.SKIP: ("-", "SKIP"), Status.RECORDED: ("•", "REC ")}
+_COLOURS = {Status.PASS: "green", Status.FAIL: "red", Status.ERROR: "magenta", Status.SKIP: "yellow",
+            Status.RECORDED: "cyan"}
 
 
 def _points(value: float) -> str:
@@ -24,15 +25,36 @@ def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose:
     mark = click.style(_mark(check.status, unicode_ok), fg=_COLOURS[check.status], bold=True) if colour \
         else _mark(check.status, unicode_ok)
     label = "quiz " if check.kind == "quiz" else ""
-    line = f"  {mark} [{_points(check.points)}/{_points(check.max_points)}] {label}{check.description}"
+    points = f"{_points(check.max_points)} pending" if check.status == Status.RECORDED else \
+        f"{_points(check.points)}/{_points(check.max_points)}"
+    line = f"  {mark} [{points}] {label}{check.description}"
     lines = [line]
-    if check.status != Status.PASS and check.message:
+    if check.status not in (Status.PASS, Status.RECORDED) and check.message:
         for text in check.message.splitlines():
             lines.append(f"      {text}")
         trace = check.details.get("traceback")
         if trace and verbose:
             lines.extend(f"      | {t}" for t in trace.splitlines())
     return lines
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _pending_note(points: float, what: str) -> str:
+    return f" (+{_points(points)} points {what})" if points > 0 else ""
+
+
+def verdict_line(report: Report) -> str:
+    """One line that claims no more than was checked: with hidden checks or recorded answers, only
+    the public checks can be said to pass."""
+    if not report.all_passed:
+        return "Not all checks pass yet: see the marks above."
+    if report.pending_score > 0:
+        return (f"All public checks pass; {_points(report.pending_score)} more points are graded when you submit "
+                "(hidden checks, recorded quiz answers).")
+    return "All checks pass."
 
 
 def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, verbose: bool = False) -> str:
@@ -50,13 +72,20 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
             if not checks:
                 continue
             if any(c.kind == "quiz" for c in chapter.checks):
-                out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}")
+                out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}"
+                           + _pending_note(chapter.recorded_score_of(kind), "recorded, graded when you submit"))
             for check in checks:
                 out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose))
-        out.append(f"  {chapter.chapter} total: {_points(chapter.score)}/{_points(chapter.max_score)}")
+        if chapter.hidden_checks:
+            out.append(f"  + {_count(chapter.hidden_checks, 'hidden check')} ({_points(chapter.hidden_points)} points) "
+                       "run when you submit")
+        out.append(f"  {chapter.chapter} total: {_points(chapter.score)}/{_points(chapter.max_score)}"
+                   + _pending_note(chapter.pending_score, "graded when you submit"))
         out.append("")
     if len(report.chapters) > 1:
-        out.append(f"Total: {_points(report.score)}/{_points(report.max_score)}")
+        out.append(f"Total: {_points(report.score)}/{_points(report.max_score)}"
+                   + _pending_note(report.pending_score, "graded when you submit"))
+    out.append(verdict_line(report))
     if verbose and report.learner_output.strip():
         out.append("What your code printed while it was graded:")
         out.extend(f"  | {line}" for line in report.learner_output.splitlines()[:50])

@@ -1,0 +1,53 @@
+"""One pipeline builds a report: `grade chNN`, `grade batch`, the release's checks and LMS runners all
+call `build_report`, so a submission gets the same verdicts wherever it is graded.
+
+Code checks run in the session's child (grader.grading), then the quiz answers are judged (no learner
+code: YAML only), then what the course hides is accounted for: on the instructor's side hidden
+checks run like any other; in a handout they are not there, and each chapter says how many checks
+and points are graded on submission instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from grader import course as courses
+from grader.model import Report
+from grader.runner import Session
+
+
+@dataclass(frozen=True)
+class Request:
+    """What to grade, and how."""
+
+    chapters: tuple[str, ...]
+    seed: int
+    learner: str | None = None  # whose per-learner quiz numbers (None: learner.yaml, else 'anonymous')
+    quiz: bool = True
+    plots: bool = False  # gather the HTML report's plot data in the same round trip
+    label: str | None = None  # how the report names the submission (default: its folder)
+
+
+def hidden_ids(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[str]:
+    """The "chNN/check_id" of checks this grader must not run: in a handout, those it does not have."""
+    if not course.in_handout:
+        return frozenset()
+    hidden = course.handout.get("hidden", {})
+    return frozenset(f"{c}/{i}" for c in chapters for i in hidden.get(c, {}).get("ids", []))
+
+
+def build_report(session: Session, request: Request, course: courses.Course | None = None) -> Report:
+    """Grade `request.chapters` of the session's submission into one Report (closes the session)."""
+    from grader.grading import grade
+
+    course = course or courses.current()
+    report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
+                   submission_label=request.label, exclude=hidden_ids(course, request.chapters))
+    for chapter in report.chapters:
+        chapter.hidden_checks, chapter.hidden_points = course.hidden_in(chapter.chapter)
+    if request.quiz:
+        from grader.quiz import add_quiz_results
+
+        submission = session.submission
+        add_quiz_results(report, submission.root, submission.package, request.learner)
+    return report

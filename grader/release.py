@@ -1,0 +1,404 @@
+"""`grade release OUT`: the learners' handout, which grades at home and holds no answer.
+
+OUT gets the stubs and answer templates (`exercises/`), the grader as a wheel and a README for
+learners. The wheel is the grader package as it is, minus nothing it needs and plus what replaces
+the references: the expected value of every question the checks (and the report's plots) ask,
+recorded at the public seed (grader/data/expected/chNN.json, see grader.expected), the question
+banks, and the course's public settings (grader/data/handout.json: public seed, quiz feedback,
+which checks are hidden). Reference solutions, the oracle, quiz keys (but practice keys of an
+immediate-feedback course), reference answers and the course seed never enter it; `scan` checks
+every file and every wheel member for their text before the release is called done.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from grader import course as courses
+from grader import expected
+from grader.chapters import CHAPTERS
+
+GRADER_DIR = Path(__file__).resolve().parent
+DISTRIBUTION = "jacobians-grader"
+DEPENDENCIES = ["numpy>=1.24", "click>=8.1", "pyyaml>=6.0", "sympy>=1.12", "jinja2>=3.1", "matplotlib>=3.7"]
+
+
+class ReleaseError(RuntimeError):
+    """The release cannot be built, or would hold an answer; the message says which and where."""
+
+
+@dataclass
+class Release:
+    folder: Path
+    wheel: Path
+    version: str
+    hidden: dict = field(default_factory=dict)
+
+
+# ------------------------------------------------------------------------------ what replaces the references
+
+def record(course: courses.Course) -> expected.Recording:
+    """Plan every public check and plot of every chapter at the public seed with the live references,
+    keeping each expected value they ask for (no learner code runs: planning needs none)."""
+    from grader import checks as check_registry
+    from grader.grading import ChapterPlan, _plots
+
+    recording = expected.Recording(seed=course.public_seed)
+    broken = []
+    with expected.using(recording):
+        for info in CHAPTERS:
+            chapter = check_registry.load(info.id)
+            exclude = frozenset(f"{info.id}/{i}" for i in _hidden_ids(course, info.id))
+            plan = ChapterPlan(chapter, course.public_seed, _plots(info.id), exclude)
+            broken += [f"{info.id} {name}: {p.unavailable or p.setup_error}"
+                       for name, p in [(c.id, p) for c, p in plan.pending] + plan.plot_pending if p.generator is None]
+    if broken:
+        raise ReleaseError("checks could not be planned with the references:\n" + "\n".join(broken))
+    return recording
+
+
+def _hidden_ids(course: courses.Course, chapter: str) -> list[str]:
+    from grader import checks as check_registry
+
+    known = {c.id for c in check_registry.load(chapter).checks}
+    return [h.split("/", 1)[1] for h in sorted(course.hidden) if h.split("/", 1)[0] == chapter
+            and h.split("/", 1)[1] in known]
+
+
+def hidden_summary(course: courses.Course) -> dict:
+    """Per chapter: how many checks and points the handout leaves to the submission, and their ids."""
+    from grader import checks as check_registry
+
+    unknown = sorted(h for h in course.hidden
+                     if h.split("/", 1)[0] not in {c.id for c in CHAPTERS}
+                     or h.split("/", 1)[1] not in {c.id for c in check_registry.load(h.split("/", 1)[0]).checks})
+    if unknown:
+        raise ReleaseError(f"{course.source}: hidden names checks that do not exist: {', '.join(unknown)} "
+                           "(`grade list --checks` shows the ids)")
+    out = {}
+    for info in CHAPTERS:
+        ids = _hidden_ids(course, info.id)
+        if ids:
+            points = sum(c.points for c in check_registry.load(info.id).checks if c.id in ids)
+            out[info.id] = {"checks": len(ids), "points": points, "ids": ids}
+    return out
+
+
+# ------------------------------------------------------------------------------ the handout
+
+def _project_exercises() -> Path:
+    """The stubs to hand out: exercises/ of the checkout this grader runs from, or of the current folder."""
+    for candidate in (GRADER_DIR.parent / "exercises", Path.cwd() / "exercises"):
+        if (candidate / "ch06_measurement.py").is_file():
+            return candidate
+    raise ReleaseError("no exercises/ folder with the stubs beside the grader or in the current folder; run "
+                       "`grade release` in the lesson's project")
+
+
+def _copy_grader(stage: Path) -> None:
+    def ignore(folder: str, names: list[str]) -> set[str]:
+        skip = {n for n in names if n == "__pycache__" or n.endswith((".pyc", ".pyo"))}
+        if Path(folder).resolve() == GRADER_DIR:
+            skip |= {"data", "quizzes"} & set(names)  # written fresh below
+        return skip
+
+    shutil.copytree(GRADER_DIR, stage / "grader", ignore=ignore)
+
+
+def _write_banks(stage: Path, course: courses.Course) -> None:
+    import yaml
+
+    from grader.quiz import bank
+
+    target = stage / "grader" / "quizzes"
+    target.mkdir(parents=True)
+    for info in CHAPTERS:
+        source = bank.QUIZ_DIR / f"{info.id}.yaml"
+        if source.is_file():
+            shutil.copyfile(source, target / source.name)
+        if course.quiz_feedback == "immediate":
+            keys = bank.public_keys(info.id)
+            if keys:
+                (target / "practice").mkdir(exist_ok=True)
+                (target / "practice" / f"{info.id}.yaml").write_text(
+                    yaml.safe_dump(keys, sort_keys=False, allow_unicode=True), encoding="utf-8")
+
+
+def _version(stage: Path) -> str:
+    """The grader's version with a local label: a hash of everything the handout grades with."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        base = version(DISTRIBUTION).split("+")[0]
+    except PackageNotFoundError:
+        base = "0.1.0"
+    digest = hashlib.sha256()
+    for path in sorted((stage / "grader").rglob("*")):
+        if path.is_file():
+            digest.update(path.relative_to(stage).as_posix().encode() + b"\0" + path.read_bytes())
+    return f"{base}+handout.{digest.hexdigest()[:12]}"
+
+
+_PYPROJECT = """[build-system]
+requires = ["setuptools>=61"]
+build-backend = "setuptools.build_meta"
+
+[project]
+name = "{name}"
+version = "{version}"
+description = "The grader of the lesson 'Jacobians & Linearization', as handed out to learners (no answers)."
+readme = "README.md"
+requires-python = ">=3.10"
+dependencies = {dependencies}
+
+[project.scripts]
+grade = "grader.launch:main"
+
+[tool.setuptools]
+packages = ["grader", "grader.checks", "grader.quiz", "grader.render"]
+
+[tool.setuptools.package-data]
+grader = ["data/*.json", "data/expected/*.json", "quizzes/*.yaml", "quizzes/practice/*.yaml"]
+"""
+
+
+def _build_wheel(stage: Path, out: Path) -> Path:
+    """pip's PEP 517 build of the staged tree (isolated; without isolation where the build backend is
+    already installed, e.g. offline)."""
+    before = set(out.glob("*.whl"))
+    command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "--disable-pip-version-check",
+               "-w", str(out), str(stage)]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        result = subprocess.run(command[:4] + ["--no-build-isolation"] + command[4:], capture_output=True, text=True)
+    built = sorted(set(out.glob("*.whl")) - before)
+    if result.returncode != 0 or len(built) != 1:
+        raise ReleaseError(f"building the wheel failed:\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}")
+    return built[0]
+
+
+def _copy_exercises(out: Path) -> None:
+    source = _project_exercises()
+    target = out / "exercises"
+    (target / "answers").mkdir(parents=True)
+    for path in sorted(source.glob("*.py")):
+        shutil.copyfile(path, target / path.name)
+    for path in sorted((source / "answers").glob("ch*.yaml")):
+        shutil.copyfile(path, target / "answers" / path.name)
+    (target / "answers" / "learner.yaml").write_text(
+        "# Your learner id, exactly as your course lists you: it chooses your own quiz numbers and the order of\n"
+        "# the options. For example:  learner: ada.lovelace\nlearner:\n", encoding="utf-8")
+
+
+LEARNER_README = """# Jacobians & Linearization: your exercises and the `grade` command
+
+This folder is your handout for the lesson's exercises: the stubs you fill in (`exercises/`), your
+quiz answer files (`exercises/answers/`) and the grader ({wheel}).
+
+## Install (once)
+
+```sh
+python3 -m venv .venv && . .venv/bin/activate      # Windows: .venv\\Scripts\\activate
+pip install {wheel}
+```
+
+## Work and grade
+
+Fill in a function in `exercises/chNN_*.py` (each stub says what it computes), then, in this folder:
+
+| command | what it does |
+|---|---|
+| `grade ch06` | grade chapter 6: which functions are right and, for the wrong ones, where and why |
+| `grade all` | every chapter |
+| `grade list` | chapters, functions and points |
+| `grade ch06 -v` | also tracebacks and what your code printed |
+| `grade quiz ch06 --show` | the quiz questions with your own numbers and option letters |
+| `grade all --html report.html` | a report with plots made from your own functions |
+
+Put your id in `exercises/answers/learner.yaml` first (`learner: your-id`, as your course lists
+you): your quiz numbers and the order of the options are your own.
+
+## What is graded here, and what when you submit
+
+At home your code is checked at the public seed: the lesson's worked examples and fixed random
+inputs, with the same messages it gets when your submission is graded. When you submit, the same
+checks run at other inputs (a course seed this handout does not hold){hidden}, so hard-coding the
+values you see here earns nothing. Quiz answers are {quiz}. The output says what was checked here
+and what is left for your submission: "All public checks pass" is not a final grade.
+
+This handout holds no reference solution and no quiz key: it grades from recorded expected values.
+
+## Submit
+
+Hand in your `exercises/` folder (zipped, or as your course asks): every `chNN_*.py` you wrote and
+the files in `exercises/answers/`.
+"""
+
+
+def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict) -> None:
+    checks = sum(h["checks"] for h in hidden.values())
+    points = sum(h["points"] for h in hidden.values())
+    hidden_text = (f", plus {checks} hidden check{'s' * (checks != 1)} worth {points:g} points" if checks else "")
+    quiz = ("read and format-checked here, and graded when you submit" if course.quiz_feedback == "recorded" else
+            "graded here where the question is the same for everyone (practice); questions with your own numbers "
+            "are recorded here and graded when you submit")
+    text = LEARNER_README.format(wheel=wheel.name, hidden=hidden_text, quiz=quiz)
+    (out / "README.md").write_text(text, encoding="utf-8")
+
+
+def build(out: Path, course: courses.Course, *, force: bool = False) -> Release:
+    """Build the handout into `out` (which must be empty or new, or is cleared with force)."""
+    if out.exists() and any(out.iterdir()):
+        if not force:
+            raise ReleaseError(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
+        shutil.rmtree(out)
+    out.mkdir(parents=True, exist_ok=True)
+    hidden = hidden_summary(course)
+    recording = record(course)
+    with tempfile.TemporaryDirectory(prefix="handout-") as temporary:
+        stage = Path(temporary)
+        _copy_grader(stage)
+        data = stage / "grader" / "data"
+        recording.write(data / "expected")
+        _write_banks(stage, course)
+        version = _version(stage)
+        handout = {"course": course.id, "version": version, "public_seed": course.public_seed,
+                   "quiz_feedback": course.quiz_feedback, "hidden": hidden}
+        (data / "handout.json").write_text(json.dumps(handout, indent=1), encoding="utf-8")
+        (stage / "README.md").write_text(f"The handout grader of the course {course.id}.\n", encoding="utf-8")
+        (stage / "pyproject.toml").write_text(_PYPROJECT.format(
+            name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES)), encoding="utf-8")
+        wheel = _build_wheel(stage, out)
+    _copy_exercises(out)
+    _write_readme(out, wheel, course, hidden)
+    leaks = scan(out)
+    if leaks:
+        raise ReleaseError("the handout would hold answers; nothing should be handed out:\n  " + "\n  ".join(leaks[:20]))
+    return Release(out, wheel, version, hidden)
+
+
+# ------------------------------------------------------------------------------ no answer in it
+
+@dataclass(frozen=True)
+class Secrets:
+    """Text that must not appear in a handout: reference code lines, key texts, reference answers."""
+
+    code_lines: frozenset[str]  # whitespace-free lines of reference function bodies
+    function_bodies: frozenset[str]  # ast dumps of reference function bodies
+    texts: frozenset[str]  # key answers, explanations, feedback; reference answers (whitespace-free)
+    names: tuple[str, ...] = ("solutions/", "oracle/", "quizzes/keys/", "course.yaml")
+
+
+def _squeeze(text: str) -> str:
+    return re.sub(r"\s+", "", text)
+
+
+def _bodies(tree: ast.AST) -> list[list[ast.stmt]]:
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            body = node.body[1:] if (node.body and isinstance(node.body[0], ast.Expr)
+                                     and isinstance(getattr(node.body[0], "value", None), ast.Constant)) else node.body
+            if body:
+                found.append(body)
+    return found
+
+
+def _dump(body: list[ast.stmt]) -> str:
+    return "\n".join(ast.dump(statement) for statement in body)
+
+
+def reference_secrets(project: Path | None = None) -> Secrets:
+    """What a handout must not hold, read from the instructor's references and keys."""
+    import yaml
+
+    from grader.quiz import bank
+
+    root = project or Path(expected.reference_function("ch06", "H_jacobian").__code__.co_filename).parents[1]
+    lines, bodies, texts = set(), set(), set()
+    for path in sorted((root / "solutions").rglob("*.py")):
+        source = path.read_text(encoding="utf-8")
+        tree = ast.parse(source)
+        for body in _bodies(tree):
+            if len(body) >= 2 or len(ast.unparse(body[0])) >= 40:
+                bodies.add(_dump(body))
+            for statement in body:
+                for line in ast.unparse(statement).splitlines():
+                    squeezed = _squeeze(line)
+                    # shorter lines are too generic to identify a reference: x = np.asarray(x, dtype=float)
+                    if len(squeezed) >= 32 and not squeezed.startswith(("import", "from", "if", "for", "else")):
+                        lines.add(squeezed)
+    for path in sorted((bank.QUIZ_DIR / "keys").glob("*.yaml")):
+        for key in (yaml.safe_load(path.read_text(encoding="utf-8")) or {}).values():
+            answer = key.get("answer")
+            if isinstance(answer, str) and len(_squeeze(answer)) >= 4:
+                texts.add(_squeeze(answer))
+            for text in [key.get("explanation", ""), *(key.get("feedback") or {}).values(),
+                         *(w.get("feedback", "") for w in key.get("wrong") or [])]:
+                if len(_squeeze(str(text))) >= 16:
+                    texts.add(_squeeze(str(text)))
+    for path in sorted((root / "solutions" / "answers").glob("ch*.yaml")):
+        for value in (yaml.safe_load(path.read_text(encoding="utf-8")) or {}).values():
+            for number in re.findall(r"-?\d+\.\d{5,}", json.dumps(value)):
+                texts.add(number)
+    return Secrets(frozenset(lines), frozenset(bodies), frozenset(texts))
+
+
+def _members(folder: Path):
+    """(name, text) of every file in `folder` and of every member of its wheels and zips."""
+    for path in sorted(folder.rglob("*")):
+        if not path.is_file():
+            continue
+        name = path.relative_to(folder).as_posix()
+        if path.suffix in (".whl", ".zip"):
+            with zipfile.ZipFile(path) as archive:
+                for member in archive.namelist():
+                    yield f"{name}!{member}", archive.read(member)
+        else:
+            yield name, path.read_bytes()
+
+
+def scan(folder: Path, secrets: Secrets | None = None, allow_practice_keys: bool = True) -> list[str]:
+    """Every place in `folder` (wheel members included) that holds reference or key text, or bytecode."""
+    secrets = secrets or reference_secrets()
+    found = []
+    for name, data in _members(folder):
+        lowered = name.lower()
+        if any(part in lowered for part in secrets.names) or lowered.endswith((".pyc", ".pyo")):
+            found.append(f"{name}: must not be in a handout")
+            continue
+        text = data.decode("utf-8", "replace")
+        squeezed = _squeeze(text)
+        found += [f"{name}: reference code `{line[:60]}`" for line in secrets.code_lines if line in squeezed]
+        if name.endswith(".py"):
+            try:
+                tree = ast.parse(text)
+            except SyntaxError:
+                tree = None
+            if tree is not None:
+                found += [f"{name}: a reference function's body" for body in _bodies(tree)
+                          if _dump(body) in secrets.function_bodies]
+        if "/practice/" in name and allow_practice_keys:
+            continue  # an immediate-feedback course ships these keys on purpose
+        found += [f"{name}: key or reference answer `{text_[:60]}`" for text_ in secrets.texts if text_ in squeezed]
+    return found
+
+
+def describe(release: Release) -> str:
+    size = release.wheel.stat().st_size
+    files = sum(1 for p in release.folder.rglob("*") if p.is_file())
+    hidden = sum(h["checks"] for h in release.hidden.values())
+    return (f"Handout {release.version} in {release.folder}: {files} files, the grader {release.wheel.name} "
+            f"({size / 1024:.0f} KiB); {hidden} hidden check(s). Checked: no reference code, quiz key or reference "
+            "answer in any file or wheel member.")
+
