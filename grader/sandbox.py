@@ -207,11 +207,18 @@ class Sandbox:
         bound: list[str] = []
         made: set[str] = {"/", "/tmp"}
 
+        masks: list[str] = []
+
+        def there(folder: str) -> bool:
+            """Whether `folder` exists in the sandbox: made, or inside a bound tree and not hidden by a mask."""
+            return folder in made or (any(_inside(folder, b) for b in bound)
+                                      and not any(_inside(folder, m) and folder != m for m in masks))
+
         def parents(path: str) -> None:
             """Make the folders above `path` traversable (bwrap would make them 0700)."""
             missing = []
             folder = os.path.dirname(path)
-            while folder not in made and not any(_inside(folder, b) for b in bound):
+            while not there(folder):
                 missing.append(folder)
                 folder = os.path.dirname(folder)
             for folder in reversed(missing):
@@ -239,7 +246,9 @@ class Sandbox:
         # Every folder of third-party packages is empty in here, then the allowed packages come back.
         masked = [folder for folder in _site_dirs() if any(_inside(folder, b) for b in bound)]
         for folder in masked:
-            args.extend(["--tmpfs", folder])
+            args.extend(["--perms", "0755", "--tmpfs", folder])
+            masks.append(folder)
+            made.add(folder)
         for path in learner_packages() + tuple(os.path.join(GRADER_DIR, name) for name in CHILD_MODULES):
             parents(path)
             args.extend(["--ro-bind", path, path])
