@@ -285,9 +285,10 @@ def write_summaries(out: Path, learners: list[str], chapters: list[str], statuse
     write_atomically(out / "gradebook.csv", buffer.getvalue())
     write_atomically(out / "junit.xml", lms.junit(reports))
     from grader.render import summary
+    from grader.sandbox import Sandbox
 
-    write_atomically(out / "summary.html", summary.render(reports, {k: v for k, v in messages.items()
-                                                                   if statuses.get(k) in ("error", "unreadable")}))
+    unreadable = {k: v for k, v in messages.items() if statuses.get(k) in ("error", "unreadable")}
+    write_atomically(out / "summary.html", summary.render(reports, unreadable, Sandbox().describe()))
 
 
 def progress_bar(stream=sys.stderr):

@@ -293,4 +293,5 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     for learner, message in sorted(result["messages"].items()):
         if result["statuses"][learner] in ("error", "unreadable"):
             click.echo(f"  {learner}: {message}", err=True)
+    click.echo(Sandbox().describe(), err=True)
     sys.exit(0 if all(s in ("graded", "unchanged") for s in result["statuses"].values()) else 1)

@@ -124,9 +124,13 @@ def _autograd_modules() -> set[str]:
 def _site_dirs() -> tuple[str, ...]:
     """Every folder of third-party packages the child could see: those on its path, and the
     site-packages inside the standard library's folder (pyenv and other installs keep it there)."""
+    import glob
+
     found = [os.path.realpath(p) for p in child_path()]
     for stdlib in _stdlib_dirs():
         found += [os.path.join(stdlib, n) for n in ("site-packages", "dist-packages")]
+    for library in SYSTEM_LIBRARIES:  # e.g. Debian's /usr/lib/python3/dist-packages
+        found += glob.glob(os.path.join(library, "python3*", "*-packages"))
     stdlib = _stdlib_dirs()
     return tuple(p for p in dict.fromkeys(found) if os.path.isdir(p) and not (
         p in stdlib or p.endswith("lib-dynload")))

@@ -13,10 +13,11 @@ STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1000px;margin:24px 
          ".bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}")
 
 
-def render(reports: list[tuple[str, Report]], unreadable: dict[str, str]) -> str:
+def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolation: str = "") -> str:
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
-             f"<p>{len(reports)} learners graded; {len(unreadable)} could not be graded.</p>"]
+             f"<p>{len(reports)} learners graded; {len(unreadable)} could not be graded.</p>",
+             f"<p id='isolation'>{escape(isolation)}</p>" if isolation else ""]
     if reports:
         top = max(r.max_score for _, r in reports) or 1
         bins = Counter(min(9, int(10 * r.score / top)) for _, r in reports)
