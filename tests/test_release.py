@@ -295,3 +295,18 @@ def test_hard_coded_public_values_pass_at_home_and_fail_where_submissions_are_gr
         assert "H_rows_orthogonal" in batch  # the hidden check runs where submissions are graded
     finally:
         shutil.rmtree(base, ignore_errors=True)
+
+
+def test_an_immediate_feedback_course_ships_practice_keys_of_fixed_questions_only(tmp_path):
+    import yaml
+
+    (tmp_path / "course.yaml").write_text("course: practice\nseed: 5\nquiz_feedback: immediate\n", encoding="utf-8")
+    done = _project("release", str(tmp_path / "out"), "--course", str(tmp_path / "course.yaml"))
+    assert done.returncode == 0, done.stderr
+    with zipfile.ZipFile(next((tmp_path / "out").glob("*.whl"))) as wheel:
+        practice = {n: yaml.safe_load(wheel.read(n)) for n in wheel.namelist() if "/practice/" in n}
+        assert not [n for n in wheel.namelist() if "/keys/" in n]
+    keys = yaml.safe_load((REPO / "quizzes" / "keys" / "ch06.yaml").read_text(encoding="utf-8"))
+    shipped = practice["grader/quizzes/practice/ch06.yaml"]
+    assert set(shipped) == {q for q, key in keys.items() if "compute" not in key} and "H_at_point" not in shipped
+    assert release.scan(tmp_path / "out") == []  # practice keys are allowed; nothing else is
