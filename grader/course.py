@@ -131,9 +131,3 @@ def _from_yaml(path: Path) -> Course:
     return Course(id=str(data.get("course", Course.id)), seed=seed,
                   quiz_feedback=feedback, hidden=frozenset(hidden), source=str(path))
 
-
-def describe(course: Course) -> dict:
-    """The course as plain data for reports (never the course seed)."""
-    return {"course": course.id, "public_seed": course.public_seed, "quiz_feedback": course.quiz_feedback,
-            **({"handout": course.handout.get("version")} if course.handout else {})}
-
