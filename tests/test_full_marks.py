@@ -32,3 +32,28 @@ def test_stubs_get_zero_and_every_check_fails_as_not_implemented(repo_root):
         for check in chapter.checks:
             assert check.status == Status.FAIL, (chapter.chapter, check.id, check.status, check.message)
             assert "not implemented" in check.message, (chapter.chapter, check.id, check.message)
+
+
+def _results(report) -> list:
+    return [(ch.chapter, c.id, c.status, c.points, c.message) for ch in report.chapters for c in ch.checks]
+
+
+@pytest.mark.parametrize("form", ["relative", "qualified", "plain"])
+def test_solution_files_copied_into_exercises_grade_as_the_references(repo_root, tmp_path, form):
+    """The three import forms of an earlier chapter the contract allows: from .ch03_jacobian,
+    from exercises.ch03_jacobian and the plain from ch03_jacobian."""
+    import re
+    import shutil
+
+    package = tmp_path / "exercises"
+    package.mkdir()
+    for source in (repo_root / "solutions").glob("ch*.py"):
+        text = source.read_text(encoding="utf-8")
+        replacement = {"relative": r"from .\1 import", "qualified": r"from exercises.\1 import",
+                       "plain": r"from \1 import"}[form]
+        (package / source.name).write_text(re.sub(r"from \.(ch0\d_\w+) import", replacement, text), encoding="utf-8")
+    shutil.copyfile(repo_root / "exercises" / "__init__.py", package / "__init__.py")
+    copied = grade(Session(Submission(tmp_path, "exercises")), ALL)
+    references = grade(Session(Submission(repo_root, "solutions")), ALL)
+    assert _results(copied) == _results(references)
+    assert copied.score == copied.max_score

@@ -310,3 +310,28 @@ def test_an_immediate_feedback_course_ships_practice_keys_of_fixed_questions_onl
     shipped = practice["grader/quizzes/practice/ch06.yaml"]
     assert set(shipped) == {q for q, key in keys.items() if "compute" not in key} and "H_at_point" not in shipped
     assert release.scan(tmp_path / "out") == []  # practice keys are allowed; nothing else is
+
+
+def test_the_project_installs_from_its_wheel_and_grades_in_an_empty_folder(tmp_path):
+    """The instructor's own install (`pip install .`, not editable): question banks and keys are package
+    data, the references come along, so grade list, grade all and grade quiz --show work anywhere."""
+    wheels = tmp_path / "wheels"
+    built = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "--disable-pip-version-check",
+                            "-w", str(wheels), str(REPO)], capture_output=True, text=True)
+    assert built.returncode == 0, built.stderr[-2000:]
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    installed = subprocess.run([sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"), "install",
+                                "--quiet", "--disable-pip-version-check", *map(str, wheels.glob("*.whl"))],
+                               capture_output=True, text=True)
+    assert installed.returncode == 0, installed.stderr[-2000:]
+    folder = tmp_path / "course"
+    shutil.copytree(REPO / "exercises", folder / "exercises")
+    grade = venv / "bin" / "grade"
+    assert _learner(grade, "list", cwd=folder).stdout.count("exercises/ch0") == 10
+    stubs = _learner(grade, "all", "--format", "json", cwd=folder)
+    assert json.loads(stubs.stdout)["max_score"] == 196  # 134 code + 62 quiz: the banks are installed
+    shown = _learner(grade, "quiz", "ch06", "--show", cwd=folder)
+    assert shown.returncode == 0 and "[dbearing_dx]" in shown.stdout
+    references = json.loads(_learner(grade, "all", "--solutions", "--format", "json", cwd=folder).stdout)
+    assert references["score"] == references["max_score"] == 196
