@@ -195,4 +195,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
         module_file = f"{submission.package}/{plan.chapter.info.module}.py"
         report.chapters.append(plan.judge(runs[plan.chapter.info.id], module_file))
     report.learner_output = session.output
+    broken = [run.import_error.get("message", "") for run in runs.values()
+              if run.import_error and run.import_error.get("infrastructure")]
+    report.infrastructure = broken[0] if broken else ""
     return report

@@ -112,6 +112,7 @@ class Report:
     seed: int | None = None
     learner: str | None = None  # whose quiz variants were graded, and where the id came from
     learner_output: str = ""  # what learner code printed while graded (capped)
+    infrastructure: str = ""  # why grading failed for a reason outside the learner's code (then it is no grade)
 
     @property
     def score(self) -> float:
@@ -144,7 +145,8 @@ class Report:
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),
                                           hidden_points=float(ch.get("hidden_points", 0.0))))
-        return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"))
+        return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
+                   infrastructure=data.get("infrastructure") or "")
 
     def to_dict(self) -> dict:
         return {
@@ -155,6 +157,7 @@ class Report:
             "score": self.score,
             "max_score": self.max_score,
             "pending_score": self.pending_score,
+            "infrastructure": self.infrastructure or None,
             "chapters": [c.to_dict() for c in self.chapters],
         }
 

@@ -69,6 +69,7 @@ class Limits:
     import_seconds: float = 5.0
     call_seconds: float = 5.0
     chapter_seconds: float = 20.0
+    learner_seconds: float = 60.0  # everything of one learner together (all chapters' code; the quiz gets what is left)
     address_space: int | None = 1 << 30
     cpu_seconds: int | None = 60
     file_size: int | None = 16 << 20
@@ -262,7 +263,7 @@ class Session:
             for req in pending:
                 runs[req.chapter].import_error = {
                     "exception": "GraderError", "message": f"the grading process failed to start ({exit_text})",
-                    "traceback": "", "line": None, "grader": True}
+                    "traceback": "", "line": None, "grader": True, "infrastructure": True}
             return []
         run = runs[name]
         req = next(r for r in pending if r.chapter == name)

@@ -265,6 +265,25 @@ class Sandbox:
         return args
 
 
+def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
+    """None when a child interpreter starts in `sandbox` and imports numpy and the child side; else why
+    not, in one paragraph (an infrastructure failure: no learner should be graded then)."""
+    import subprocess
+
+    command = [sys.executable, "-I", "-S", "-c",
+               f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.child; print('ready')"]
+    if sandbox is not None:
+        command = sandbox(command)
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=seconds, stdin=subprocess.DEVNULL)
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"the sandboxed interpreter did not start: {exc}"
+    if done.returncode == 0 and done.stdout.strip() == "ready":
+        return None
+    said = " ".join((done.stderr or done.stdout).split())[-600:]
+    return f"the sandboxed interpreter did not start (exit status {done.returncode}): {said or 'no message'}"
+
+
 def learner_sandbox() -> Sandbox | None:
     """The sandbox for `grade chNN`, or None where bubblewrap is not installed (or GRADER_SANDBOX=off)."""
     sandbox = Sandbox()
