@@ -65,10 +65,12 @@ def test_batch_outputs_every_format(submissions, tmp_path):
     rows = _rows(out / "gradebook.csv")
     by_learner = {row["learner"]: row for row in rows}
     assert set(by_learner) == {"alice", "bob", "carol", "dave"}
-    assert list(rows[0]) == ["learner", "ch03_code", "ch03_quiz", "ch06_code", "ch06_quiz", "total", "max_total", "status"]
+    assert list(rows[0]) == ["learner", "ch03_code", "ch03_quiz", "ch06_code", "ch06_quiz", "total", "max_total",
+                             "status", "message"]
     assert by_learner["alice"]["ch06_code"] == by_learner["bob"]["ch06_code"] == "15"
     assert float(by_learner["carol"]["ch06_code"]) < 15 and by_learner["carol"]["ch03_code"] == "10"
     assert by_learner["dave"]["status"] == "unreadable" and by_learner["dave"]["total"] == ""
+    assert "not a valid zip file" in by_learner["dave"]["message"] and by_learner["alice"]["message"] == ""
     report = json.loads((out / "carol" / "report.json").read_text())
     assert report["chapters"][1]["chapter"] == "ch06"
     gradescope = json.loads((out / "carol" / "results.json").read_text())

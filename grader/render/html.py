@@ -271,8 +271,9 @@ def _draw_ch09(ax, d):
     X, Y = np.meshgrid(grid, grid)
     Q = 0.5 * (H[0, 0] * X**2 + 2 * H[0, 1] * X * Y + H[1, 1] * Y**2)
     ax.contour(X, Y, Q, levels=12, cmap="coolwarm")
-    kind = d["kind"] or d["kind_ref"]
-    ax.set(aspect="equal", title=f"Quadratic model from the Hessian: {kind}")
+    kind = str(d["kind"] or d["kind_ref"])[:60]
+    # the learner's text, drawn as plain text: a '$' would start matplotlib's math parser
+    ax.set(aspect="equal", title=f"Quadratic model from the Hessian: {kind}".replace("$", r"\$"))
     return ok, "Contours of the quadratic model 0.5 v^T H v with H at (1, 2) from " + \
         ("your hessian_fd" if ok else "the reference (your hessian_fd gave no usable value)") + \
         f"; your classify_critical_point says: {d['kind'] or 'nothing usable'}"
@@ -340,9 +341,12 @@ def _template():
 
 
 def render(report: Report) -> str:
-    """The report as one self-contained HTML page."""
+    """The report as one self-contained HTML page. Learner text is escaped by the template and has
+    no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes."""
+    from grader import safe_text
     from grader.render.text import verdict_line
 
+    report = safe_text.clean_report(report, safe_text.for_html)
     return _template().render(report=report, figures=_all_figures(report), num=_num, values=_values,
                               verdict=verdict_line(report))
 

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 
+from grader import safe_text
 from grader.model import Report
 
 
 def render(report: Report) -> str:
-    return json.dumps(report.to_dict(), indent=2, allow_nan=False) + "\n"
+    """The report as JSON that is valid UTF-8 whatever learner text it holds."""
+    return json.dumps(safe_text.for_json(report.to_dict()), indent=2, allow_nan=False) + "\n"

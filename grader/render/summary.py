@@ -4,19 +4,29 @@ common failure messages, so an instructor sees which idea the class missed. Self
 from __future__ import annotations
 
 from collections import Counter
-from html import escape
+from html import escape as _escape
 
 from grader.model import Report, Status
+from grader.safe_text import for_html
 
 STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1000px;margin:24px auto;color:#1f2937}"
          "table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #e5e7eb;text-align:left}"
          ".bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}")
 
 
-def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolation: str = "") -> str:
+def escape(text: str) -> str:
+    """Learner text for the page: escaped, no lone surrogates or control characters."""
+    return _escape(for_html(str(text)))
+
+
+def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolation: str = "",
+           skipped: list[tuple[str, str]] = ()) -> str:
+    """The page; `unreadable` maps each learner not graded (unreadable submission, infrastructure
+    failure) to why, `skipped` lists (entry, why) of what in the submissions folder was not taken as a
+    submission at all."""
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
-             f"<p>{len(reports)} learners graded; {len(unreadable)} could not be graded.</p>",
+             f"<p>{len(reports)} learners graded; {len(unreadable)} could not be graded; {len(skipped)} skipped.</p>",
              f"<p id='isolation'>{escape(isolation)}</p>" if isolation else ""]
     if reports:
         top = max(r.max_score for _, r in reports) or 1
@@ -48,10 +58,14 @@ def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolat
                          f"{count}/{seen[key]}</td><td class='num'>{100 * count / seen[key]:.0f}%</td></tr>")
         parts.append("</table><h2 id='messages'>Most common failure messages</h2><table>")
         for (chapter, message), count in messages.most_common(25):
-            parts.append(f"<tr><td class='num'>{count}</td><td>{chapter}</td><td>{escape(message)}</td></tr>")
+            parts.append(f"<tr><td class='num'>{count}</td><td>{escape(chapter)}</td><td>{escape(message)}</td></tr>")
         parts.append("</table>")
     if unreadable:
-        parts.append("<h2>Not graded</h2><ul>")
+        parts.append("<h2 id='not-graded'>Not graded</h2><ul>")
         parts.extend(f"<li>{escape(k)}: {escape(v)}</li>" for k, v in sorted(unreadable.items()))
+        parts.append("</ul>")
+    if skipped:
+        parts.append("<h2 id='skipped'>Skipped (not taken as submissions)</h2><ul>")
+        parts.extend(f"<li>{escape(k)}: {escape(v)}</li>" for k, v in skipped)
         parts.append("</ul>")
     return "".join(parts) + "</body></html>\n"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from grader import safe_text
 from grader.model import CheckResult, Report, Status
 
 _MARKS = {Status.PASS: ("✓", "PASS"), Status.FAIL: ("✗", "FAIL"), Status.ERROR: ("!", "ERR "),
@@ -58,7 +59,10 @@ def verdict_line(report: Report) -> str:
 
 
 def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, verbose: bool = False) -> str:
-    """The whole report as text; `colour` adds ANSI styles, `unicode_ok` picks the marks."""
+    """The whole report as text; `colour` adds ANSI styles, `unicode_ok` picks the marks. Learner text
+    (messages, tracebacks, printed output, ids) reaches the terminal without its control characters
+    and escape sequences (grader.safe_text.for_terminal): only this renderer's own styles remain."""
+    report = safe_text.clean_report(report, safe_text.for_terminal)
     out: list[str] = []
     if report.learner and any(c.kind == "quiz" for ch in report.chapters for c in ch.checks):
         out.append(f"Quiz answers graded for learner {report.learner}.")

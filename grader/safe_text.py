@@ -1,0 +1,111 @@
+"""Learner-controlled text made safe for each medium it reaches.
+
+Learner ids, file and zip entry names, exception names and messages, what learner code printed and
+quiz answers as written all end up in grader outputs. Each medium has its own hazards:
+
+- every UTF-8 output (JSON, HTML, CSV, XML, a terminal): lone surrogates ("\\udcff", from bytes that
+  were not UTF-8) cannot be encoded at all; they become U+FFFD.
+- XML (junit.xml): characters XML 1.0 forbids (most C0 controls, U+FFFE, U+FFFF) make the file
+  unreadable; they become U+FFFD.
+- HTML: escaping is the renderer's (jinja2's autoescape, html.escape); control characters become
+  U+FFFD.
+- CSV (the gradebook): a cell starting with = + - @, a tab or a carriage return is a formula to a
+  spreadsheet; it gets a leading single quote (OWASP's advice). Nothing else changes, so ids stay as
+  given. Line breaks and other control characters inside a cell become spaces and U+FFFD.
+- a terminal: escape sequences (colours, clearing the screen, moving the cursor, window titles) are
+  removed; other control characters (a carriage return that would overwrite a line, a backspace,
+  bidirectional overrides that reorder what is shown) become '?'. Newlines and tabs stay unless the
+  text must stay on one line.
+
+`clean_report` applies one of these to every string of a grader.model.Report (a copy), so a renderer
+can make a report safe in one place.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from enum import Enum
+from typing import Callable
+
+_SURROGATES = re.compile("[\ud800-\udfff]")
+# Characters XML 1.0 does not allow (besides the surrogates)
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+# C0 and C1 controls but tab and newline (and carriage return, handled apart), DEL
+_CONTROL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f-\x9f]")
+# Bidirectional embeddings, overrides and isolates, and the line and paragraph separators
+_BIDI = re.compile("[\u200e\u200f\u202a-\u202e\u2066-\u2069\u2028\u2029]")
+# Terminal escape sequences: CSI (colours, cursor, clear), OSC (titles, links), DCS/SOS/PM/APC
+# strings, the 8-bit CSI, and the short two-character escapes
+_ESCAPE_SEQUENCE = re.compile(
+    r"\x1b\[[0-?]*[ -/]*[@-~]?"
+    r"|\x1b\][^\x07\x1b\x9c]*(?:\x07|\x1b\\|\x9c)?"
+    r"|\x1b[PX^_][^\x1b\x9c]*(?:\x1b\\|\x9c)?"
+    r"|\x9b[0-?]*[ -/]*[@-~]?"
+    r"|\x1b[ -/]*[0-~]?")
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def unicode_clean(text: str) -> str:
+    """`text` that encodes as UTF-8: lone surrogates become U+FFFD."""
+    return _SURROGATES.sub("\ufffd", text)
+
+
+def for_xml(text: str) -> str:
+    """`text` with every character XML 1.0 forbids replaced by U+FFFD (escaping is ElementTree's)."""
+    return _NOT_XML.sub("\ufffd", text)
+
+
+def for_html(text: str) -> str:
+    """`text` for an HTML page before escaping: no lone surrogates, no control characters but tab and
+    line breaks."""
+    return _CONTROL.sub("\ufffd", unicode_clean(text))
+
+
+def for_csv(text: str) -> str:
+    """A spreadsheet cell: one line, no formula (a leading = + - @ tab or CR gets a single quote)."""
+    if text.startswith(FORMULA_START):
+        text = "'" + text
+    text = re.sub(r"\r\n|[\r\n\t]", " ", text)
+    return _CONTROL.sub("\ufffd", unicode_clean(text))
+
+
+def for_terminal(text: str, one_line: bool = False) -> str:
+    """`text` that cannot move the cursor, change colours, clear the screen, set a title or overwrite
+    a line: escape sequences removed, other controls (and bidirectional overrides) shown as '?'.
+    With `one_line`, line breaks and tabs become spaces."""
+    text = _ESCAPE_SEQUENCE.sub("", text).replace("\r\n", "\n")
+    if one_line:
+        text = re.sub(r"[\n\t]+", " ", text)
+    text = _CONTROL.sub("?", text.replace("\r", "?"))
+    return _BIDI.sub("?", _SURROGATES.sub("?", text))
+
+
+def for_json(value: object) -> object:
+    """Plain JSON data (dicts, lists, strings, numbers) whose strings all encode as UTF-8; JSON's
+    own escaping takes care of control characters."""
+    return clean_value(value, unicode_clean)
+
+
+def clean_value(value: object, clean: Callable[[str], str]) -> object:
+    """`value` with `clean` applied to every string inside it: dict keys and values, list and tuple
+    items and the fields of dataclasses (copied, never changed in place). Enums, numbers and arrays
+    are left as they are."""
+    if isinstance(value, Enum):
+        return value
+    if isinstance(value, str):
+        return clean(value)
+    if isinstance(value, dict):
+        return {clean_value(k, clean): clean_value(v, clean) for k, v in value.items()}
+    if type(value) in (list, tuple):
+        return type(value)(clean_value(v, clean) for v in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        changes = {f.name: clean_value(getattr(value, f.name), clean) for f in dataclasses.fields(value) if f.init}
+        return dataclasses.replace(value, **changes)
+    return value
+
+
+def clean_report(report, clean: Callable[[str], str]):
+    """A copy of a grader.model.Report with `clean` applied to every string in it (messages, problems,
+    what learner code printed, quiz answers as written, the learner's id ...)."""
+    return clean_value(report, clean)

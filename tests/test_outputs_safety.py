@@ -1,0 +1,125 @@
+"""Learner text in every output: a learner whose exception name and message, and what it prints, hold
+terminal escape sequences, control characters and a lone surrogate ("\\udcff") breaks no output of
+`grade chNN` (text on a terminal, JSON, HTML), and each medium gets the text made safe its own way
+(grader.safe_text)."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import pytest
+
+from grader import safe_text
+from tests.conftest import REPO, build_submission, run_on_terminal
+
+HOSTILE_H = '''
+
+def H_jacobian(x, y):
+    print("\\x1b[2J\\x1b[H\\x1b]0;pwned\\x07\\x1b[32mall checks pass\\r")
+    Fake = type("\\x1b[2J\\x1b[1;32mPASS\\x1b[0m", (Exception,), {})
+    raise Fake("\\x1b[1;32m\\u2713 [2/2] all good\\x1b[0m\\r\\udcff \\x00 \\u202e\\x9b2J")
+'''
+
+
+def hostile_module() -> str:
+    """The reference ch06 with H_jacobian replaced by one that raises and prints hostile text."""
+    text = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / "ch06_measurement.py").read_text())
+    return text + HOSTILE_H
+
+
+@pytest.fixture(scope="module")
+def hostile(tmp_path_factory):
+    return build_submission(tmp_path_factory.mktemp("hostile") / "sub", {"ch06_measurement": hostile_module()})
+
+
+# ------------------------------------------------------------------------------- each medium
+
+@pytest.mark.parametrize("text, shown", [
+    ("\x1b[2Jcleared", "cleared"),
+    ("\x1b[1;32mgreen\x1b[0m", "green"),
+    ("\x1b]0;window title\x07after", "after"),
+    ("\x1b]8;;http://x\x1b\\link\x1b]8;;\x1b\\", "link"),
+    ("\x9b2Jeight-bit", "eight-bit"),
+    ("over\rwrite", "over?write"),
+    ("back\bspace\x00", "back?space?"),
+    ("bidi\u202eevil", "bidi?evil"),
+    ("lone \udcff", "lone ?"),
+    ("two\nlines\tand tab", "two\nlines\tand tab"),
+    ("zoë ann+cs101@uni.edu", "zoë ann+cs101@uni.edu"),
+])
+def test_terminal_text_has_no_control_or_escape_sequence(text, shown):
+    assert safe_text.for_terminal(text) == shown
+    assert "\n" not in safe_text.for_terminal(text, one_line=True)
+
+
+@pytest.mark.parametrize("cell, written", [
+    ("=HYPERLINK(\"http://x\")", "'=HYPERLINK(\"http://x\")"),
+    ("+1+1", "'+1+1"), ("-2+3", "'-2+3"), ("@SUM(A1)", "'@SUM(A1)"),
+    ("\t=1", "' =1"), ("\r=1", "' =1"),
+    ("ann+cs101@uni.edu", "ann+cs101@uni.edu"), ("zoë", "zoë"), ("a.b", "a.b"),
+    ("two\nlines", "two lines"), ("lone \udcff", "lone \ufffd"),
+])
+def test_csv_cells_are_never_formulas_and_ids_stay_as_given(cell, written):
+    assert safe_text.for_csv(cell) == written
+
+
+def test_xml_json_and_html_text_always_encode():
+    text = "a\x00b\x1b[2J\udcff\ufffe\x7f"
+    xml = safe_text.for_xml(text)
+    assert xml.encode("utf-8") and not re.search("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\ud800-\udfff]", xml)
+    assert json.dumps(safe_text.for_json({text: [text, (text, 1.5)]}), ensure_ascii=False).encode("utf-8")
+    assert "\\ud" not in json.dumps(safe_text.for_json({"k": text}))  # no lone surrogate escapes either
+    html = safe_text.for_html(text)
+    assert html.encode("utf-8") and "\x1b" not in html and "\x00" not in html
+
+
+def test_a_report_is_cleaned_as_a_copy(hostile):
+    from grader.model import CheckResult, ChapterResult, Report, Status
+
+    check = CheckResult("c", "f", "d", Status.FAIL, 0, 1, message="\x1b[2Jx\udcff", details={"traceback": "\x1b[H"})
+    report = Report("s\udcff", [ChapterResult("ch06", "t", [check], ["\x1b[2J"])], learner_output="\x1b[2J")
+    clean = safe_text.clean_report(report, safe_text.for_terminal)
+    assert clean.chapters[0].checks[0].message == "x?" and clean.chapters[0].checks[0].status is Status.FAIL
+    assert clean.chapters[0].checks[0].details["traceback"] == "" and clean.learner_output == ""
+    assert clean.submission == "s?" and clean.chapters[0].problems == [""]
+    assert report.chapters[0].checks[0].message == "\x1b[2Jx\udcff"  # the original is untouched
+
+
+# ----------------------------------------------------------------------- grade chNN, for real
+
+def test_grade_chapter_text_output_shows_no_learner_escape_sequence(hostile):
+    done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile), "--no-quiz", "-v"],
+                          cwd=REPO, capture_output=True, timeout=120)
+    assert done.returncode == 1, done.stderr.decode(errors="replace")[-2000:]
+    out = done.stdout.decode("utf-8")  # strict: a lone surrogate would not have been written at all
+    assert "Traceback" not in done.stderr.decode(errors="replace")
+    assert "\x1b" not in out and "\r" not in out and "\x9b" not in out and "\u202e" not in out
+    assert "H_jacobian raised PASS: \u2713 [2/2] all good" in out  # the text itself is still shown
+    assert "H at the lesson's point" in out and "15/15" not in out
+
+
+def test_on_a_terminal_only_the_graders_own_colours_remain(hostile):
+    code, out = run_on_terminal([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile), "--no-quiz",
+                                 "-v"], REPO)
+    assert code == 1, out
+    assert "\x1b[2J" not in out and "\x1b]0;" not in out and "\x1b[1;32m" not in out
+    assert "\x1b[32m" in out  # the grader's own green marks are there, and each is one of its marks
+    assert all(out[i:].startswith("\x1b[32m\x1b[1m\u2713\x1b[0m") for i in (m.start() for m in re.finditer(
+        re.escape("\x1b[32m"), out))), out
+
+
+def test_grade_chapter_json_and_html_are_valid_utf8(hostile, tmp_path):
+    page = tmp_path / "report.html"
+    done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile), "--no-quiz",
+                           "--format", "json", "--html", str(page)], cwd=REPO, capture_output=True, timeout=120)
+    assert done.returncode == 1, done.stderr.decode(errors="replace")[-2000:]
+    data = json.loads(done.stdout.decode("utf-8"))
+    messages = [c["message"] for ch in data["chapters"] for c in ch["checks"] if c["function"] == "H_jacobian"]
+    assert any("all good" in m for m in messages)
+    assert not re.search(r"\\ud[89a-f]", done.stdout.decode("ascii", errors="replace"), re.I)
+    html = page.read_bytes().decode("utf-8")
+    assert "all good" in html and "\x1b" not in html and "\x00" not in html and "\udcff" not in html
+    assert "<script" not in html
