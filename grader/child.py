@@ -109,6 +109,7 @@ def _apply_limits(limits: dict) -> None:
         "file_size": resource.RLIMIT_FSIZE,
         "open_files": resource.RLIMIT_NOFILE,
         "core": resource.RLIMIT_CORE,
+        "processes": resource.RLIMIT_NPROC,  # counted in the learner's own user namespace (grader.confine)
     }
     for key, which in table.items():
         value = limits.get(key)
@@ -214,15 +215,19 @@ def _write_files(files: dict, root: str) -> None:
 
 def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
     """Grade one request and leave the process (never returns)."""
-    out = os.fdopen(result_fd, "w", buffering=1)
     request = json.loads(request_text)
+    if request.get("confine"):  # in a sandbox: the learner's own namespaces, /tmp and caps (grader.confine)
+        from grader.confine import enter
+
+        enter(request.get("limits", {}), [p for p in sys.path if os.path.isabs(p)])
+    out = os.fdopen(result_fd, "w", buffering=1)
     _write_files(request["files"], request["root"])  # the learner's files come with the request
     os.chdir(request["root"])
     _redirect_output(capture_fd)
     _apply_limits(request.get("limits", {}))
     run(request, out)
     out.close()
-    os._exit(0)  # skip learner atexit handlers and finalizers  # skip learner atexit handlers and finalizers
+    os._exit(0)  # skip learner atexit handlers and finalizers
 
 
 def main(argv: list[str] | None = None) -> None:

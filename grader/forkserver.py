@@ -135,7 +135,7 @@ class ForkedChild:
 
     def send(self, request: dict) -> None:
         """The request, with where the child writes the submission's files."""
-        request = dict(request, root=self.root)
+        request = dict(request, root=self.root, confine=self.server.sandboxed)
         try:
             with open(self.request_fd, "wb", closefd=True) as pipe:
                 pipe.write(json.dumps(request).encode())

@@ -20,8 +20,8 @@ from typing import Callable, Protocol
 from grader.spawn import CommandWrapper, start_child
 from grader.submission import Submission
 from grader.wire import (
-    CRASHED, DONE, IMPORT, IMPORT_FAILED, IMPORTED, MISSING_EVENT, NOT_RUN, RAISED_EVENT, RETURNED, TIMEOUT, Call,
-    Returned, from_event,
+    CRASHED, DONE, IMPORT, IMPORT_FAILED, IMPORTED, MAX_LINE, MISSING_EVENT, NOT_RUN, RAISED_EVENT, RETURNED, TIMEOUT,
+    Call, Returned, clean_error, from_event,
 )
 
 
@@ -74,10 +74,27 @@ class Limits:
     cpu_seconds: int | None = 60
     file_size: int | None = 16 << 20
     open_files: int | None = 256
+    processes: int | None = 64  # in a sandbox: the learner's processes and threads (own user namespace)
+    memory_bytes: int | None = 1 << 30  # in a sandbox: all the learner's processes together (resident)
+    tmp_bytes: int = 64 << 20  # in a sandbox: the learner's own /tmp
 
     def rlimits(self) -> dict:
         return {"address_space": self.address_space, "cpu_seconds": self.cpu_seconds,
-                "file_size": self.file_size, "open_files": self.open_files, "core": 0}
+                "file_size": self.file_size, "open_files": self.open_files, "core": 0,
+                "processes": self.processes, "memory_bytes": self.memory_bytes, "tmp_bytes": self.tmp_bytes}
+
+
+MALFORMED = {"event": None}  # a result line that is not one JSON object (see _Child.events)
+
+
+def _parse(line: bytes) -> dict:
+    if len(line) > MAX_LINE:
+        return MALFORMED
+    try:
+        event = json.loads(line)
+    except (ValueError, RecursionError):  # RecursionError: a line of 200,000 '['
+        return MALFORMED
+    return event if isinstance(event, dict) else MALFORMED
 
 
 class _Child:
@@ -91,7 +108,9 @@ class _Child:
         self.handle.send(request)
 
     def events(self, deadline: Callable[[], float]):
-        """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes."""
+        """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes. A line that
+        is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
+        the caller stops the child for it."""
         read_fd = self.handle.read_fd
         selector = selectors.DefaultSelector()
         selector.register(read_fd, selectors.EVENT_READ)
@@ -99,12 +118,10 @@ class _Child:
             while True:
                 while b"\n" in self.buffer:
                     line, self.buffer = self.buffer.split(b"\n", 1)
-                    try:
-                        event = json.loads(line)
-                    except ValueError:
-                        continue
-                    if isinstance(event, dict):
-                        yield event
+                    yield _parse(line)
+                if len(self.buffer) > MAX_LINE:
+                    yield MALFORMED
+                    return
                 remaining = deadline() - time.monotonic()
                 if remaining <= 0 or not selector.select(remaining):
                     raise TimeoutError
@@ -119,12 +136,17 @@ class _Child:
         """Kill the child and everything it started; return what learner code printed (capped)."""
         return self.handle.stop(_CAPTURE_LIMIT)
 
-    def exit_description(self) -> str:
+    def exit_description(self, limits: Limits) -> str:
+        from grader.confine import OUT_OF_MEMORY
+
         code = self.handle.returncode
         if code is None:
             return "it was still running"
         if code < 0:
             return f"killed by signal {signal.Signals(-code).name}"
+        if code == OUT_OF_MEMORY and limits.memory_bytes:
+            return (f"it ran out of memory: all its processes together may use at most "
+                    f"{limits.memory_bytes >> 20} MiB")
         return f"exit status {code}"
 
 
@@ -143,6 +165,7 @@ class Session:
         self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
         self.output = ""
         self._files: dict[str, str] | None = None
+        self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
         self._child: _Child | None = _Child(started or self.launcher(submission))
 
     def close(self) -> None:
@@ -150,9 +173,17 @@ class Session:
             self.output += self._child.stop()
             self._child = None
 
+    @property
+    def learner_end(self) -> float:
+        """When this learner's whole time budget (Limits.learner_seconds) runs out (time.monotonic());
+        it starts with the first run."""
+        return float("inf") if self._learner_end is None else self._learner_end
+
     def run(self, requests: list[ChapterRequest]) -> dict[str, ChapterRun]:
         runs = {r.chapter: ChapterRun(r.chapter, results=[None] * len(r.calls)) for r in requests}
         pending = list(requests)
+        if self._learner_end is None:
+            self._learner_end = time.monotonic() + self.limits.learner_seconds
         try:
             while pending:
                 before = _unresolved(runs)
@@ -190,7 +221,7 @@ class Session:
                  "chapter": None, "index": None, "stage": "startup"}
 
         def deadline() -> float:
-            return min(state["deadline"], state["chapter_end"])
+            return min(state["deadline"], state["chapter_end"], self.learner_end)
 
         # The child's lines must follow the request exactly: import, imported, then one result per
         # pending call in order, ..., done. Anything else means learner code wrote to the channel
@@ -226,8 +257,7 @@ class Session:
                         continue
                 elif stage == "import" and name == state["chapter"]:
                     if kind == IMPORT_FAILED:
-                        error = event.get("error")
-                        runs[name].import_error = error if isinstance(error, dict) else {}
+                        runs[name].import_error = clean_error(event.get("error"))
                         position.update(chapter=position["chapter"] + 1, call=0)
                         state.update(stage="between", deadline=now + limits.call_seconds)
                         continue
@@ -252,7 +282,7 @@ class Session:
         if finished:
             return []
         exit_text = ("it broke the grading protocol: learner code wrote to the grader's result channel"
-                     if violated else child.exit_description())
+                     if violated else child.exit_description(self.limits))
         return self._recover(state, pending, runs, timed_out, exit_text)
 
     def _recover(self, state: dict, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
@@ -267,6 +297,8 @@ class Session:
             return []
         run = runs[name]
         req = next(r for r in pending if r.chapter == name)
+        if time.monotonic() >= self.learner_end:
+            return self._budget_spent(pending, runs, state)
         chapter_over = time.monotonic() >= state["chapter_end"]
         if state["stage"] == "import":
             why = (f"importing it took longer than {self.limits.import_seconds:g} s" if timed_out
@@ -292,6 +324,19 @@ class Session:
         rest = [r for r in pending[position:] if runs[r.chapter].import_error is None
                 and any(x is None for x in runs[r.chapter].results)]
         return rest
+
+
+    def _budget_spent(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun], state: dict) -> list:
+        """The learner's whole time is spent: every call not yet answered, in every chapter, timed out."""
+        note = f"this learner's {self.limits.learner_seconds:g} s for all chapters ran out"
+        for req in pending:
+            run = runs[req.chapter]
+            if run.import_error is not None:
+                continue
+            for i, c in enumerate(req.calls):
+                if run.results[i] is None:
+                    run.results[i] = Returned(TIMEOUT, c.function, note=note)
+        return []
 
 
 def _unresolved(runs: dict[str, ChapterRun]) -> int:

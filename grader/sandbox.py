@@ -30,7 +30,7 @@ from grader.spawn import child_path
 NOBODY = 65534
 GRADER_DIR = os.path.dirname(os.path.abspath(__file__))
 # The grader modules the child (and the fork server) import: nothing else of the grader is visible.
-CHILD_MODULES = ("__init__.py", "child.py", "wire.py", "catalogue.py", "forkserver.py", "spawn.py")
+CHILD_MODULES = ("__init__.py", "child.py", "wire.py", "catalogue.py", "confine.py", "forkserver.py", "spawn.py")
 # What learner code may import (the contract: numpy, math, sympy, an autograd library), with what
 # those import in turn.
 LEARNER_PACKAGES = ("numpy", "sympy", "mpmath")

@@ -122,7 +122,7 @@ class SpawnedChild:
         """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
         import json
 
-        request = dict(request, root=self.root)
+        request = dict(request, root=self.root, confine=not self.host_root)
         try:
             self.process.stdin.write(json.dumps(request).encode())
             self.process.stdin.close()

@@ -256,7 +256,8 @@ class Returned:
     @property
     def text(self) -> str | None:
         """The returned string (first 80 characters), or None when the value is not a str."""
-        return self.encoded.get("text") if self.ok and self.encoded.get("t") == T_STR else None
+        text = self.encoded.get("text") if self.ok and self.encoded.get("t") == T_STR else None
+        return text if isinstance(text, str) else None
 
     def items(self) -> list[Returned] | None:
         """The elements of a returned tuple or list, each as its own Returned."""
@@ -314,15 +315,55 @@ class Returned:
         return (self.error or {}).get("traceback", "") if self.kind == RAISED else ""
 
 
+def clean_error(value: object) -> dict:
+    """An error description from the child with every field of the type the grader reads (learner code
+    can forge result lines, so nothing in one is trusted to have the right types)."""
+    value = value if isinstance(value, dict) else {}
+
+    def text(key: str, limit: int = 20_000) -> str:
+        item = value.get(key)
+        return item[:limit] if isinstance(item, str) else ""
+
+    line = value.get("line")
+    bases = value.get("bases")
+    return {"exception": text("exception", 200), "message": text("message", 2000), "traceback": text("traceback"),
+            "line": line if isinstance(line, int) and not isinstance(line, bool) else None,
+            "not_implemented": value.get("not_implemented") is True,
+            "bases": [b for b in bases if isinstance(b, str)][:8] if isinstance(bases, list) else []}
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def valid_value(encoded: object, depth: int = 0) -> bool:
+    """Whether an encoded value has the shape encode_value gives it (a forged one may not)."""
+    if not isinstance(encoded, dict) or not isinstance(encoded.get("t"), str) or depth > _MAX_DEPTH:
+        return False
+    kind = encoded["t"]
+    if kind in (T_TUPLE, T_LIST):
+        items = encoded.get("items")
+        return isinstance(items, list) and len(items) <= _MAX_ITEMS and all(valid_value(i, depth + 1) for i in items)
+    if kind == T_SCALAR:
+        return _is_number(encoded.get("data"))
+    if kind == T_NDARRAY:
+        shape = encoded.get("shape")
+        if not (isinstance(shape, list) and len(shape) <= 8 and all(isinstance(n, int) and 0 <= n for n in shape)):
+            return False
+        data = encoded.get("data")
+        return isinstance(encoded.get("f8"), str) if data is None else (
+            isinstance(data, list) and all(_is_number(v) for v in data))
+    return kind in (T_NONE, T_STR, T_OTHER, T_TOO_LARGE, T_NDARRAY_OTHER)
+
+
 def from_event(function: str, event: dict) -> Returned:
     """Build a Returned from one child result line (already parsed JSON)."""
     kind = event.get("event")
-    if kind == RETURNED and isinstance(event.get("value"), dict) and "t" in event["value"]:
+    if kind == RETURNED and valid_value(event.get("value")):
         return Returned(VALUE, function, encoded=event["value"])
     if kind == RAISED_EVENT and isinstance(event.get("error"), dict):
-        if event["error"].get("not_implemented"):
-            return Returned(NOT_IMPLEMENTED, function, error=event["error"])
-        return Returned(RAISED, function, error=event["error"])
+        error = clean_error(event["error"])
+        return Returned(NOT_IMPLEMENTED if error["not_implemented"] else RAISED, function, error=error)
     if kind == MISSING_EVENT:
         return Returned(MISSING, function)
     return Returned(CRASHED, function, note="the child sent a malformed result")

@@ -40,8 +40,9 @@ HOSTILE = {
     "os_exit_in_function": _h("    import os\n    os._exit(0)"),
     "prints_hundreds_of_mb": _h("    import sys\n    chunk = 'x' * (1 << 20)\n    for _ in range(400):\n"
                                 "        sys.stdout.write(chunk)\n    return np.zeros((2, 2))"),
-    "sleeping_children": _module(f"import subprocess\nsubprocess.Popen(['sleep', '{MARKER}'])\n"
-                                 f"subprocess.Popen(['sleep', '{MARKER}'], start_new_session=True)\n"),
+    # background Pythons (the sandbox holds no other program) that outlive the import
+    "sleeping_children": _module(f"import subprocess, sys\nSLEEP = [sys.executable, '-c', 'import time; time.sleep({MARKER})']\n"
+                                 "subprocess.Popen(SLEEP)\nsubprocess.Popen(SLEEP, start_new_session=True)\n"),
     "reads_references": _h("    from solutions.ch06_measurement import H_jacobian as reference\n"
                            "    return reference(x, y)"),
     "reads_reference_file": _h(f"    text = open({os.path.join(GRADER_PARENT, 'solutions', 'ch06_measurement.py')!r}).read()\n"

@@ -53,10 +53,12 @@ def server(tmp_path):
 
 def test_background_processes_of_a_run_are_killed_before_the_next(server, submission_factory):
     spawner = submission_factory({"ch06_measurement": replace_function(
-        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import subprocess\n"
-        f"    subprocess.Popen(['sleep', '{MARKER}'], start_new_session=True)\n"
-        f"    subprocess.Popen(['sleep', '{MARKER}'])\n    return np.eye(2)\n")})
-    _grade(server, spawner)
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import subprocess, sys\n"
+        f"    sleep = [sys.executable, '-c', 'import time; time.sleep({MARKER})']\n"
+        "    subprocess.Popen(sleep, start_new_session=True)\n"
+        "    subprocess.Popen(sleep)\n    return np.eye(2)\n")})
+    spawned = _grade(server, spawner)
+    assert "entries differ" in spawned["H_worked_example"].message  # it returned: both processes started
     time.sleep(0.2)
     assert _strays() == []
     good = _grade(server, submission_factory())

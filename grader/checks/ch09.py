@@ -177,11 +177,10 @@ def expect_text(returned, expected: str, *, label: str) -> Verdict:
     """The call must return exactly the string `expected`."""
     if not returned.ok:
         return fail(returned.problem(), expected=expected)
-    enc = returned.encoded
-    if enc["t"] != "str":
+    text = returned.text
+    if text is None:
         shown = fmt_array(returned.as_array()) if returned.as_array() is not None else returned.type_name
         return fail(f"{label} returned {shown}; expected the string {expected!r}.", expected=expected)
-    text = enc["text"]
     if text == expected:
         return passed(expected=expected, got=text)
     hint = ""

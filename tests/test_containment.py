@@ -1,0 +1,247 @@
+"""One learner can never cost another a mark (grader.confine, grader.runner): each learner's run has its
+own user, mount, IPC and PID namespaces, a fresh /tmp, a cap on its processes and on the memory of all
+of them together, and one time budget; nothing it leaves (a process, a file, a SysV message queue or
+shared-memory segment, a key in the user's keyring) reaches the next learner on the same fork server
+or a later, separate run. A malformed result line is a protocol violation, never an exception.
+Real processes, real bubblewrap (CI has it)."""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from grader.forkserver import ForkServer
+from grader.grading import grade
+from grader.runner import Limits, Session
+from grader.sandbox import Sandbox
+from grader.submission import Submission
+from grader.wire import MAX_LINE, clean_error
+from tests.conftest import REPO, build_submission, replace_function
+
+BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
+pytestmark = pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"),
+                                reason="per-learner containment is the bubblewrap sandbox's")
+MARKER = "161.803"  # in the command line of every process a hostile learner leaves, to find strays
+QUEUE_KEY, SEGMENT_KEY = 0x5EED01, 0x5EED02
+
+# Learner A leaves one of everything; learner B looks for each and says what it found.
+LEAVES = """
+def H_jacobian(x, y):
+    import ctypes, os, platform, sys
+    libc = ctypes.CDLL(None, use_errno=True)
+    assert libc.msgget(QUEUE_KEY, 0o1666) >= 0, 'no message queue'
+    assert libc.shmget(SEGMENT_KEY, 64 << 20, 0o1666) >= 0, 'no shared memory'
+    add_key = {'x86_64': 248, 'aarch64': 217}[platform.machine()]
+    assert libc.syscall(add_key, b'user', b'left-by-a', b'secret', 6, -4) > 0, 'no key'
+    os.chdir('/tmp')
+    for _ in range(60):  # a path far longer than PATH_MAX
+        os.mkdir('d' * 100)
+        os.chdir('d' * 100)
+    open('left.txt', 'w').write('x')
+    open('/dev/shm/left', 'w').write('x')
+    return np.eye(2)
+""".replace("QUEUE_KEY", str(QUEUE_KEY)).replace("SEGMENT_KEY", str(SEGMENT_KEY))
+
+LOOKS = """
+def H_jacobian(x, y):
+    import ctypes, os, platform
+    libc = ctypes.CDLL(None, use_errno=True)
+    keyctl = {'x86_64': 250, 'aarch64': 219}[platform.machine()]
+    found = []
+    if libc.msgget(QUEUE_KEY, 0) >= 0:
+        found.append('message queue')
+    if libc.shmget(SEGMENT_KEY, 0, 0) >= 0:
+        found.append('shared memory')
+    if libc.syscall(keyctl, 10, -4, b'user', b'left-by-a', 0) > 0:
+        found.append('key')
+    found += [f'/tmp/{name}' for name in os.listdir('/tmp') if name.startswith('d')]
+    found += [f'/dev/shm/{name}' for name in os.listdir('/dev/shm')]
+    raise ValueError('found ' + repr(found))
+""".replace("QUEUE_KEY", str(QUEUE_KEY)).replace("SEGMENT_KEY", str(SEGMENT_KEY))
+
+
+def _h(tmp_path: Path, name: str, source: str) -> Path:
+    return build_submission(tmp_path / name, {"ch06_measurement": replace_function("ch06_measurement", "H_jacobian",
+                                                                                    source)})
+
+
+def _ch06(session: Session) -> dict:
+    return {c.id: c for c in grade(session, ["ch06"], seed=3).chapters[0].checks}
+
+
+def _strays() -> list[str]:
+    found = []
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            try:
+                if MARKER in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
+                    found.append(pid)
+            except OSError:
+                continue
+    return found
+
+
+def _host_ipc_keys() -> set[int]:
+    keys = set()
+    for table in ("msg", "shm"):
+        try:
+            rows = Path(f"/proc/sysvipc/{table}").read_text().splitlines()[1:]
+        except OSError:
+            continue
+        keys |= {int(row.split()[0]) for row in rows if row.split()}
+    return keys
+
+
+def test_nothing_a_learner_leaves_reaches_the_next_learner_or_a_later_run(tmp_path):
+    server = ForkServer(Sandbox())
+    try:
+        left = _ch06(Session(Submission(_h(tmp_path, "a", LEAVES), "exercises"), launcher=server.start))
+        assert "entries differ" in left["H_worked_example"].message, left["H_worked_example"].message  # all made
+        after = _ch06(Session(Submission(_h(tmp_path, "b", LOOKS), "exercises"), launcher=server.start))
+    finally:
+        server.close()
+    assert "found []" in after["H_worked_example"].message, after["H_worked_example"].message
+    later = subprocess.run([sys.executable, "-m", "grader", "ch06", "--no-quiz", "--format", "json", "--submission",
+                            str(_h(tmp_path, "c", LOOKS))], cwd=REPO, capture_output=True, text=True, timeout=120)
+    message = next(c["message"] for c in json.loads(later.stdout)["chapters"][0]["checks"]
+                   if c["id"] == "H_worked_example")
+    assert "found []" in message, message
+    assert not {QUEUE_KEY, SEGMENT_KEY} & _host_ipc_keys()  # gone with the learner's IPC namespace
+
+
+MEMORY_HOG = f"""
+def H_jacobian(x, y):
+    import subprocess, sys, time
+    grab = 'import numpy, time; block = numpy.ones(300 << 17); time.sleep({MARKER})'  # 300 MiB each
+    for _ in range(3):
+        subprocess.Popen([sys.executable, '-c', grab])
+    block = np.ones(300 << 17)
+    time.sleep(10)
+    return np.eye(2)
+"""
+
+
+def test_the_memory_of_all_of_a_learners_processes_together_is_capped(tmp_path):
+    limits = Limits(memory_bytes=512 << 20, call_seconds=8.0)
+    server = ForkServer(Sandbox())
+    try:
+        started = time.monotonic()
+        hog = _ch06(Session(Submission(_h(tmp_path, "hog", MEMORY_HOG), "exercises"), limits, launcher=server.start))
+        elapsed = time.monotonic() - started
+        good = _ch06(Session(Submission(build_submission(tmp_path / "good"), "exercises"), limits, launcher=server.start))
+    finally:
+        server.close()
+    message = hog["H_worked_example"].message
+    assert "ran out of memory: all its processes together may use at most 512 MiB" in message, message
+    assert elapsed < 8, elapsed  # stopped when it crossed the cap, not when the call's time ran out
+    assert all(c.status.value == "pass" for c in good.values())
+    time.sleep(0.2)
+    assert _strays() == []
+
+
+# at import: takes every process slot it can, and any that comes free, for 4 s
+PROCESS_HOG = f"""import os, time
+HELD, _end = 0, time.monotonic() + 4
+while time.monotonic() < _end:
+    try:
+        _pid = os.fork()
+    except OSError:
+        time.sleep(0.005)
+        continue
+    if _pid == 0:
+        time.sleep({MARKER})
+        os._exit(0)
+    HELD += 1
+
+
+def range_bearing(x, y):
+    raise ValueError(f'held {{HELD}} processes')
+"""
+
+
+def test_a_learner_holding_every_process_slot_costs_no_one_else(tmp_path):
+    """`ulimit -u 300` stands in for the machine's limit; 40 learners are graded in the other worker while
+    the hog holds what it can. Its own cap (64 processes) leaves the rest to them."""
+    submissions = tmp_path / "submissions"
+    submissions.mkdir()
+    build_submission(submissions / "hog", {"ch06_measurement": PROCESS_HOG})
+    for n in range(40):
+        build_submission(submissions / f"innocent{n:02d}")
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(tmp_path / "out"),
+                           "--chapters", "ch06", "--jobs", "2", "--no-html"], cwd=REPO, capture_output=True, text=True,
+                          timeout=300, preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NPROC, (300, 300)))
+    assert done.returncode in (0, 1), done.stderr
+    for n in range(40):
+        report = json.loads((tmp_path / "out" / f"innocent{n:02d}" / "report.json").read_text(encoding="utf-8"))
+        chapter = report["chapters"][0]
+        assert chapter["code_score"] == chapter["code_max_score"], (n, chapter["problems"])
+    hog = json.loads((tmp_path / "out" / "hog" / "report.json").read_text(encoding="utf-8"))
+    message = next(c["message"] for c in hog["chapters"][0]["checks"] if c["id"] == "range_bearing_worked_example")
+    held = int(message.split("held ")[1].split()[0])
+    assert 30 <= held < 64, message  # it got its own processes, up to its cap, never more
+    time.sleep(0.2)
+    assert _strays() == []
+
+
+def test_one_time_budget_for_all_of_a_learners_chapters(tmp_path):
+    functions = {"ch03_jacobian": ["polar_to_cartesian", "polar_to_cartesian_jacobian", "area_scale"],
+                 "ch06_measurement": ["range_bearing", "H_jacobian", "measurement_covariance"],
+                 "ch07_dynamics": ["motion_model", "F_jacobian", "propagate_covariance"]}
+    hanging = {module: "import time\ntime.sleep(1.5)\n\n" + "".join(
+        f"def {name}(*args, **kwargs):\n    while True:\n        pass\n\n" for name in names)
+        for module, names in functions.items()}
+    limits = Limits(learner_seconds=6.0, import_seconds=3.0, call_seconds=2.0, chapter_seconds=20.0)
+    started = time.monotonic()
+    report = grade(Session(Submission(build_submission(tmp_path / "slow", hanging), "exercises"), limits),
+                   ["ch03", "ch06", "ch07"], seed=3)
+    elapsed = time.monotonic() - started
+    assert elapsed < 9, elapsed  # without the budget: 3 imports + 3 hung calls of 2 s, then more
+    messages = [c.message for ch in report.chapters for c in ch.checks]
+    assert any("6 s for all chapters ran out" in m for m in messages), messages
+    assert all(c.status.value != "pass" for ch in report.chapters for c in ch.checks)
+
+
+def test_a_malformed_or_forged_result_line_is_a_protocol_violation_not_an_exception(tmp_path):
+    nested = ("import os\nfor fd in range(3, 64):\n    try:\n        os.write(fd, b'[' * 200000 + b'\\n')\n"
+              "    except OSError:\n        pass\n")
+    forged = ("import os, json\nline = json.dumps({'event': 'import-failed', 'chapter': 'ch06', 'error': "
+              "{'exception': 7, 'message': 5, 'line': 'x', 'traceback': ['no']}}).encode() + b'\\n'\n"
+              "for fd in range(3, 64):\n    try:\n        os.write(fd, line)\n    except OSError:\n        pass\n")
+    for name, module in (("nested", nested), ("forged", forged)):
+        root = build_submission(tmp_path / name, {"ch06_measurement": (REPO / "solutions" / "ch06_measurement.py")
+                                                  .read_text(encoding="utf-8") + "\n" + module})
+        report = grade(Session(Submission(root, "exercises")), ["ch03", "ch06", "ch07"], seed=3)
+        by_chapter = {c.chapter: c for c in report.chapters}
+        assert by_chapter["ch03"].score == by_chapter["ch03"].max_score, name  # the rest is graded normally
+        assert by_chapter["ch07"].score == by_chapter["ch07"].max_score, name
+        ch06 = by_chapter["ch06"]
+        assert ch06.score == 0 and ch06.problems, (name, ch06.problems)
+        if name == "nested":
+            assert "broke the grading protocol" in ch06.problems[0], ch06.problems
+
+
+def test_result_lines_are_read_without_trusting_their_types():
+    from grader.runner import MALFORMED, _parse
+
+    assert _parse(b"[" * 200_000) is MALFORMED and _parse(b"3") is MALFORMED
+    assert _parse(b"x" * (MAX_LINE + 1)) is MALFORMED
+    assert clean_error({"exception": 7, "message": 5, "line": True, "traceback": ["x"], "bases": [1, "A"]}) == {
+        "exception": "", "message": "", "traceback": "", "line": None, "not_implemented": False, "bases": ["A"]}
+
+
+def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tmp_path):
+    class Broken(Sandbox):
+        def __call__(self, command):
+            return [sys.executable, "-c", "raise SystemExit(3)"]
+
+    report = grade(Session(Submission(build_submission(tmp_path / "any"), "exercises"), wrap=Broken()), ["ch06"])
+    assert "failed to start" in report.infrastructure
+    assert all(c.status.value == "error" for c in report.chapters[0].checks)
