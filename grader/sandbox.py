@@ -175,7 +175,7 @@ class Sandbox:
         return self.bwrap is not None
 
     def describe(self) -> str:
-        """The isolation line: what holds for learner code here."""
+        """The isolation line: what holds for learner code here, per learner as well."""
         if not self.available:
             from grader.course import in_handout
 
@@ -184,8 +184,16 @@ class Sandbox:
             return ("isolation: no sandbox (bubblewrap not found; apt-get install bubblewrap): learner code runs "
                     f"as you, with resource limits only, and can read every file you can ({readable})")
         who = "as uid 65534" if self.drops_to_nobody else "as you"
+        from grader.runner import Limits
+
+        limits = Limits()
+        each = (f"; each learner in namespaces of its own (processes, IPC, keyring, a fresh {limits.tmp_bytes >> 20} MiB "
+                f"/tmp), at most {limits.processes} processes and {limits.memory_bytes >> 20} MiB for all of them, "
+                f"{limits.learner_seconds:g} s in all" if user_namespaces() else
+                "; this kernel allows no user namespaces, so learners share the sandbox's uid, keyring and IPC and "
+                "have no cap on their processes or memory as a whole")
         return ("isolation: bubblewrap sandbox, an allow-list: learner code sees the interpreter, numpy/sympy and its "
-                f"own files only (no answers, no other learner, no network), {who}")
+                f"own files only (no answers, no other learner, no network), {who}{each}")
 
     def scratch_dirs(self) -> list[str]:
         """The only folders learner code can write to inside the sandbox."""
@@ -263,6 +271,20 @@ class Sandbox:
                      "--unshare-ipc", "--unshare-pid", "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
                      "--die-with-parent", "--new-session", "--chdir", "/tmp"])
         return args
+
+
+def user_namespaces() -> bool:
+    """Whether an unprivileged process may create a user namespace here (grader.confine needs one)."""
+    def read(path: str, default: str) -> str:
+        try:
+            with open(path, encoding="utf-8") as handle:
+                return handle.read().strip()
+        except OSError:
+            return default
+
+    return (read("/proc/sys/user/max_user_namespaces", "0") not in ("0", "")
+            and read("/proc/sys/kernel/unprivileged_userns_clone", "1") == "1"
+            and read("/proc/sys/kernel/apparmor_restrict_unprivileged_userns", "0") == "0")
 
 
 def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:

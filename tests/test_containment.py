@@ -245,3 +245,14 @@ def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tm
     report = grade(Session(Submission(build_submission(tmp_path / "any"), "exercises"), wrap=Broken()), ["ch06"])
     assert "failed to start" in report.infrastructure
     assert all(c.status.value == "error" for c in report.chapters[0].checks)
+
+
+def test_the_isolation_line_says_which_guarantees_hold_here():
+    from grader.sandbox import user_namespaces
+
+    line = Sandbox().describe()
+    assert "an allow-list" in line
+    if user_namespaces():
+        assert "each learner in namespaces of its own" in line and "at most 64 processes and 1024 MiB" in line
+    else:
+        assert "allows no user namespaces" in line
