@@ -10,12 +10,13 @@ code runs here: answers are data, read from YAML and parsed behind a whitelist (
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 
 from grader.chapters import BY_ID
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
-from grader.quiz.answers import LOADER, MAX_BYTES, read
+from grader.quiz.answers import LOADER, MAX_BYTES, TOO_LARGE, read
 from grader.quiz.symbolic import AnswerError
 
 DEFAULT_LEARNER = "anonymous"
@@ -73,13 +74,23 @@ def _short(text: str, width: int = 100) -> str:
 RECORDED_MESSAGE = "recorded; graded when you submit"
 
 
+OUT_OF_TIME = "not judged: the time for this learner ran out before this question's turn"
+
+
+def _time_is_up(deadline: float | None) -> bool:
+    return deadline is not None and time.monotonic() >= deadline
+
+
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
-               quiz_dir: Path | None = None) -> tuple[list[CheckResult], list[str]]:
+               quiz_dir: Path | None = None, deadline: float | None = None) -> tuple[list[CheckResult], list[str]]:
     """The quiz results of one chapter, and chapter-level problems (file, line, question).
 
     A question whose key is here is judged. One whose key is not (no keys file, not in it, or
     computed by references that are not installed) has its answer read and format-checked
-    without sympy and is RECORDED when well-formed: graded on submission, not in max_score."""
+    without sympy and is RECORDED when well-formed: graded on submission, not in max_score.
+    Whatever an answer holds, it costs only its own question: an answer that cannot be read or
+    judged fails with file, line and why; one not judged by `deadline` (time.monotonic()) is SKIP
+    with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED."""
     from grader.quiz.judge import fmt_value, judge, read_answer, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
@@ -109,20 +120,34 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.message = "not answered yet"
             continue
         result.got = answer.text
+        if _time_is_up(deadline):
+            result.status, result.message = Status.SKIP, OUT_OF_TIME
+            continue
+        where = f"{shown}, line {answer.line}, question {question.id}"
         key = keys.get(question.id)
         try:
-            right_value = None if key is None else key.value_for(chapter, values)
-        except bank.KeyUnavailable:
-            key = None
-        try:
+            try:
+                right_value = None if key is None else key.value_for(chapter, values)
+            except bank.KeyUnavailable:
+                key = None
             if key is None:
                 read_answer(question, answer.value, lettering)
                 result.status, result.message = Status.RECORDED, RECORDED_MESSAGE
                 continue
             verdict = judge(question, key, answer.value, right_value,
-                            bank.variant_seed("points", chapter, question.id), lettering)
+                            bank.variant_seed("points", chapter, question.id), lettering, deadline)
         except AnswerError as exc:
-            result.message = f"{shown}, line {answer.line}, question {question.id}: {exc}"
+            result.message = f"{where}: {exc}"
+            continue
+        except OverflowError:
+            result.message = f"{where}: {TOO_LARGE}"
+            continue
+        except Exception as exc:  # noqa: BLE001  one answer never costs more than its question
+            result.status = Status.ERROR
+            result.message = f"{where}: could not be judged ({type(exc).__name__}); please tell your instructor"
+            continue
+        if verdict.out_of_time:
+            result.status, result.message = Status.SKIP, OUT_OF_TIME
             continue
         result.points = question.points * verdict.fraction
         result.status = Status.PASS if verdict.right else Status.FAIL
@@ -132,20 +157,27 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     return results, problems
 
 
-def add_quiz_results(report: Report, root: Path, package: str, learner: str | None = None) -> str:
+def add_quiz_results(report: Report, root: Path, package: str, learner: str | None = None,
+                     deadline: float | None = None) -> str:
     """Append each chapter's quiz results to `report` and record whose variants were graded.
-    Reads YAML only: no learner code runs, and sympy is imported only for an answer that needs it."""
+    Reads YAML only: no learner code runs, and sympy runs (in a separate process) only for an answer
+    that needs it. Questions not judged by `deadline` (a time.monotonic() value: what is left of the
+    learner's time) say that the time ran out. Nothing in an answer file raises out of here: the
+    report's code results always stay."""
     folder = answers_dir(root, package)
     who, source = learner_id(folder, learner, package)
     report.learner = f"{who} (from {source})"
     for chapter in report.chapters:
         try:
-            results, problems = grade_quiz(chapter.chapter, folder, who, f"{package}/answers")
+            results, problems = grade_quiz(chapter.chapter, folder, who, f"{package}/answers", deadline=deadline)
         except bank.BankError as exc:
             chapter.problems.append(f"quiz not graded: {exc}")
             continue
         except FileNotFoundError:
             continue  # a chapter without a quiz
+        except Exception as exc:  # noqa: BLE001  the quiz never takes the code results with it
+            chapter.problems.append(f"quiz not graded: {type(exc).__name__}: {exc}")
+            continue
         chapter.checks.extend(results)
         chapter.problems.extend(problems)
     return report.learner

@@ -23,6 +23,8 @@ MAX_BYTES = 64_000
 MAX_DEPTH = 3  # an answer, a list, a list of lists (a matrix)
 MAX_ITEMS = 100
 _ENTRY = re.compile(r"^([A-Za-z_][\w-]*)\s*:")
+MAX_INT_BITS = 1000  # about 301 decimal digits: the integers a float can hold, with room to spare
+TOO_LARGE = "the number is too large"
 
 
 @dataclass
@@ -61,6 +63,36 @@ def _shape_problem(node: yaml.Node) -> str | None:
     return None
 
 
+def _construct(constructor: yaml.constructor.SafeConstructor, node: yaml.Node) -> tuple[object, str | None]:
+    """(the answer as data, None) or (None, why it cannot be read). An integer too large for a float
+    (310 digits or more; Python refuses to even read 4301 or more) is refused here, before anything
+    converts it: it would raise OverflowError or ValueError where the answer is judged."""
+    try:
+        value = constructor.construct_object(node, deep=True)
+    except (yaml.YAMLError, RecursionError) as exc:
+        return None, str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    except ValueError as exc:  # the digits limit of int(), or a date such as 2001-13-01
+        if "digits" in str(exc):
+            return None, TOO_LARGE
+        return None, f"cannot read this value ({str(exc).splitlines()[0][:100] if str(exc) else type(exc).__name__})"
+    except (OverflowError, TypeError, ArithmeticError) as exc:
+        return None, f"cannot read this value ({type(exc).__name__})"
+    if _too_large(value):
+        return None, TOO_LARGE
+    return value, None
+
+
+def _too_large(value: object) -> bool:
+    """Whether `value` holds an integer beyond the range of a float (checked without converting it)."""
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, int):
+        return value.bit_length() > MAX_INT_BITS
+    if isinstance(value, (list, tuple)):
+        return any(_too_large(item) for item in value)
+    return False
+
+
 def _entries_of_node(node: yaml.Node, offset: int, source: str, shown: str, out: AnswerFile) -> None:
     if not isinstance(node, yaml.MappingNode):
         out.problems.append(f"{shown}, line {node.start_mark.line + 1 + offset}: expected `question_id: answer` lines")
@@ -74,10 +106,7 @@ def _entries_of_node(node: yaml.Node, offset: int, source: str, shown: str, out:
             continue
         problem = _shape_problem(value_node)
         if problem is None:
-            try:
-                value = constructor.construct_object(value_node, deep=True)
-            except (yaml.YAMLError, RecursionError) as exc:
-                problem = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            value, problem = _construct(constructor, value_node)
         if problem is not None:
             out.unreadable[key] = f"{shown}, line {line}, question {key}: {problem}"
             out.answers.pop(key, None)

@@ -15,7 +15,9 @@ import numpy as np
 from grader.quiz.bank import Key, Question
 from grader.quiz.symbolic import (
     MAX_LENGTH,
+    SIMPLIFY_SECONDS,
     AnswerError,
+    Simplifier,
     Undefined,
     check_text,
     equivalent,
@@ -23,12 +25,17 @@ from grader.quiz.symbolic import (
     number,
 )
 
+UNDECIDED = (f"could not be decided in time: whether this expression equals the right one took sympy longer "
+             f"than {SIMPLIFY_SECONDS:g} s to check, or more than it could; write it in a simpler form")
+
 
 @dataclass
 class Judgement:
     fraction: float  # of the question's points
     feedback: str
     right: bool = False
+    undecided: bool = False  # sympy had to decide and could not in time (then fraction is 0)
+    out_of_time: bool = False  # ... because the learner's deadline came first
 
 
 def _letters(value: object, lettering: dict[str, str]) -> list[str]:
@@ -128,10 +135,11 @@ def read_answer(question: Question, value: object, lettering: dict[str, str] | N
 
 
 def judge(question: Question, key: Key, value: object, right_value: object, seed: int,
-          lettering: dict[str, str] | None = None) -> Judgement:
+          lettering: dict[str, str] | None = None, deadline: float | None = None) -> Judgement:
     """The verdict on `value` (letters as shown through `lettering`, default the bank's own) against
     `right_value`; feedback of a wrong option names it by its shown letter. AnswerError when the
-    answer cannot be read."""
+    answer cannot be read. A symbolic answer that sympy must decide is decided in a separate process
+    within SIMPLIFY_SECONDS and before `deadline` (time.monotonic()), else `undecided`."""
     lettering = lettering or identity_lettering(question)
     got = read_answer(question, value, lettering)
     kind = question.kind
@@ -165,11 +173,15 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
                     np.all(np.abs(got - candidate) <= key.atol + key.rtol * np.abs(candidate)):
                 return Judgement(0.0, wrong["feedback"])
         return Judgement(0.0, "not within the tolerance of the right value")
-    if equivalent(got, str(right_value), question.symbols, question.domain, seed):
-        return Judgement(1.0, key.explanation, True)
-    for wrong in key.wrong:
-        if equivalent(got, str(wrong["answer"]), question.symbols, question.domain, seed):
-            return Judgement(0.0, wrong["feedback"])
+    with Simplifier(deadline) as simplifier:  # a process only if sympy must decide
+        same = equivalent(got, str(right_value), question.symbols, question.domain, seed, simplifier)
+        if same:
+            return Judgement(1.0, key.explanation, True)
+        if same is None:
+            return Judgement(0.0, UNDECIDED, undecided=True, out_of_time=simplifier.out_of_time)
+        for wrong in key.wrong:
+            if equivalent(got, str(wrong["answer"]), question.symbols, question.domain, seed, simplifier):
+                return Judgement(0.0, wrong["feedback"])
     return Judgement(0.0, "not equivalent to the right expression")
 
 

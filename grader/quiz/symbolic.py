@@ -12,16 +12,23 @@ random points of the question's domain. Agreement at NUMERIC_POINTS points (at l
 MIN_POINTS) means equal; a clear difference at one point where both sides are defined means not
 equal (then simplify(a - b) cannot be 0 either). Only when too few points are defined does sympy
 decide: parse_expr with exactly the allowed names, and simplify(a - b) == 0 within
-SIMPLIFY_SECONDS. "Undecided" (a timeout, an error) is never "equal". So sympy is imported only
-for those rare answers, and `grade` stays fast.
+SIMPLIFY_SECONDS, in a separate process that is killed when the time is up (Simplifier).
+"Undecided" (a timeout, sympy's error) is never "equal". So sympy is imported only for those rare
+answers, never in the grading process itself, and `grade` stays fast.
 """
 
 from __future__ import annotations
 
 import ast
+import json
 import math
+import os
 import random
-import threading
+import selectors
+import signal
+import subprocess
+import sys
+import time
 from fractions import Fraction
 
 MAX_LENGTH = 200
@@ -244,28 +251,155 @@ def parse(text: str, symbols: tuple[str, ...] = ()):
         raise AnswerError(f"cannot read it as a formula ({type(exc).__name__})") from None
 
 
-def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...]) -> bool | None:
-    """simplify(answer - key) == 0 within SIMPLIFY_SECONDS (in a daemon thread); None if undecided."""
-    outcome: list = []
+class Simplifier:
+    """sympy's simplify in a separate process, where it can be stopped.
 
-    def work() -> None:
+    sympy's simplify on an allowed but hostile expression (exp(exp(exp(exp(exp(100)))))) runs for many
+    seconds in C-level big-number code that no thread can interrupt. So it runs in a child
+    interpreter of its own, started on first use (importing sympy there does not count against
+    SIMPLIFY_SECONDS), with CPU-time and memory limits (resource.setrlimit where the platform has
+    it), and killed with its process group when an answer takes longer than SIMPLIFY_SECONDS or the
+    learner's `deadline` (a time.monotonic() value) passes (then `out_of_time`). After a kill every
+    further question to this Simplifier is undecided at once. Use it as a context manager: the process ends with the block."""
+
+    def __init__(self, deadline: float | None = None) -> None:
+        self.deadline = deadline
+        self.process: subprocess.Popen | None = None
+        self.stopped = False
+        self.out_of_time = False  # stopped because the learner's deadline came first
+        self._buffer = b""
+
+    def __enter__(self) -> Simplifier:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    def _wait(self, seconds: float) -> bytes | None:
+        """The worker's next line within `seconds` and before the deadline; None if none came."""
+        limit = time.monotonic() + seconds
+        until = limit if self.deadline is None else min(limit, self.deadline)
+        line = self._line(until)
+        if line is None and until < limit:
+            self.out_of_time = True
+        return line or None
+
+    def _start(self) -> bool:
+        from grader.spawn import child_environment, child_path
+
+        # no -I/-E: the environment is grader.spawn's own (no PYTHONPATH), and its PYTHONHASHSEED=0 makes
+        # sympy's term order, and so its verdict, the same on every run
+        command = [sys.executable, "-S", "-c", _WORKER_BOOT.format(child_path())]
         try:
-            import sympy
+            self.process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                            stderr=subprocess.DEVNULL, bufsize=0, start_new_session=True,
+                                            env=child_environment())
+        except OSError:
+            return False
+        return self._wait(SYMPY_START_SECONDS) == b"ready"
 
-            outcome.append(bool(sympy.simplify(parse(answer, symbols) - parse(key, symbols)) == 0))
-        except Exception:  # noqa: BLE001  any failure is 'undecided'
-            outcome.append(None)
+    def _line(self, until: float) -> bytes | None:
+        """The worker's next line; None if none came by `until`, b"" if the worker ended."""
+        fd = self.process.stdout.fileno()
+        with selectors.DefaultSelector() as selector:
+            selector.register(fd, selectors.EVENT_READ)
+            while b"\n" not in self._buffer:
+                remaining = until - time.monotonic()
+                if remaining <= 0 or not selector.select(remaining):
+                    return None
+                chunk = os.read(fd, 4096)
+                if not chunk:
+                    return b""
+                self._buffer += chunk
+        line, self._buffer = self._buffer.split(b"\n", 1)
+        return line.strip() or b"?"
 
-    worker = threading.Thread(target=work, daemon=True)
-    worker.start()
-    worker.join(SIMPLIFY_SECONDS)
-    return outcome[0] if outcome else None
+    def is_zero(self, answer: str, key: str, symbols: tuple[str, ...]) -> bool | None:
+        """Whether simplify(answer - key) == 0; None when sympy could not decide it in time (or failed)."""
+        if self.stopped:
+            return None
+        if self.process is None and not self._start():
+            self._stop()
+            return None
+        job = json.dumps({"answer": answer, "key": key, "symbols": list(symbols)}).encode() + b"\n"
+        try:
+            self.process.stdin.write(job)
+        except OSError:
+            self._stop()
+            return None
+        verdict = self._wait(SIMPLIFY_SECONDS)
+        if verdict not in (b"true", b"false", b"error"):
+            self._stop()
+            return None
+        return None if verdict == b"error" else verdict == b"true"
+
+    def _stop(self) -> None:
+        self.close()
+        self.stopped = True
+
+    def close(self) -> None:
+        """Kill the worker and everything it started."""
+        if self.process is None:
+            return
+        try:
+            os.killpg(self.process.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+        self.process.wait()
+        self.process.stdin.close()
+        self.process.stdout.close()
+        self.process = None
+
+
+SYMPY_START_SECONDS = 30.0  # a fresh interpreter importing sympy (about 0.4 s; more on a loaded machine)
+SYMPY_CPU_SECONDS = 60  # a backstop: the worker is killed at its wall-clock time limits anyway
+SYMPY_MEMORY_BYTES = 2 << 30
+_WORKER_BOOT = "import sys; sys.path[:] = {!r}; from grader.quiz.symbolic import _worker; _worker()  # grader-sympy"
+
+
+def _worker() -> None:
+    """The Simplifier's process: limit itself, import sympy, say 'ready', then answer one job a line
+    (true, false, or error when sympy fails) until its input ends."""
+    try:
+        import resource
+
+        for limit, value in ((resource.RLIMIT_CPU, SYMPY_CPU_SECONDS), (resource.RLIMIT_AS, SYMPY_MEMORY_BYTES),
+                             (resource.RLIMIT_CORE, 0)):
+            try:
+                resource.setrlimit(limit, (value, value))
+            except (ValueError, OSError):
+                pass
+    except ImportError:  # not on this platform: the wall-clock kill still holds
+        pass
+    import sympy
+
+    out = sys.stdout.buffer
+    out.write(b"ready\n")
+    out.flush()
+    for line in iter(sys.stdin.buffer.readline, b""):
+        try:
+            job = json.loads(line)
+            symbols = tuple(job["symbols"])
+            same = bool(sympy.simplify(parse(job["answer"], symbols) - parse(job["key"], symbols)) == 0)
+            out.write(b"true\n" if same else b"false\n")
+        except Exception:  # noqa: BLE001  sympy's failure to decide is never "equal"
+            out.write(b"error\n")
+        out.flush()
+
+
+def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...], deadline: float | None = None) -> bool | None:
+    """simplify(answer - key) == 0 in a Simplifier of its own; None if undecided in time."""
+    with Simplifier(deadline) as simplifier:
+        return simplifier.is_zero(answer, key, symbols)
 
 
 def equivalent(answer: str, key: str, symbols: tuple[str, ...],
-               domain: dict[str, tuple[float, float]] | None = None, seed: int = 0) -> bool:
-    """Whether two expression texts are the same function of `symbols` (see the module docstring).
+               domain: dict[str, tuple[float, float]] | None = None, seed: int = 0,
+               simplifier: Simplifier | None = None) -> bool | None:
+    """Whether two expression texts are the same function of `symbols` (see the module docstring):
+    True or False, or None when sympy had to decide and could not in time (never "equal").
     `domain` maps a symbol to its (low, high) range; others are drawn from +-DEFAULT_DOMAIN.
+    `simplifier` is the Simplifier to ask if sympy must decide (else one of its own).
     AnswerError if `answer` cannot be read."""
     answer_tree = check_text(answer, symbols)
     key_tree = check_text(key, symbols)
@@ -290,4 +424,6 @@ def equivalent(answer: str, key: str, symbols: tuple[str, ...],
             return True
     if agree >= MIN_POINTS:
         return True
-    return _simplify_is_zero(answer, key, symbols) is True
+    if simplifier is not None:
+        return simplifier.is_zero(answer, key, symbols)
+    return _simplify_is_zero(answer, key, symbols)

@@ -1,0 +1,148 @@
+"""Quiz answers that would stall or crash the grader cost only their own question: integers too large
+for a float (OverflowError at 310 digits, ValueError at 4301), values YAML cannot build, a symbolic
+answer that sympy would chew on for many seconds (decided in a process of its own, killed at its time
+limit), and the learner's time running out (`add_quiz_results(..., deadline=...)`). The learner's code
+scores stay, in `grade chNN` and in `grade batch`."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+from grader.chapters import BY_ID
+from grader.model import ChapterResult, Report, Status
+from grader.quiz import OUT_OF_TIME, add_quiz_results, grade_quiz, symbolic
+from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
+from test_quiz_hardening import _sympy_workers
+from tests.conftest import REPO, build_submission
+
+# Allowed, and undefined (overflowing) at every point, so numbers cannot decide; sympy's simplify of it
+# minus ch06's dbearing_dx key runs for many seconds in code no thread can interrupt (always: some other
+# such expressions, exp(exp(exp(exp(exp(100))))) among them, make sympy give up at once on some runs).
+SLOW = "x*exp(exp(exp(exp(exp(1)))))"
+HUGE_ANSWERS = (f"bearing_near_dish: {RIGHT_CHOICE}\n"
+                f"H_at_point: [[{'9' * 4400}, 1], [1, 1]]\n"
+                f"bearing_variance: {'9' * 320}\n"
+                f"dbearing_dx: 0x{'f' * 4400}\n"
+                f"H_facts: {RIGHT_FACTS}\n")
+
+
+def _answers(root, text: str):
+    folder = root / "exercises" / "answers"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "ch06.yaml").write_text(text)
+    return folder
+
+
+def _grade(tmp_path, text, **kwargs):
+    results, problems = grade_quiz("ch06", _answers(tmp_path, text), "alice", "exercises/answers", **kwargs)
+    return {r.function: r for r in results}, problems
+
+
+def test_integers_too_large_for_a_float_fail_their_question_with_file_and_line(tmp_path):
+    results, _ = _grade(tmp_path, HUGE_ANSWERS + "dbearing_dy: 2001-13-01\n")
+    for line, qid in ((2, "H_at_point"), (3, "bearing_variance"), (4, "dbearing_dx")):
+        assert results[qid].status == Status.FAIL and results[qid].points == 0
+        assert results[qid].message == f"exercises/answers/ch06.yaml, line {line}, question {qid}: the number is too large"
+    assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+
+
+def test_a_number_within_float_range_is_still_read(tmp_path):
+    results, _ = _grade(tmp_path, f"bearing_variance: {'9' * 300}\n")
+    assert "too large" not in results["bearing_variance"].message  # read, and judged wrong
+    assert results["bearing_variance"].message == "not within the tolerance of the right value"
+
+
+def test_sympy_runs_in_a_process_that_is_killed_at_its_time_limit(tmp_path, monkeypatch):
+    monkeypatch.setattr(symbolic, "SIMPLIFY_SECONDS", 0.5)
+    started = time.monotonic()
+    results, _ = _grade(tmp_path, f"bearing_near_dish: {RIGHT_CHOICE}\ndbearing_dx: {SLOW}\nH_facts: {RIGHT_FACTS}\n")
+    assert time.monotonic() - started < 0.5 + 5
+    assert results["dbearing_dx"].status == Status.FAIL
+    assert results["dbearing_dx"].message.startswith("could not be decided in time")
+    assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+    assert _sympy_workers() == []
+    cpu = time.process_time()
+    time.sleep(0.5)
+    assert time.process_time() - cpu < 0.2
+
+
+def test_sympy_still_decides_what_only_it_can_and_never_in_the_grading_process():
+    # undefined at every real point, so numbers cannot decide: sympy does, in its own process
+    code = ("import sys; from grader.quiz.symbolic import equivalent; "
+            "print(equivalent('sqrt(-1 - x^2)*2', '2*sqrt(-1 - x^2)', ('x',)), "
+            "equivalent('sqrt(-1 - x^2)*3', '2*sqrt(-1 - x^2)', ('x',)), 'sympy' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert done.stdout.split() == ["True", "False", "False"], done.stderr
+
+
+def _quiz_only_report():
+    return Report("x", [ChapterResult("ch06", BY_ID["ch06"].title)])
+
+
+def test_questions_after_the_deadline_say_the_learners_time_ran_out(tmp_path):
+    _answers(tmp_path, f"bearing_near_dish: {RIGHT_CHOICE}\nH_facts: {RIGHT_FACTS}\n")
+    report = _quiz_only_report()
+    add_quiz_results(report, tmp_path, "exercises", "alice", deadline=time.monotonic() - 1)
+    checks = {c.function: c for c in report.chapters[0].checks}
+    for qid in ("bearing_near_dish", "H_facts"):
+        assert checks[qid].status == Status.SKIP and checks[qid].points == 0
+        assert "the time for this learner ran out" in checks[qid].message and checks[qid].message == OUT_OF_TIME
+    assert checks["H_at_point"].message == "not answered yet"
+
+
+def test_the_deadline_stops_sympy_too(tmp_path):
+    _answers(tmp_path, f"bearing_near_dish: {RIGHT_CHOICE}\ndbearing_dx: {SLOW}\nH_facts: {RIGHT_FACTS}\n")
+    report = _quiz_only_report()
+    started = time.monotonic()
+    add_quiz_results(report, tmp_path, "exercises", "alice", deadline=started + 1.0)  # sooner than SIMPLIFY_SECONDS
+    assert time.monotonic() - started < 1.0 + 1.5
+    checks = {c.function: c for c in report.chapters[0].checks}
+    assert checks["bearing_near_dish"].status == Status.PASS
+    assert checks["dbearing_dx"].status == Status.SKIP and checks["dbearing_dx"].message == OUT_OF_TIME
+    assert checks["H_facts"].status == Status.SKIP
+    assert _sympy_workers() == []
+
+
+@pytest.fixture(scope="module")
+def hostile_learner(tmp_path_factory):
+    """alice: right code, and answers with huge numbers and an expression sympy cannot decide in time."""
+    root = build_submission(tmp_path_factory.mktemp("quiz") / "alice")
+    _answers(root, HUGE_ANSWERS.replace(f"dbearing_dx: 0x{'f' * 4400}", f"dbearing_dx: {SLOW}"))
+    return root
+
+
+def test_grade_chapter_reports_each_answer_and_keeps_the_code_score(hostile_learner):
+    done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile_learner),
+                           "--learner", "alice", "--format", "json"], cwd=REPO, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr[-2000:]
+    chapter = json.loads(done.stdout)["chapters"][0]
+    assert chapter["code_score"] == chapter["code_max_score"] == 15
+    checks = {c["function"]: c for c in chapter["checks"] if c["kind"] == "quiz"}
+    assert checks["H_at_point"]["message"].endswith("line 2, question H_at_point: the number is too large")
+    assert checks["bearing_variance"]["message"].endswith("question bearing_variance: the number is too large")
+    assert checks["dbearing_dx"]["message"].startswith("could not be decided in time")
+    assert checks["bearing_near_dish"]["status"] == checks["H_facts"]["status"] == "pass"
+
+
+def test_batch_grades_the_learner_with_their_code_scores(hostile_learner, tmp_path):
+    submissions = tmp_path / "submissions"
+    submissions.mkdir()
+    shutil.copytree(hostile_learner, submissions / "alice")
+    build_submission(submissions / "bob")
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(tmp_path / "out"),
+                           "--chapters", "ch06", "--jobs", "2", "--no-html"], cwd=REPO, capture_output=True,
+                          text=True, timeout=180)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stdout + done.stderr[-2000:]
+    with open(tmp_path / "out" / "gradebook.csv", newline="", encoding="utf-8") as handle:
+        rows = {row["learner"]: row for row in csv.DictReader(handle)}
+    assert rows["alice"]["status"] == rows["bob"]["status"] == "graded"
+    assert rows["alice"]["ch06_code"] == rows["bob"]["ch06_code"] == "15"
+    assert float(rows["alice"]["ch06_quiz"]) > 0  # the right answers count
