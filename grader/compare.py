@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from grader.diagnose import Mistake, diagnose, shape_mistake
 from grader.wire import RAISED, Returned
 
 SHOWN_ENTRIES = 3
@@ -25,6 +26,7 @@ class Verdict:
     expected: object = None
     got: object = None
     details: dict = field(default_factory=dict)
+    mistake: Mistake | None = None  # the known mistake the wrong value matches (grader.diagnose)
 
 
 @dataclass(frozen=True)
@@ -49,10 +51,11 @@ class Entries:
         return text
 
 
-def fmt(value: float) -> str:
-    """A number as a learner reads it: up to 6 significant digits."""
+def fmt(value: float, zero_below: float = 0.0) -> str:
+    """A number as a learner reads it: up to 6 significant digits; 0 for anything no larger than
+    `zero_below` (a value meant as 0 that rounding left at 3.8e-17)."""
     value = float(value)
-    if value == 0:
+    if value == 0 or abs(value) <= zero_below:
         return "0"
     return f"{value:.6g}"
 
@@ -69,7 +72,7 @@ def tolerance_text(rtol: float, atol: float) -> str:
     return f"tolerance |got - expected| <= {atol:g} + {rtol:g}*|expected|"
 
 
-def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: str) -> str | None:
+def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: str, symbol: str = "result") -> str | None:
     """Why `returned` cannot be compared to a result of `expected_shape`, or None if it can."""
     if not returned.ok:
         return returned.problem()
@@ -89,25 +92,33 @@ def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: st
     if got is None:
         return f"{label} returned a malformed array."
     if got.shape != expected_shape:
-        return f"{label} returned shape {got.shape}; expected shape {expected_shape}."
+        mistake = shape_mistake(got.shape, expected_shape, symbol)
+        return f"{label} returned shape {got.shape}; expected shape {expected_shape}." + \
+            (f" {mistake.help[0].upper()}{mistake.help[1:]}" if mistake else "")
     return None
 
 
 def expect(returned: Returned, expected: object, *, label: str, rtol: float = 1e-6,
-           atol: float = 1e-9, entries: Entries | None = None) -> Verdict:
-    """Compare a learner's returned value with the expected number or array."""
+           atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = ()) -> Verdict:
+    """Compare a learner's returned value with the expected number or array; a wrong value is named by
+    the first of `mistakes` (then of the generic slips) it matches."""
     expected = np.asarray(expected, dtype=np.float64)
-    problem = value_problem(returned, expected.shape, label)
+    symbol = (entries or Entries("result")).symbol
+    problem = value_problem(returned, expected.shape, label, symbol)
     if problem is not None:
+        got = returned.as_array() if returned.ok else None
+        mistake = shape_mistake(got.shape, expected.shape, symbol) if got is not None else None
         return Verdict(False, problem, expected=expected,
-                       details={"traceback": returned.traceback} if returned.traceback else {})
-    return compare_arrays(returned.as_array(), expected, label=label, rtol=rtol, atol=atol, entries=entries)
+                       details={"traceback": returned.traceback} if returned.traceback else {}, mistake=mistake)
+    return compare_arrays(returned.as_array(), expected, label=label, rtol=rtol, atol=atol, entries=entries,
+                          mistakes=mistakes)
 
 
 def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: float = 1e-6,
                    atol: float = 1e-9, entries: Entries | None = None,
-                   expected_name: str = "expected") -> Verdict:
-    """Values of two float arrays of the same shape, with the worst entries named."""
+                   expected_name: str = "expected", mistakes: tuple | list = ()) -> Verdict:
+    """Values of two float arrays of the same shape, with the worst entries named, and the mistake the
+    wrong value matches (grader.diagnose) said first."""
     got = np.asarray(got, dtype=np.float64)
     expected = np.asarray(expected, dtype=np.float64)
     if got.shape != expected.shape:
@@ -129,14 +140,19 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: f
     order = np.argsort(-np.where(wrong, diff, -1.0), axis=None, kind="stable")
     worst = [tuple(int(i) for i in np.unravel_index(k, got.shape)) for k in order[: min(SHOWN_ENTRIES, int(wrong.sum()))]]
     lines = []
+    tiny = atol / 10  # below a tenth of the tolerance a number reads as 0
     if got.ndim == 0:
-        lines.append(f"{label}: got {fmt(got)}, {expected_name} {fmt(expected)}")
+        lines.append(f"{label}: got {fmt(got, tiny)}, {expected_name} {fmt(expected, tiny)}")
     else:
         lines.append(f"{label}: {int(wrong.sum())} of {got.size} entries differ")
         for idx in worst:
-            lines.append(f"  {entries.name(idx)}: got {fmt(got[idx])}, {expected_name} {fmt(expected[idx])}")
+            lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny)}, {expected_name} {fmt(expected[idx], tiny)}")
     lines.append(f"  ({tolerance_text(rtol, atol)}; largest difference {fmt(diff.max())})")
-    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()})
+    mistake = diagnose(got, expected, mistakes, entries if expected_name == "expected" else None, rtol, atol)
+    if mistake is not None:
+        lines.insert(0, f"{label}: {mistake.help}")
+        lines[1] = "  " + lines[1].replace(f"{label}: ", "", 1)
+    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()}, mistake)
 
 
 def expect_raises(returned: Returned, exception: str, *, label: str, why: str = "") -> Verdict:
@@ -160,9 +176,10 @@ def all_of(verdicts: list[Verdict]) -> Verdict:
     failures = [v for v in verdicts if not v.passed]
     if not failures:
         return Verdict(True, "", verdicts[-1].expected if verdicts else None, verdicts[-1].got if verdicts else None)
-    first = failures[0]
+    first = next((f for f in failures if f.mistake is not None), failures[0])  # a named mistake says most
     if len(verdicts) > 1 and len({f.message for f in failures}) > 1 or len(failures) < len(verdicts):
-        first.message = f"wrong at {len(failures)} of {len(verdicts)} inputs; the first:\n{first.message}"
+        which = "the first" if first is failures[0] else "one of them"
+        first.message = f"wrong at {len(failures)} of {len(verdicts)} inputs; {which}:\n{first.message}"
     return first
 
 

@@ -134,6 +134,7 @@ def _result(check: Check, status: Status, points: float, message: str, verdict: 
         expected=None if verdict is None else verdict.expected,
         got=None if verdict is None else verdict.got,
         details={} if verdict is None else verdict.details,
+        mistake="" if verdict is None or verdict.mistake is None else verdict.mistake.name,
     )
 
 

@@ -37,6 +37,7 @@ class CheckResult:
     got: object = None
     kind: str = "code"  # "code" or "quiz"
     details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
+    mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
 
     def to_dict(self) -> dict:
         return {
@@ -50,6 +51,7 @@ class CheckResult:
             "expected": jsonable(self.expected),
             "got": jsonable(self.got),
             "kind": self.kind,
+            "mistake": self.mistake or None,
         }
 
 
@@ -141,7 +143,8 @@ class Report:
             checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
-                                  kind=c.get("kind", "code")) for c in ch.get("checks", [])]
+                                  kind=c.get("kind", "code"), mistake=c.get("mistake") or "")
+                      for c in ch.get("checks", [])]
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),
                                           hidden_points=float(ch.get("hidden_points", 0.0))))

@@ -177,7 +177,7 @@ MUTANTS = {
         def compose_jacobian(f, jac_f, jac_g, x):
             x = np.asarray(x, dtype=float)
             return np.asarray(jac_g(x)) @ np.asarray(jac_f(x))
-        """, "compose_jacobian_order_and_point", ["jac_g evaluated at x instead of at f(x)"],
+        """, "compose_jacobian_order_and_point", ["the outer Jacobian is taken at x"],
         {"pipeline_jacobian_worked_example", "pipeline_jacobian_random_points", "pipeline_jacobian_vs_own_g_stage"}),
     "pipeline without the inner Jacobian": ("ch04", "pipeline_jacobian", """
         def pipeline_jacobian(r, theta):

@@ -271,7 +271,7 @@ MUTANTS = {
             S = H @ P @ H.T + R
             K = P @ H.T @ np.linalg.inv(S)
             return x + K @ (z - range_bearing(x[0], x[1])), (np.eye(2) - K @ H) @ P
-        """, "ekf_update_wraps_bearing_innovation", ["x_new of ekf_update(", "wrap the innovation"], set()),
+        """, "ekf_update_wraps_bearing_innovation", ["x_new of ekf_update(", "innovation z - h(x) is not wrapped"], set()),
     "EKF gain with H instead of H^T": ("ch08", "ekf_update", """
         def ekf_update(x, P, z, R):
             x, P, z, R = (np.asarray(a, dtype=float) for a in (x, P, z, R))

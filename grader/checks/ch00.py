@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
@@ -43,8 +44,9 @@ def range_reading_random_points(ctx):
     calls.append(call("range_reading", -5, 12))
     expected = [REF.range_reading(*c.args) for c in calls]
     got = yield calls
-    verdicts = [expect(g, want, label=c.label, rtol=1e-9) for g, want, c in zip(got, expected, calls)]
-    return all_of(verdicts)
+    return all_of([expect(g, want, label=c.label, rtol=1e-9, mistakes=[
+        Mistake("squared range", "range_reading returns x^2 + y^2: take the square root.", want ** 2)])
+        for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("superposition_gap", points=1)
@@ -77,10 +79,12 @@ def _shift_verdict(returned, law: tuple, n: int, label: str):
     problem = value_problem(returned, (), label)
     if problem:
         return fail(problem)
-    shift, spread, approximation = law
+    shift, spread, approximation, r = law
+    mean_range = Mistake("mean range", "that is the mean range itself: subtract range(mean), the range of the mean "
+                                       "position.", shift + r)
     return compare_arrays(returned.as_array(), shift, label=f"{label} (about sigma^2/(2r) = {fmt(approximation)}; "
                           f"statistical, {STANDARD_ERRORS:g} standard errors)",
-                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)))
+                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)), mistakes=[mean_range])
 
 
 @CHECKS.check("mean_shift", points=2)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
 from grader.wire import Array, Fn, call
@@ -89,10 +90,13 @@ def tangent_line_random_inputs(ctx):
     """tangent_line = f(a) + f'(a)(x - a) for sqrt, sin, a cubic, exp and log at random a, x (floats and arrays)"""
     cases = _cases(ctx.rng)
     expected = [REF.tangent_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
+    slips = [REF.tangent_mistakes_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
     got = yield [call("tangent_line", Fn(FUNCTIONS[fn][0]), Fn(FUNCTIONS[fn][1]), a, passed_x)
                  for fn, a, x, passed_x in cases]
-    return all_of([expect(g, want, label=_label("tangent_line", FUNCTIONS[fn], a, x), rtol=1e-9, atol=1e-12, entries=L)
-                   for g, want, (fn, a, x, _) in zip(got, expected, cases)])
+    return all_of([expect(g, want, label=_label("tangent_line", FUNCTIONS[fn], a, x), rtol=1e-9, atol=1e-12, entries=L,
+                          mistakes=[Mistake("slope at x", "the slope is taken at x: use fprime(a), the slope at the "
+                                                          "point of tangency.", slip["slope at x"])])
+                   for g, want, slip, (fn, a, x, _) in zip(got, expected, slips, cases)])
 
 
 @CHECKS.check("linearization_error", points=2)
@@ -114,11 +118,14 @@ def linearization_error_random_inputs(ctx):
     """linearization_error = |f(x) - L(x)| (never negative) for several f at random a, x (floats and arrays)"""
     cases = _cases(ctx.rng)
     expected = [REF.error_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
+    signed = [REF.signed_error_of(*FUNCTIONS[fn][:2], a, x) for fn, a, x, _ in cases]
     got = yield [call("linearization_error", Fn(FUNCTIONS[fn][0]), Fn(FUNCTIONS[fn][1]), a, passed_x)
                  for fn, a, x, passed_x in cases]
     return all_of([expect(g, want, rtol=1e-9, atol=1e-12, entries=ERROR,
-                          label=_label("linearization_error", FUNCTIONS[fn], a, x))
-                   for g, want, (fn, a, x, _) in zip(got, expected, cases)])
+                          label=_label("linearization_error", FUNCTIONS[fn], a, x),
+                          mistakes=[Mistake("signed error", "the error is |f(x) - L(x)|: take the absolute value.",
+                                            value)])
+                   for g, want, value, (fn, a, x, _) in zip(got, expected, signed, cases)])
 
 
 @CHECKS.check("linearization_error", points=1)
@@ -161,7 +168,8 @@ def taylor_error_estimate_random_inputs(ctx):
     cases = [(fn, _point(rng, fn), float(_offsets(rng, 1)[0])) for fn in ("sqrt", "sin", "cubic", "exp", "sin")]
     expected = [REF.estimate_of(FUNCTIONS[fn][2], a, delta) for fn, a, delta in cases]
     got = yield [call("taylor_error_estimate", Fn(FUNCTIONS[fn][2]), a, delta) for fn, a, delta in cases]
-    return all_of([expect(g, want, rtol=1e-9, atol=1e-12,
+    return all_of([expect(g, want, rtol=1e-9, atol=1e-12, mistakes=[
+        Mistake("missing 0.5", "the estimate is 0.5 |f''(a)| delta^2: the factor 0.5 is missing.", 2 * want)],
                           label=f"taylor_error_estimate({FUNCTIONS[fn][2]}, a={fmt(a)}, delta={fmt(delta)})")
                    for g, want, (fn, a, delta) in zip(got, expected, cases)])
 

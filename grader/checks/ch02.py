@@ -13,6 +13,7 @@ import numpy as np
 
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, vector_form
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt_array, value_problem
 from grader.wire import Fn, call
@@ -88,11 +89,15 @@ def tangent_plane_random_inputs(ctx):
         step = rng.choice([-1.0, 1.0], n) * rng.uniform(0.3, 1.2, n)
         cases.append((f, grad, a, a + step, form_a, form_x))
     expected = [REF.tangent_plane_of(f, grad, a, x) for f, grad, a, x, _, _ in cases]
+    slips = [REF.tangent_plane_mistakes_of(f, grad, a, x) for f, grad, a, x, _, _ in cases]
     got = yield [call("tangent_plane", Fn(f), Fn(grad), vector_form(a, fa), vector_form(x, fx))
                  for f, grad, a, x, fa, fx in cases]
     return all_of([expect(g, want, rtol=1e-9, atol=1e-12,
-                          label=f"tangent_plane({f}, {grad}, a={fmt_array(a)} as {fa}, x={fmt_array(x)} as {fx})")
-                   for g, want, (f, grad, a, x, fa, fx) in zip(got, expected, cases)])
+                          label=f"tangent_plane({f}, {grad}, a={fmt_array(a)} as {fa}, x={fmt_array(x)} as {fx})",
+                          mistakes=[Mistake("gradient at x", "the gradient is taken at x: the tangent plane uses "
+                                                             "grad(a), the gradient at the point of tangency.",
+                                            slip["gradient at x"])])
+                   for g, want, slip, (f, grad, a, x, fa, fx) in zip(got, expected, slips, cases)])
 
 
 @CHECKS.check("bowl_gradient", points=2)
@@ -117,10 +122,13 @@ def contour_direction_is_unit_and_perpendicular(ctx):
         if problem:
             return fail(problem)
         t = g.as_array()
+        normal = Mistake("normal, not tangent", "that is the direction of the gradient, which is perpendicular to "
+                                                "the contour: turn it by 90 degrees.", None)
         verdicts.append(compare_arrays(np.array([np.linalg.norm(t), t @ gradient / np.linalg.norm(gradient)]),
                                        np.array([1.0, 0.0]), label=f"{c.label} = {fmt_array(t)}; the gradient of g "
                                                                    f"there is {fmt_array(gradient)}",
-                                       entries=CONTOUR, rtol=0.0, atol=UNIT_TOLERANCE))
+                                       entries=CONTOUR, rtol=0.0, atol=UNIT_TOLERANCE,
+                                       mistakes=[Mistake(normal.name, normal.help, [1.0, sign]) for sign in (1.0, -1.0)]))
     return all_of(verdicts)
 
 

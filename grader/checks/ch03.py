@@ -12,6 +12,7 @@ import numpy as np
 from grader.checks.base import Skip, chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, call
 
@@ -43,10 +44,13 @@ def polar_random_points(ctx):
     """polar_to_cartesian = (r cos theta, r sin theta) at random points in all four quadrants (theta in radians)"""
     calls = [call("polar_to_cartesian", float(r), float(t)) for r, t in _points(ctx.rng)]
     expected = [REF.polar_to_cartesian(*c.args) for c in calls] + [REF.polar_to_cartesian(3, 2)]
+    in_degrees = [REF.polar_in_degrees(*c.args) for c in calls] + [REF.polar_in_degrees(3, 2)]
     calls.append(call("polar_to_cartesian", Array(3, "int64"), 2))
     got = yield calls
-    return all_of([expect(g, want, label=c.label, entries=P, rtol=1e-9, atol=1e-12)
-                   for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, label=c.label, entries=P, rtol=1e-9, atol=1e-12, mistakes=[
+        Mistake("degrees", "theta is read as degrees: it is in radians, use np.cos(theta) and np.sin(theta) as "
+                           "they are.", degrees)])
+        for g, want, degrees, c in zip(got, expected, in_degrees, calls)])
 
 
 @CHECKS.check("polar_to_cartesian_jacobian", points=2)
@@ -80,7 +84,10 @@ def area_scale_is_r(ctx):
     calls = [call("area_scale", float(r), float(t)) for r, t in _points(rng) + [(-rng.uniform(0.5, 3.0), angle(rng))]]
     expected = [REF.area_scale(*c.args) for c in calls]
     got = yield calls
-    return all_of([expect(g, want, label=c.label, rtol=1e-9, atol=1e-12) for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, label=c.label, rtol=1e-9, atol=1e-12, mistakes=[
+        Mistake("unsigned determinant", "area_scale is the signed determinant of J: a negative r gives a negative "
+                                        "value (no abs).", abs(want))])
+        for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("area_scale", points=1)

@@ -14,6 +14,7 @@ import numpy as np
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, polar_point, vector_form
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt_array, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Fn, call
 
@@ -30,10 +31,14 @@ FORMS = ("tuple", "list", "array")
 COMPOSITIONS = (("mix_vec", "mix_jac", "shear_jac"), ("shear_vec", "shear_jac", "twist_jac"),
                 ("twist_vec", "twist_jac", "mix_jac"), ("mix_vec", "mix_jac", "mix_jac"))
 SLIP_GAP = 0.5
-SLIPS = {"order": "the product in the wrong order, Jf(x) @ Jg(f(x)); the chain rule is Jg(f(x)) @ Jf(x)",
-         "at_x": "jac_g evaluated at x instead of at f(x)",
-         "at_x_and_order": "jac_g at x and the product in the wrong order",
-         "elementwise": "an elementwise product (*) instead of the matrix product (@)"}
+SLIPS = {"order": "the product is in the wrong order, Jf(x) @ Jg(f(x)): the chain rule is Jg(f(x)) @ Jf(x).",
+         "at_x": "the outer Jacobian is taken at x: evaluate jac_g at f(x), the point the first stage maps x to.",
+         "at_x_and_order": "jac_g is taken at x and the product is in the wrong order: Jg(f(x)) @ Jf(x).",
+         "elementwise": "that is an elementwise product (*): the chain rule multiplies matrices (@)."}
+
+
+def _slips(candidates: dict) -> list[Mistake]:
+    return [Mistake(name, SLIPS[name], candidates[name]) for name in SLIPS if name in candidates]
 
 
 @CHECKS.check("g_stage", points=2)
@@ -98,14 +103,8 @@ def _compose_verdict(returned, f: str, jac_f: str, jac_g: str, x: np.ndarray, fo
     problem = value_problem(returned, (2, 2), label)
     if problem:
         return fail(problem, expected=candidates["right"])
-    got = returned.as_array()
-    verdict = compare_arrays(got, candidates["right"], label=label, entries=J_COMPOSED, rtol=1e-9, atol=1e-12)
-    if not verdict.passed:
-        slip = next((text for slip, text in SLIPS.items()
-                     if np.allclose(got, candidates[slip], rtol=1e-9, atol=1e-12)), None)
-        if slip:
-            verdict.message = f"your result is {slip}.\n{verdict.message}"
-    return verdict
+    return compare_arrays(returned.as_array(), candidates["right"], label=label, entries=J_COMPOSED, rtol=1e-9,
+                          atol=1e-12, mistakes=_slips(candidates))
 
 
 @CHECKS.check("compose_jacobian", points=2)
@@ -127,9 +126,9 @@ def compose_jacobian_order_and_point(ctx):
 @CHECKS.check("pipeline_jacobian", points=2)
 def pipeline_jacobian_worked_example(ctx):
     """pipeline_jacobian(4, pi/3) is [[2.866, -11.856], [3.464, -8.000]]"""
-    want = REF.pipeline_jacobian(4, np.pi / 3)
+    want, slips = REF.pipeline_jacobian(4, np.pi / 3), REF.pipeline_mistakes(4, np.pi / 3)
     got = yield call("pipeline_jacobian", 4, np.pi / 3)
-    return expect(got, want, label="pipeline_jacobian(4, pi/3)", entries=J_PIPE, rtol=1e-9)
+    return expect(got, want, label="pipeline_jacobian(4, pi/3)", entries=J_PIPE, rtol=1e-9, mistakes=_slips(slips))
 
 
 add_derivative_checks(CHECKS, Derivative(
@@ -140,4 +139,5 @@ add_derivative_checks(CHECKS, Derivative(
     reference_forward=lambda p, extra: REF.pipeline_forward(*p),
     reference_jacobian=lambda p, extra: REF.pipeline_jacobian(*p),
     cases=lambda rng: [(polar_point(rng, 4.0), ()) for _ in range(6)],
+    mistakes=lambda p, extra: _slips(REF.pipeline_mistakes(*p)),
 ))

@@ -30,6 +30,7 @@ import numpy as np
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
 from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, Fn, call
 
@@ -75,14 +76,25 @@ def _difference_verdict(returned, name: str, x, h: float, function: str, law: di
     error = got - exact
     if low <= error <= high:
         return passed(expected=exact, got=got)
-    forward, central = law["forward_value"], law["central_value"]
-    hint = ""
-    if function == "central_difference" and abs(got - forward) <= 1e-9 * max(1.0, abs(forward)):
-        hint = " That is the forward difference (f(x+h) - f(x))/h; the central one uses f(x+h) - f(x-h) over 2h."
-    elif function == "forward_difference" and abs(got - central) <= 1e-9 * max(1.0, abs(central)):
-        hint = " That is the central difference; the forward one is (f(x+h) - f(x))/h."
-    return fail(f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is {error:.3g}, "
-                f"but {what} must be in [{low:.3g}, {high:.3g}].{hint}", expected=exact, got=got)
+    slip = _difference_slip(function, got, law)
+    verdict = fail(f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is {error:.3g}, "
+                   f"but {what} must be in [{low:.3g}, {high:.3g}]." + (f" {slip.help}" if slip else ""),
+                   expected=exact, got=got)
+    verdict.mistake = slip
+    return verdict
+
+
+def _difference_slip(function: str, got: float, law: dict) -> Mistake | None:
+    """The other difference quotient, if that is what the learner computed."""
+    other = "forward" if function == "central_difference" else "central"
+    value = law[f"{other}_value"]
+    if abs(got - value) > 1e-9 * max(1.0, abs(value)):
+        return None
+    if other == "forward":
+        return Mistake("forward difference", "That is the forward difference (f(x+h) - f(x))/h; the central one uses "
+                                             "f(x+h) - f(x-h) over 2h.", value)
+    return Mistake("central difference", "That is the central difference; the forward one is (f(x+h) - f(x))/h.",
+                   value)
 
 
 def _scalar_cases(rng: np.random.Generator) -> list:
@@ -178,6 +190,7 @@ VECTOR = {
     "twist_vec": Entries("J", rows=("e^(x/3) cos y", "x - y^3/3"), cols=("x", "y"), derivative=True),
     "two_of_three_vec": Entries("J", rows=("x y + sin z", "x^2 z - y"), cols=("x", "y", "z"), derivative=True),
     "polar_twin_vec": Entries("J", rows=("x", "y"), cols=("r", "theta"), derivative=True),
+    "wave_vec": Entries("J", rows=("y sin x + x^2/2",), cols=("x", "y"), derivative=True),  # one output: 1 x 2
 }
 RIGHT_JACOBIAN = {"mix_vec": "mix_jac", "shear_vec": "shear_jac", "twist_vec": "twist_jac",
                   "two_of_three_vec": "two_of_three_jac"}
@@ -186,7 +199,7 @@ RIGHT_JACOBIAN = {"mix_vec": "mix_jac", "shear_vec": "shear_jac", "twist_vec": "
 def _vector_point(rng: np.random.Generator, name: str) -> np.ndarray:
     if name == "two_of_three_vec":
         return np.array([*(rng.choice([-1.0, 1.0], 2) * rng.uniform(0.5, 2.5, 2)), angle(rng)])
-    if name == "twist_vec":  # cos y, sin y and y all clearly nonzero
+    if name in ("twist_vec", "wave_vec"):  # cos y, sin y and y all clearly nonzero
         return np.array([rng.uniform(-2.0, 2.0), angle(rng)])
     return rng.choice([-1.0, 1.0], 2) * rng.uniform(0.5, 2.5, 2)  # mix, shear: no zero entry in J
 
@@ -215,6 +228,8 @@ def jacobian_fd_random_inputs(ctx):
     cases += [("shear_vec", np.array([2.0, -3.0]), "int array", None),
               ("two_of_three_vec", np.array([1.0, -2.0, 2.0]), "int array", None)]
     expected = [REF.jacobian_of(name, point) for name, point, _, _ in cases]
+    forward = [REF.jacobian_fd_of(name, point, 1e-6 if isinstance(h, str) else (h or 1e-5), "forward")
+               for name, point, _, h in cases]
     calls = []
     for name, point, form, h in cases:
         args = (Fn(name), vector_form(point, form))
@@ -222,12 +237,34 @@ def jacobian_fd_random_inputs(ctx):
                      call("jacobian_fd", *args, h=1e-6) if isinstance(h, str) else call("jacobian_fd", *args, h))
     got = yield calls
     verdicts = []
-    for g, want, (name, point, form, h) in zip(got, expected, cases):
+    for g, want, slip, (name, point, form, h) in zip(got, expected, forward, cases):
         step = "" if h is None else (", h=1e-6" if isinstance(h, str) else f", {fmt(h)}")
         shown = f"np.array({_show(point)}, int)" if form == "int array" else _show(point)
         verdicts.append(expect(g, want, label=f"jacobian_fd({name.removesuffix('_vec')}, {shown}{step})",
-                               rtol=FD_RTOL, atol=FD_ATOL, entries=VECTOR[name]))
+                               rtol=FD_RTOL, atol=FD_ATOL, entries=VECTOR[name], mistakes=[
+                                   Mistake("forward difference", FORWARD_HELP, slip)]))
     return all_of(verdicts)
+
+
+FORWARD_HELP = ("that is a forward difference, (f(x + h e_j) - f(x)) / h: the contract's jacobian_fd is central, "
+                "(f(x + h e_j) - f(x - h e_j)) / (2h).")
+
+
+@CHECKS.check("jacobian_fd", points=1)
+def jacobian_fd_uses_the_step_as_given(ctx):
+    """jacobian_fd uses h exactly as given (steps 0.05..0.3, where the quotient differs from J), also a 1 x n one-output Jacobian"""
+    rng = ctx.rng
+    cases = [(name, _vector_point(rng, name), float(rng.uniform(0.05, 0.3)))
+             for name in ("twist_vec", "two_of_three_vec", "mix_vec", "wave_vec")]
+    expected = [REF.jacobian_fd_of(name, point, h) for name, point, h in cases]
+    slips = [[Mistake(form, help, REF.jacobian_fd_of(name, point, h, form)) for form, help in
+              (("half step", "the step is halved: the contract's quotient is (f(x + h e_j) - f(x - h e_j)) / (2h), "
+                             "x moved by h, not h/2."), ("forward difference", FORWARD_HELP))]
+             for name, point, h in cases]
+    got = yield [call("jacobian_fd", Fn(name), Array(point.tolist()), h) for name, point, h in cases]
+    return all_of([expect(g, want, label=f"jacobian_fd({name.removesuffix('_vec')}, {_show(point)}, {fmt(h)})",
+                          rtol=1e-8, atol=1e-10, entries=VECTOR[name], mistakes=mistakes)
+                   for g, want, mistakes, (name, point, h) in zip(got, expected, slips, cases)])
 
 
 # ------------------------------------------------------------------------------ max_jacobian_error
@@ -259,10 +296,14 @@ def max_jacobian_error_wrong_jacobian(ctx):
         point = _vector_point(rng, "mix_vec")
         cases.append(("mix_jac_sign_slip", "mix_vec", np.array([sign * abs(point[0]), point[1]]), form))
     expected = [REF.jacobian_gap(jac, f, p) for jac, f, p, _ in cases]
+    signed = [REF.signed_jacobian_gap(jac, f, p) for jac, f, p, _ in cases]
     got = yield [call("max_jacobian_error", Fn(jac), Fn(f), vector_form(p, form)) for jac, f, p, form in cases]
     return all_of([expect(g, want, label=f"max_jacobian_error({jac}, {f}, {_show(p)}) (max |jac - J|, J the true "
-                                         "Jacobian)", rtol=FD_RTOL, atol=2 * FD_ATOL)
-                   for g, want, (jac, f, p, _) in zip(got, expected, cases)])
+                                         "Jacobian)", rtol=FD_RTOL, atol=2 * FD_ATOL, mistakes=[
+                              Mistake("signed difference", "take the absolute value: the Jacobian check is "
+                                                           "max |jac(x) - J(x)|, and a wrong entry may be too small.",
+                                      value)])
+                   for g, want, value, (jac, f, p, _) in zip(got, expected, signed, cases)])
 
 
 # ------------------------------------------------------------------------------ best_step

@@ -7,6 +7,7 @@ import numpy as np
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point
 from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, call
 
@@ -22,12 +23,37 @@ def _points(rng: np.random.Generator, n: int = 6) -> list:
     return [planar_point(rng) for _ in range(n)]
 
 
+BEARING_SLIPS = {
+    "atan": "the bearing is atan(y/x), which is off by pi in the left half-plane: use np.arctan2(y, x).",
+    "reversed bearing": "the bearing is off by pi everywhere: it is measured from the dish to the drone, "
+                        "atan2(y, x), not from the drone to the dish.",
+    "degrees": "the bearing is in degrees: keep it in radians, as atan2 returns it.",
+}
+
+
+def _bearing_slips(x: float, y: float) -> list[Mistake]:
+    values = REF.bearing_mistakes(x, y)
+    return [Mistake(name, help, values[name]) for name, help in BEARING_SLIPS.items()]
+
+
+def _H_slips(x: float, y: float, H: np.ndarray) -> list[Mistake]:
+    """H with the bearing row over r instead of r^2 (arithmetic on the right H)."""
+    over_r = np.array(H, dtype=float)
+    over_r[1] = over_r[1] * float(np.hypot(x, y))
+    return [Mistake("bearing over r", "the bearing row is divided by r: d bearing/d(x, y) = (-y, x) / r^2.", over_r)]
+
+
+def _sigma_slip(R: np.ndarray, sigma: float) -> list[Mistake]:
+    return [Mistake("sigma not squared", "sigma multiplies the result once: the position covariance is sigma^2 I.",
+                    np.asarray(R, dtype=float) / sigma)]
+
+
 @CHECKS.check("range_bearing", points=1)
 def range_bearing_worked_example(ctx):
     """range_bearing at the lesson's point (3, 4) gives (5, 0.9273)"""
-    want = REF.range_bearing(3, 4)
+    want, slips = REF.range_bearing(3, 4), _bearing_slips(3, 4)
     got = yield call("range_bearing", 3, 4)
-    return expect(got, want, label="range_bearing(3, 4)", entries=Z, rtol=1e-9)
+    return expect(got, want, label="range_bearing(3, 4)", entries=Z, rtol=1e-9, mistakes=slips)
 
 
 @CHECKS.check("range_bearing", points=2)
@@ -35,8 +61,10 @@ def range_bearing_all_quadrants(ctx):
     """range_bearing at random points in all four quadrants (bearing is atan2, in [-pi, pi])"""
     calls = [call("range_bearing", float(x), float(y)) for x, y in _points(ctx.rng, 8)]
     expected = [REF.range_bearing(*c.args) for c in calls]
+    slips = [_bearing_slips(*c.args) for c in calls]
     got = yield calls
-    return all_of([expect(g, want, label=c.label, entries=Z, rtol=1e-9) for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, label=c.label, entries=Z, rtol=1e-9, mistakes=s)
+                   for g, want, s, c in zip(got, expected, slips, calls)])
 
 
 @CHECKS.check("H_jacobian", points=2)
@@ -44,7 +72,7 @@ def H_worked_example(ctx):
     """H at the lesson's point (3, 4) is [[0.6, 0.8], [-0.16, 0.12]]"""
     want = REF.H_jacobian(3, 4)
     got = yield call("H_jacobian", 3, 4)
-    return expect(got, want, label="H_jacobian(3, 4)", entries=H, rtol=1e-9)
+    return expect(got, want, label="H_jacobian(3, 4)", entries=H, rtol=1e-9, mistakes=_H_slips(3, 4, want))
 
 
 add_derivative_checks(CHECKS, Derivative(
@@ -53,6 +81,7 @@ add_derivative_checks(CHECKS, Derivative(
     reference_forward=lambda p, extra: REF.range_bearing(p[0], p[1]),
     reference_jacobian=lambda p, extra: REF.H_jacobian(p[0], p[1]),
     cases=lambda rng: [(p, ()) for p in _points(rng)],
+    mistakes=lambda p, extra: _H_slips(p[0], p[1], REF.H_jacobian(p[0], p[1])),
 ))
 
 
@@ -93,7 +122,7 @@ def covariance_worked_example(ctx):
     """measurement_covariance(3, 4, sigma=1) is diag(1, 0.04)"""
     want = REF.measurement_covariance(3, 4, 1.0)
     got = yield call("measurement_covariance", 3, 4, 1.0)
-    return expect(got, want, label="measurement_covariance(3, 4, 1)", entries=R)
+    return expect(got, want, label="measurement_covariance(3, 4, 1)", entries=R)  # sigma = 1: sigma^2 cannot show
 
 
 @CHECKS.check("measurement_covariance", points=2)
@@ -103,7 +132,8 @@ def covariance_random_points(ctx):
     calls = [call("measurement_covariance", float(x), float(y), float(rng.uniform(0.1, 2.0))) for x, y in _points(rng, 6)]
     expected = [REF.measurement_covariance(*c.args) for c in calls]
     got = yield calls
-    return all_of([expect(g, want, label=c.label, entries=R) for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, label=c.label, entries=R, mistakes=_sigma_slip(want, c.args[2]))
+                   for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("measurement_covariance", points=1)

@@ -19,6 +19,7 @@ import numpy as np
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, time_step, vector_form
 from grader.compare import Entries, all_of, expect, fail, fmt, passed, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, call
 
@@ -77,10 +78,11 @@ def motion_model_random_inputs(ctx):
     cases = [(_state(rng), *_controls(rng), form) for form in ("tuple", "list", "array", "list", "tuple", "array")]
     cases.append((np.array([2.0, -1.0, 1.0]), -1.5, 0.7, 0.25, "int array"))
     expected = [REF.motion_model(s, v, w, dt) for s, v, w, dt, _ in cases]
+    slips = [_dt_slips("motion_model", s, v, w, dt) for s, v, w, dt, _ in cases]
     got = yield [call("motion_model", vector_form(s, form), v, w, dt) for s, v, w, dt, form in cases]
-    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S,
+    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S, mistakes=mistakes,
                           label=f"motion_model({_show(s)}, v={fmt(v)}, omega={fmt(w)}, dt={fmt(dt)})")
-                   for g, want, (s, v, w, dt, form) in zip(got, expected, cases)])
+                   for g, want, mistakes, (s, v, w, dt, form) in zip(got, expected, slips, cases)])
 
 
 # ------------------------------------------------------------------------------ F_jacobian
@@ -100,6 +102,7 @@ add_derivative_checks(CHECKS, Derivative(
     reference_forward=lambda p, extra: REF.motion_model(p, *extra),
     reference_jacobian=lambda p, extra: REF.F_jacobian(p, *extra),
     cases=lambda rng: [(_state(rng), _controls(rng)) for _ in range(6)],
+    mistakes=lambda p, extra: _dt_slips("F_jacobian", p, *extra),
 ))
 
 
@@ -141,6 +144,21 @@ def _label(P, F, Q=None, how: str = "") -> str:
     return text + ("" if Q is None else f", Q = {_mat(Q)}")
 
 
+def _dt_slips(function: str, state, v: float, omega: float, dt: float) -> list[Mistake]:
+    """What a missing or a fixed time step gives (asked of the reference while planning)."""
+    reference = getattr(REF, function)
+    slips = [Mistake("missing dt", f"dt is missing: every change in one step is a rate times dt (here dt = {fmt(dt)}).",
+                     reference(state, v, omega, 1.0))]
+    if abs(dt - 0.1) > 1e-9:
+        slips.append(Mistake("fixed dt", "a fixed time step of 0.1 is used: take dt from the argument "
+                                         f"(here {fmt(dt)}).", reference(state, v, omega, 0.1)))
+    if function == "motion_model":
+        slips.append(Mistake("arc model", "that is the exact constant-turn (arc) motion: the lesson's model is "
+                                          "the Euler step x + v cos(theta) dt, y + v sin(theta) dt, theta + omega dt.",
+                             REF.arc_motion(state, v, omega, dt)))
+    return slips
+
+
 def _matrix(values: np.ndarray, form: str) -> Array:
     """A matrix argument: a float array, or (form "int") an integer array when its entries are whole."""
     return Array(values.tolist(), "int64" if form == "int" else "float64")
@@ -174,11 +192,21 @@ def propagate_random_matrices(ctx):
     F_int = rng.integers(-2, 3, (3, 3)).astype(float) + np.diag([1.0, 0.0, 0.0])
     cases.append((P, F_int, np.eye(3), "int"))
     expected = [REF.propagate_covariance(P, Fm, Q) for P, Fm, Q, _ in cases]
+    slips = [_propagate_slips(P, Fm, Q) for P, Fm, Q, _ in cases]
     got = yield [call("propagate_covariance", _matrix(P, form), _matrix(Fm, form),
                       *(() if Q is None else (_matrix(Q, form),))) for P, Fm, Q, form in cases]
     return all_of([expect(g, want, label=_label(P, Fm, Q) + (" (integer arrays)" if form == "int" else ""),
-                          rtol=RTOL, atol=ATOL, entries=_cov_entries(P.shape[0]))
-                   for g, want, (P, Fm, Q, form) in zip(got, expected, cases)])
+                          rtol=RTOL, atol=ATOL, entries=_cov_entries(P.shape[0]), mistakes=mistakes)
+                   for g, want, mistakes, (P, Fm, Q, form) in zip(got, expected, slips, cases)])
+
+
+def _propagate_slips(P, Fm, Q) -> list[Mistake]:
+    slips = [Mistake("F^T P F", "your result equals F^T P F: propagation is F P F^T (F on the left).",
+                     REF.propagate_covariance(P, np.asarray(Fm).T, Q))]
+    if Q is not None:
+        slips.append(Mistake("missing Q", "Q is missing: add the process noise, F P F^T + Q.",
+                             REF.propagate_covariance(P, Fm)))
+    return slips
 
 
 @CHECKS.check("propagate_covariance", points=1)

@@ -15,9 +15,9 @@ reference's particular draws (a learner may draw N(mean, sigma^2 I) any correct 
 Closed forms (measure_samples, linearized_measurement_cov, sample_covariance, ekf_update) are
 compared with the reference formula: rtol 1e-9 (ekf_update's P_new 1e-8, as the standard and
 Joseph forms differ by rounding). sample_covariance gets n as small as 2 and 5, so dividing by n
-instead of n - 1 is off by 20% or more. ekf_update's P_new must be symmetric (to 1e-9 of its
-largest entry) and P - P_new positive semi-definite (eigenvalues >= -1e-12 of max |P|), both
-computed here from the learner's output.
+instead of n - 1 is off by 20% or more. ekf_update's P_new must be symmetric (to 1e-9 of max |P|:
+a P_new of entries near 1e-17 is symmetric enough) and P - P_new positive semi-definite (eigenvalues
+>= -1e-12 of max |P|), both computed here from the learner's output.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from grader.compare import (
     passed,
     value_problem,
 )
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, Rng, call
 
@@ -145,13 +146,11 @@ def _measure_expected(samples: np.ndarray, ref_bearing: float) -> tuple:
 
 def _measure_verdict(returned, wanted: tuple, label: str):
     expected, raw = wanted
-    verdict = expect(returned, expected, label=label, rtol=RTOL, atol=ATOL, entries=_measure_entries(len(expected)))
-    if not verdict.passed and returned.as_array() is not None and returned.as_array().shape == expected.shape:
-        got = returned.as_array()
-        if np.allclose(got[:, 1], raw, rtol=RTOL, atol=1e-9) and not np.allclose(raw, expected[:, 1]):
-            verdict.message += ("\n  (these are the raw atan2 bearings: move each by whole turns, "
-                                "b + 2 pi round((ref_bearing - b) / 2 pi), to lie within pi of ref_bearing)")
-    return verdict
+    not_unwrapped = np.column_stack([expected[:, 0], raw])
+    return expect(returned, expected, label=label, rtol=RTOL, atol=ATOL, entries=_measure_entries(len(expected)),
+                  mistakes=[Mistake("not unwrapped", "these are the raw atan2 bearings: move each by whole turns, "
+                                                     "b + 2 pi round((ref_bearing - b) / 2 pi), to lie within pi of "
+                                                     "ref_bearing.", not_unwrapped)])
 
 
 @CHECKS.check("measure_samples", points=1)
@@ -205,8 +204,9 @@ def linearized_cov_random_points(ctx):
     calls = [call("linearized_measurement_cov", x, y, s) for x, y, s in cases]
     expected = [REF.linearized_measurement_cov(*c.args) for c in calls]
     got = yield calls
-    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S_LIN, label=c.label)
-                   for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, rtol=RTOL, atol=ATOL, entries=S_LIN, label=c.label, mistakes=[
+        Mistake("sigma not squared", "sigma multiplies the result once: Sigma = sigma^2 I.", want / c.args[2])])
+        for g, want, c in zip(got, expected, calls)])
 
 
 # ------------------------------------------------------------------------------ sample_covariance
@@ -225,11 +225,10 @@ def sample_covariance_matches_np_cov(ctx):
     verdicts = []
     for g, want, z in zip(got, expected, cases):
         label = f"sample_covariance({len(z)} x 2 array z with mean {_show(z.mean(axis=0))})"
-        v = expect(g, want, label=label, rtol=RTOL, atol=ATOL, entries=S_COV)
         n = len(z)
-        if not v.passed and v.got is not None and np.shape(v.got) == (2, 2) and np.allclose(v.got, want * (n - 1) / n):
-            v.message += f"\n  (that is the biased covariance: divide by n - 1 = {n - 1}, not by n = {n})"
-        verdicts.append(v)
+        verdicts.append(expect(g, want, label=label, rtol=RTOL, atol=ATOL, entries=S_COV, mistakes=[
+            Mistake("n, not n - 1", f"that is the biased covariance: divide by n - 1 = {n - 1}, not by n = {n}.",
+                    want * (n - 1) / n)]))
     return all_of(verdicts)
 
 
@@ -327,14 +326,20 @@ def ekf_parts(returned, label: str):
     return items
 
 
+EKF_SLIPS = {"innovation not wrapped": "the bearing innovation z - h(x) is not wrapped: bring it to [-pi, pi) "
+                                       "before it multiplies the gain.",
+             "R missing": "R is missing from the innovation covariance: S = H P H^T + R."}
+
+
 def _ekf_verdict(returned, case, wanted: tuple, label: str):
-    """(x_new, P_new) against wanted = REF.ekf_update(*case)."""
+    """(x_new, P_new) against wanted = (REF.ekf_update(*case), REF.ekf_mistakes(*case))."""
     parts = ekf_parts(returned, label)
     if not isinstance(parts, list):
         return parts
-    x_new, P_new = wanted
+    (x_new, P_new), slips = wanted
     scale = float(np.max(np.abs(case[1])))
-    x_verdict = expect(parts[0], x_new, label=f"x_new of {label}", rtol=RTOL, atol=ATOL, entries=X_NEW)
+    x_verdict = expect(parts[0], x_new, label=f"x_new of {label}", rtol=RTOL, atol=ATOL, entries=X_NEW,
+                       mistakes=[Mistake(name, EKF_SLIPS[name], slips[name][0]) for name in EKF_SLIPS])
     if not x_verdict.passed:
         return x_verdict
     return expect(parts[1], P_new, label=f"P_new of {label}", rtol=1e-8, atol=1e-12 * scale, entries=P_NEW)
@@ -347,7 +352,7 @@ def ekf_update_random_states(ctx):
     cases = [(np.array([3.0, 4.0]), 0.1 * np.eye(2), np.array([5.1, 0.93]), np.diag([0.01, 0.001]))]
     cases += [_ekf_case(rng, planar_point(rng, 1.0, 4.5)) for _ in range(5)]
     forms = ["list", "array", "tuple", "list", "array", "tuple"]
-    wanted = [REF.ekf_update(*case) for case in cases]
+    wanted = [(REF.ekf_update(*case), REF.ekf_mistakes(*case)) for case in cases]
     got = yield [_ekf_call(*case, form) for case, form in zip(cases, forms)]
     return all_of([_ekf_verdict(g, case, w, _ekf_label(*case)) for g, case, w in zip(got, cases, wanted)])
 
@@ -363,16 +368,9 @@ def ekf_update_wraps_bearing_innovation(ctx):
         case = _ekf_case(rng, x, z_point)
         case[2][1] = REF.range_bearing(*z_point)[1]  # the bearing exactly as atan2 gives it: the other sign
         cases.append(case)
-    wanted = [REF.ekf_update(*case) for case in cases]
+    wanted = [(REF.ekf_update(*case), REF.ekf_mistakes(*case)) for case in cases]
     got = yield [_ekf_call(*case) for case in cases]
-    verdicts = []
-    for g, case, w in zip(got, cases, wanted):
-        v = _ekf_verdict(g, case, w, _ekf_label(*case))
-        if not v.passed and "x_new" in v.message:
-            v.message += ("\n  (the predicted bearing and the measured one are on either side of +-pi: wrap the "
-                          "innovation z - h to [-pi, pi))")
-        verdicts.append(v)
-    return all_of(verdicts)
+    return all_of([_ekf_verdict(g, case, w, _ekf_label(*case)) for g, case, w in zip(got, cases, wanted)])
 
 
 @CHECKS.check("ekf_update", points=1)
@@ -394,7 +392,7 @@ def ekf_update_shrinks_covariance(ctx):
         scale = float(np.max(np.abs(P)))
         if not np.all(np.isfinite(P_new)):
             return fail(f"P_new of {label} is not finite: {_mat(P_new)}.", got=P_new)
-        if abs(P_new[0, 1] - P_new[1, 0]) > SYMMETRY * max(float(np.max(np.abs(P_new))), 1e-300):
+        if abs(P_new[0, 1] - P_new[1, 0]) > SYMMETRY * scale:  # relative to P: P_new may be tiny
             return fail(f"P_new of {label} is not symmetric: P_new[0,1] = {fmt(P_new[0, 1])}, P_new[1,0] = "
                         f"{fmt(P_new[1, 0])}.", got=P_new)
         lowest = float(np.linalg.eigvalsh(0.5 * ((P - P_new) + (P - P_new).T)).min())

@@ -29,6 +29,7 @@ import numpy as np
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, planar_point, vector_form
 from grader.compare import Entries, Verdict, all_of, expect, fail, fmt, fmt_array, passed, value_problem
+from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, Fn, call
 
@@ -76,6 +77,7 @@ def gradient_fd_random_points(ctx):
             ("wave_vec", "array", None)]
     cases = [(name, _point(rng, name), form, h) for name, form, h in plan]
     expected = [REF.gradient_of(name, p) for name, p, _, _ in cases]
+    slips = [_forward_slip(name, p, 1e-6 if isinstance(h, str) else (h or 1e-5)) for name, p, _, h in cases]
     calls = []
     for name, p, form, h in cases:
         args = (Fn(name), vector_form(p, form))
@@ -83,10 +85,10 @@ def gradient_fd_random_points(ctx):
                      call("gradient_fd", *args, h=1e-6) if isinstance(h, str) else call("gradient_fd", *args, h))
     got = yield calls
     verdicts = []
-    for g, want, (name, p, form, h) in zip(got, expected, cases):
+    for g, want, slip, (name, p, form, h) in zip(got, expected, slips, cases):
         step = "" if h is None else (", h=1e-6" if isinstance(h, str) else f", {fmt(h)}")
         verdicts.append(expect(g, want, label=f"gradient_fd({name}, {_show(p)}{step})",
-                               rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(p.size)))
+                               rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(p.size), mistakes=[slip]))
     return all_of(verdicts)
 
 
@@ -96,15 +98,19 @@ def gradient_fd_integer_input(ctx):
     cases = [("wave_vec", [1, 2], Array([1, 2], "int64")), ("wave_vec", [-2, 1], [-2, 1]),
              ("rosenbrock_vec", [1, -1], (1, -1)), ("saddle3_vec", [1, -2, 1], Array([1, -2, 1], "int64"))]
     expected = [REF.gradient_of(name, point) for name, point, _ in cases]
+    slips = [_forward_slip(name, point, 1e-5) for name, point, _ in cases]
     calls = [call("gradient_fd", Fn(name), passed) for name, _, passed in cases]
     got = yield calls
-    verdicts = []
-    for g, want, c in zip(got, expected, calls):
-        v = expect(g, want, label=c.label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)))
-        if not v.passed and v.got is not None and np.shape(v.got) == np.shape(want) and not np.any(v.got):
-            v.message += "\n  (all zeros: an integer array cannot hold x + h; convert x to float first)"
-        verdicts.append(v)
-    return all_of(verdicts)
+    return all_of([expect(g, want, label=c.label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)),
+                          mistakes=[slip, Mistake("integer steps", "all zeros: an integer array cannot hold x + h; "
+                                                                   "convert x to float first.", np.zeros(len(want)))])
+                   for g, want, slip, c in zip(got, expected, slips, calls)])
+
+
+def _forward_slip(name: str, point, h: float) -> Mistake:
+    return Mistake("forward difference", "that is a forward difference, (f(x + h e_j) - f(x)) / h: gradient_fd is "
+                                         "central, (f(x + h e_j) - f(x - h e_j)) / (2h).",
+                   REF.gradient_fd_of(name, point, h, "forward"))
 
 
 # ------------------------------------------------------------------------------ hessian_fd

@@ -53,6 +53,8 @@ class Derivative:
     # (e.g. pipeline_jacobian(r, theta) checked against g_stage(polar_to_cartesian(r, theta)))
     forward_args: Callable[[np.ndarray, tuple], tuple] | None = None
     forward_text: str = ""  # how the forward map reads in messages, when not just `forward`
+    # the derivative's own known mistakes at (point, extra), asked of the reference while planning
+    mistakes: Callable[[np.ndarray, tuple], list] | None = None
 
     def forward_call(self, point: np.ndarray, extra: tuple):
         return call(self.forward, *(self.forward_args or self.args)(point, extra))
@@ -103,15 +105,16 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
     def vs_reference(ctx: Context):
         cases = d.cases(ctx.rng)
         expected = [central_difference(lambda p: d.reference_forward(p, case[1]), case[0]) for case in cases]
+        slips = [d.mistakes(*case) if d.mistakes else [] for case in cases]
         got = yield [call(d.jacobian, *d.args(*case)) for case in cases]
         verdicts = []
-        for case, returned, want in zip(cases, got, expected):
+        for case, returned, want, mistakes in zip(cases, got, expected, slips):
             label = d.label(d.jacobian, case)
             problem = value_problem(returned, want.shape, label)
             if problem:
                 return Verdict(False, problem, want)
             v = compare_arrays(returned.as_array(), want, label=label, rtol=FD_RTOL, atol=FD_ATOL,
-                               entries=d.entries, expected_name="expected")
+                               entries=d.entries, expected_name="expected", mistakes=mistakes)
             if not v.passed:
                 v.message = f"{v.message}\n  (wrong in {_columns_text(v.details['wrong'], d.entries)})"
             verdicts.append(v)

@@ -22,8 +22,8 @@ def rice_moments(r: float, sigma: float) -> tuple[float, float]:
     return float(mean), float(2 * sigma * sigma + r * r - mean * mean)
 
 
-def shift_law(mean, sigma: float) -> tuple[float, float, float]:
-    """(the exact mean shift E[R] - r, the standard deviation of one range reading R, sigma^2 / 2r)."""
+def shift_law(mean, sigma: float) -> tuple[float, float, float, float]:
+    """(the exact mean shift E[R] - r, the standard deviation of one range reading R, sigma^2 / 2r, r)."""
     r = float(np.hypot(*np.asarray(mean, dtype=float)))
     expected_range, variance = rice_moments(r, sigma)
-    return expected_range - r, float(np.sqrt(variance)), sigma * sigma / (2 * r)
+    return expected_range - r, float(np.sqrt(variance)), sigma * sigma / (2 * r), r

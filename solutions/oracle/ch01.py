@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from grader.catalogue import CALLABLES
 from solutions.ch01_tangent_line import linearization_error, tangent_line, taylor_error_estimate
 
@@ -16,3 +18,18 @@ def error_of(f: str, fprime: str, a, x):
 
 def estimate_of(fsecond: str, a, delta):
     return taylor_error_estimate(CALLABLES[fsecond], a, delta)
+
+
+def tangent_mistakes_of(f: str, fprime: str, a, x) -> dict:
+    """What the usual slips give: the slope taken at x instead of a."""
+    xs = np.asarray(x, dtype=float)
+    function, slope = CALLABLES[f], CALLABLES[fprime]
+    value = function(a) + slope(xs) * (xs - a)
+    return {"slope at x": float(value) if np.ndim(x) == 0 else value}
+
+
+def signed_error_of(f: str, fprime: str, a, x):
+    """f(x) - L(x) without the absolute value."""
+    xs = np.asarray(x, dtype=float)
+    value = CALLABLES[f](xs) - tangent_line(CALLABLES[f], CALLABLES[fprime], a, xs)
+    return float(value) if np.ndim(x) == 0 else value

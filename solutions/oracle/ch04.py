@@ -24,4 +24,16 @@ def compose_candidates(f: str, jac_f: str, jac_g: str, x) -> dict:
             "at_x_and_order": jf @ jg_at_x, "elementwise": jg_at_fx * jf}
 
 
-__all__ = ["compose_candidates", "pipeline_forward", "polar_to_cartesian"]
+
+
+
+def pipeline_mistakes(r, theta) -> dict:
+    """What the usual chain-rule slips give for the two-stage pipeline."""
+    from solutions.ch03_jacobian import polar_to_cartesian_jacobian
+    from solutions.ch04_chain_rule import g_jacobian
+
+    inner, outer = polar_to_cartesian_jacobian(r, theta), g_jacobian(polar_to_cartesian(r, theta))
+    return {"order": inner @ outer, "at_x": g_jacobian([r, theta]) @ inner}
+
+
+__all__ = ["compose_candidates", "pipeline_forward", "pipeline_mistakes", "polar_to_cartesian"]

@@ -96,3 +96,29 @@ def jacobian_gap(jac: str, f: str, point) -> float:
     """max |jac(x) - J(x)| for catalogue Jacobian `jac` of map `f`: what the Jacobian check must say."""
     point = np.asarray(point, dtype=float)
     return float(np.max(np.abs(np.asarray(CALLABLES[jac](point), dtype=float) - jacobian_of(f, point))))
+
+
+def jacobian_fd_of(name: str, point, h: float, form: str = "central") -> np.ndarray:
+    """The difference-quotient Jacobian of catalogue map `name` at `point` with step h, exactly as the
+    contract's formula gives it ("central"), or as a slip gives it ("forward", "half step")."""
+    f = CALLABLES[name]
+    point = np.asarray(point, dtype=float)
+    columns = []
+    for j in range(point.size):
+        e = np.zeros_like(point)
+        e[j] = h
+        plus = np.atleast_1d(np.asarray(f(point + e), dtype=float))
+        if form == "forward":
+            columns.append((plus - np.atleast_1d(np.asarray(f(point), dtype=float))) / h)
+        elif form == "half step":  # a central difference with step h/2: x moved by h/2, divided by h
+            columns.append((np.atleast_1d(np.asarray(f(point + e / 2), dtype=float))
+                            - np.atleast_1d(np.asarray(f(point - e / 2), dtype=float))) / h)
+        else:
+            columns.append((plus - np.atleast_1d(np.asarray(f(point - e), dtype=float))) / (2 * h))
+    return np.stack(columns, axis=1)
+
+
+def signed_jacobian_gap(jac: str, f: str, point) -> float:
+    """max(jac(x) - J(x)) without the absolute value."""
+    point = np.asarray(point, dtype=float)
+    return float(np.max(np.asarray(CALLABLES[jac](point), dtype=float) - jacobian_of(f, point)))

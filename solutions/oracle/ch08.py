@@ -44,4 +44,24 @@ def cloud(mean, sigma: float, n: int, seed: int) -> np.ndarray:
     return sample_positions(mean, sigma, n, np.random.default_rng(seed))
 
 
-__all__ = ["cloud", "mismatch_distribution", "range_bearing", "raw_bearings"]
+def ekf_mistakes(x, P, z, R) -> dict:
+    """(x_new, P_new) of the usual EKF slips: the bearing innovation not wrapped, R left out of S."""
+    from solutions.ch06_measurement import H_jacobian
+
+    x, P, z, R = (np.asarray(a, dtype=float) for a in (x, P, z, R))
+    H = H_jacobian(x[0], x[1])
+
+    def update(innovation, S):
+        K = np.linalg.solve(S, H @ P).T
+        I_KH = np.eye(2) - K @ H
+        return x + K @ innovation, I_KH @ P @ I_KH.T + K @ R @ K.T
+
+    raw = z - range_bearing(x[0], x[1])
+    wrapped = raw.copy()
+    wrapped[1] = (wrapped[1] + np.pi) % (2 * np.pi) - np.pi
+    K_no_R = np.linalg.solve(H @ P @ H.T, H @ P).T
+    return {"innovation not wrapped": update(raw, H @ P @ H.T + R),
+            "R missing": (x + K_no_R @ wrapped, (np.eye(2) - K_no_R @ H) @ P)}
+
+
+__all__ = ["cloud", "ekf_mistakes", "mismatch_distribution", "range_bearing", "raw_bearings"]

@@ -67,4 +67,18 @@ def gradient_of_example_f(x, y) -> np.ndarray:
     return np.array([2.0 * x + y, float(x)])
 
 
-__all__ = ["classify_critical_point", "gradient_of", "gradient_of_example_f", "hessian_of", "hessian_tolerance"]
+def gradient_fd_of(name: str, point, h: float, form: str = "central") -> np.ndarray:
+    """The difference-quotient gradient of catalogue function `name` as the contract's formula gives it
+    ("central"), or as a forward difference does."""
+    f = CALLABLES[name]
+    point = np.asarray(point, dtype=float)
+    out = np.zeros(point.size)
+    for j in range(point.size):
+        e = np.zeros_like(point)
+        e[j] = h
+        out[j] = ((f(point + e) - f(point)) / h if form == "forward"
+                  else (f(point + e) - f(point - e)) / (2 * h))
+    return out
+
+
+__all__ = ["classify_critical_point", "gradient_fd_of", "gradient_of", "gradient_of_example_f", "hessian_of", "hessian_tolerance"]

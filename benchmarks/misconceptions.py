@@ -1,0 +1,340 @@
+"""The misconception corpus: one-bug submissions and wrong quiz answers, each with the mistake the
+grader should name, graded for real; prints the share named correctly and any diagnosis offered on a
+right answer (there must be none). Target: at least 80% named.
+
+    python benchmarks/misconceptions.py [--verbose]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tests.conftest import build_submission, replace_function  # noqa: E402
+
+# (module, function, wrong source, the mistake name it should get)
+CODE = {
+    "range squared": ("ch00_range_sensor", "range_reading", """
+        def range_reading(x, y):
+            return float(x) ** 2 + float(y) ** 2
+        """, "squared range"),
+    "gap reversed": ("ch00_range_sensor", "superposition_gap", """
+        def superposition_gap(p, q):
+            p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+            return float(np.hypot(*p) + np.hypot(*q) - np.hypot(*(p + q)))
+        """, "every sign"),
+    "mean range, not its shift": ("ch00_range_sensor", "mean_shift", """
+        def mean_shift(mean, sigma, n, seed):
+            rng = np.random.default_rng(seed)
+            samples = np.asarray(mean, dtype=float) + sigma * rng.standard_normal((int(n), 2))
+            return float(np.mean(np.hypot(samples[:, 0], samples[:, 1])))
+        """, "mean range"),
+    "tangent slope at x": ("ch01_tangent_line", "tangent_line", """
+        def tangent_line(f, fprime, a, x):
+            xs = np.asarray(x, dtype=float)
+            value = f(a) + fprime(xs) * (xs - a)
+            return float(value) if np.ndim(x) == 0 else value
+        """, "slope at x"),
+    "error without abs": ("ch01_tangent_line", "linearization_error", """
+        def linearization_error(f, fprime, a, x):
+            xs = np.asarray(x, dtype=float)
+            value = f(xs) - (f(a) + fprime(a) * (xs - a))
+            return float(value) if np.ndim(x) == 0 else value
+        """, "signed error"),
+    "taylor without the half": ("ch01_tangent_line", "taylor_error_estimate", """
+        def taylor_error_estimate(fsecond, a, delta):
+            return float(abs(fsecond(a)) * delta ** 2)
+        """, "missing 0.5"),
+    "gradient entries swapped": ("ch02_gradient", "example_gradient", """
+        def example_gradient(x, y):
+            return np.array([float(x), 2 * float(x) + float(y)])
+        """, "entries swapped"),
+    "gradient as a row": ("ch02_gradient", "example_gradient", """
+        def example_gradient(x, y):
+            return np.array([[2 * float(x) + float(y), float(x)]])
+        """, "row instead of flat"),
+    "bowl coefficients swapped": ("ch02_gradient", "bowl_gradient", """
+        def bowl_gradient(x, y):
+            return np.array([0.5 * x + 2 * y, 2 * x + 0.5 * y], dtype=float)
+        """, "entries swapped"),
+    "contour along the gradient": ("ch02_gradient", "contour_direction", """
+        def contour_direction(x, y):
+            g = np.array([2 * x + 0.5 * y, 0.5 * x + 2 * y], dtype=float)
+            if not g.any():
+                raise ValueError("no direction at the origin")
+            return g / np.linalg.norm(g)
+        """, "normal, not tangent"),
+    "tangent plane with grad at x": ("ch02_gradient", "tangent_plane", """
+        def tangent_plane(f, grad, a, x):
+            a, x = np.asarray(a, dtype=float), np.asarray(x, dtype=float)
+            return float(f(a) + np.dot(grad(x), x - a))
+        """, "gradient at x"),
+    "polar J transposed": ("ch03_jacobian", "polar_to_cartesian_jacobian", """
+        def polar_to_cartesian_jacobian(r, theta):
+            return np.array([[np.cos(theta), np.sin(theta)], [-r * np.sin(theta), r * np.cos(theta)]])
+        """, "transpose"),
+    "polar J sign slip": ("ch03_jacobian", "polar_to_cartesian_jacobian", """
+        def polar_to_cartesian_jacobian(r, theta):
+            return np.array([[np.cos(theta), r * np.sin(theta)], [np.sin(theta), r * np.cos(theta)]])
+        """, "entry sign"),
+    "polar in degrees": ("ch03_jacobian", "polar_to_cartesian", """
+        def polar_to_cartesian(r, theta):
+            t = np.radians(theta)
+            return np.array([r * np.cos(t), r * np.sin(t)], dtype=float)
+        """, "degrees"),
+    "area scale unsigned": ("ch03_jacobian", "area_scale", """
+        def area_scale(r, theta):
+            return float(abs(r))
+        """, "unsigned determinant"),
+    "g jacobian transposed": ("ch04_chain_rule", "g_jacobian", """
+        def g_jacobian(u):
+            u1, u2 = np.asarray(u, dtype=float)
+            return np.array([[2 * u1, u2], [1.0, u1]])
+        """, "transpose"),
+    "chain order swapped": ("ch04_chain_rule", "compose_jacobian", """
+        def compose_jacobian(f, jac_f, jac_g, x):
+            x = np.asarray(x, dtype=float)
+            return np.asarray(jac_f(x)) @ np.asarray(jac_g(f(x)))
+        """, "order"),
+    "outer jacobian at x": ("ch04_chain_rule", "compose_jacobian", """
+        def compose_jacobian(f, jac_f, jac_g, x):
+            x = np.asarray(x, dtype=float)
+            return np.asarray(jac_g(x)) @ np.asarray(jac_f(x))
+        """, "at_x"),
+    "pipeline order swapped": ("ch04_chain_rule", "pipeline_jacobian", """
+        def pipeline_jacobian(r, theta):
+            p = polar_to_cartesian(r, theta)
+            return polar_to_cartesian_jacobian(r, theta) @ g_jacobian(p)
+        """, "order"),
+    "central is forward": ("ch05_finite_differences", "central_difference", """
+        def central_difference(f, x, h):
+            return float((f(x + h) - f(x)) / h)
+        """, "forward difference"),
+    "forward is central": ("ch05_finite_differences", "forward_difference", """
+        def forward_difference(f, x, h):
+            return float((f(x + h) - f(x - h)) / (2 * h))
+        """, "central difference"),
+    "jacobian by forward differences": ("ch05_finite_differences", "jacobian_fd", """
+        def jacobian_fd(f, x, h=1e-5):
+            x = np.asarray(x, dtype=float)
+            base = np.atleast_1d(np.asarray(f(x), dtype=float))
+            columns = []
+            for j in range(x.size):
+                e = np.zeros_like(x)
+                e[j] = h
+                columns.append((np.atleast_1d(np.asarray(f(x + e), dtype=float)) - base) / h)
+            return np.stack(columns, axis=1)
+        """, "forward difference"),
+    "jacobian half step": ("ch05_finite_differences", "jacobian_fd", """
+        def jacobian_fd(f, x, h=1e-5):
+            x = np.asarray(x, dtype=float)
+            columns = []
+            for j in range(x.size):
+                e = np.zeros_like(x)
+                e[j] = h / 2
+                columns.append((np.atleast_1d(np.asarray(f(x + e), dtype=float))
+                                - np.atleast_1d(np.asarray(f(x - e), dtype=float))) / h)
+            return np.stack(columns, axis=1)
+        """, "half step"),
+    "one-output jacobian flat": ("ch05_finite_differences", "jacobian_fd", """
+        def jacobian_fd(f, x, h=1e-5):
+            x = np.asarray(x, dtype=float)
+            columns = []
+            for j in range(x.size):
+                e = np.zeros_like(x)
+                e[j] = h
+                columns.append((np.asarray(f(x + e), dtype=float) - np.asarray(f(x - e), dtype=float)) / (2 * h))
+            return np.squeeze(np.stack(columns, axis=-1))
+        """, "flat instead of row"),
+    "jacobian check without abs": ("ch05_finite_differences", "max_jacobian_error", """
+        def max_jacobian_error(jac, f, x, h=1e-5):
+            analytic = np.asarray(jac(np.asarray(x, dtype=float)), dtype=float)
+            return float(np.max(analytic - jacobian_fd(f, x, h)))
+        """, "signed difference"),
+    "H transposed": ("ch06_measurement", "H_jacobian", """
+        def H_jacobian(x, y):
+            r2 = float(x) ** 2 + float(y) ** 2
+            if r2 == 0:
+                raise ValueError("r = 0")
+            r = np.sqrt(r2)
+            return np.array([[x / r, -y / r2], [y / r, x / r2]])
+        """, "transpose"),
+    "bearing row sign": ("ch06_measurement", "H_jacobian", """
+        def H_jacobian(x, y):
+            r2 = float(x) ** 2 + float(y) ** 2
+            if r2 == 0:
+                raise ValueError("r = 0")
+            r = np.sqrt(r2)
+            return np.array([[x / r, y / r], [y / r2, -x / r2]])
+        """, "row sign"),
+    "H of the sensor, not the target": ("ch06_measurement", "H_jacobian", """
+        def H_jacobian(x, y):
+            r2 = float(x) ** 2 + float(y) ** 2
+            if r2 == 0:
+                raise ValueError("r = 0")
+            r = np.sqrt(r2)
+            return -np.array([[x / r, y / r], [-y / r2, x / r2]])
+        """, "every sign"),
+    "bearing row over r": ("ch06_measurement", "H_jacobian", """
+        def H_jacobian(x, y):
+            r2 = float(x) ** 2 + float(y) ** 2
+            if r2 == 0:
+                raise ValueError("r = 0")
+            r = np.sqrt(r2)
+            return np.array([[x / r, y / r], [-y / r, x / r]])
+        """, "bearing over r"),
+    "bearing by atan": ("ch06_measurement", "range_bearing", """
+        def range_bearing(x, y):
+            return np.array([np.hypot(x, y), np.arctan(y / x)], dtype=float)
+        """, "atan"),
+    "bearing from the drone": ("ch06_measurement", "range_bearing", """
+        def range_bearing(x, y):
+            return np.array([np.hypot(x, y), np.arctan2(-y, -x)], dtype=float)
+        """, "reversed bearing"),
+    "bearing in degrees": ("ch06_measurement", "range_bearing", """
+        def range_bearing(x, y):
+            return np.array([np.hypot(x, y), np.degrees(np.arctan2(y, x))], dtype=float)
+        """, "degrees"),
+    "covariance with sigma": ("ch06_measurement", "measurement_covariance", """
+        def measurement_covariance(x, y, sigma):
+            H = H_jacobian(x, y)
+            return float(sigma) * (H @ H.T)
+        """, "sigma not squared"),
+    "F without dt": ("ch07_dynamics", "F_jacobian", """
+        def F_jacobian(state, v, omega, dt):
+            th = float(np.asarray(state, dtype=float)[2])
+            return np.array([[1.0, 0.0, -v * np.sin(th)], [0.0, 1.0, v * np.cos(th)], [0.0, 0.0, 1.0]])
+        """, "missing dt"),
+    "F with a fixed dt": ("ch07_dynamics", "F_jacobian", """
+        def F_jacobian(state, v, omega, dt):
+            th = float(np.asarray(state, dtype=float)[2])
+            return np.array([[1.0, 0.0, -v * np.sin(th) * 0.1], [0.0, 1.0, v * np.cos(th) * 0.1], [0.0, 0.0, 1.0]])
+        """, "fixed dt"),
+    "F sign": ("ch07_dynamics", "F_jacobian", """
+        def F_jacobian(state, v, omega, dt):
+            th = float(np.asarray(state, dtype=float)[2])
+            return np.array([[1.0, 0.0, v * np.sin(th) * dt], [0.0, 1.0, v * np.cos(th) * dt], [0.0, 0.0, 1.0]])
+        """, "entry sign"),
+    "motion without dt": ("ch07_dynamics", "motion_model", """
+        def motion_model(state, v, omega, dt):
+            x, y, th = np.asarray(state, dtype=float)
+            return np.array([x + v * np.cos(th), y + v * np.sin(th), th + omega])
+        """, "missing dt"),
+    "arc motion model": ("ch07_dynamics", "motion_model", """
+        def motion_model(state, v, omega, dt):
+            x, y, th = np.asarray(state, dtype=float)
+            return np.array([x + v / omega * (np.sin(th + omega * dt) - np.sin(th)),
+                             y - v / omega * (np.cos(th + omega * dt) - np.cos(th)), th + omega * dt])
+        """, "arc model"),
+    "F^T P F": ("ch07_dynamics", "propagate_covariance", """
+        def propagate_covariance(P, F, Q=None):
+            out = np.asarray(F).T @ np.asarray(P) @ np.asarray(F)
+            return out if Q is None else out + np.asarray(Q)
+        """, "F^T P F"),
+    "Q left out": ("ch07_dynamics", "propagate_covariance", """
+        def propagate_covariance(P, F, Q=None):
+            return np.asarray(F, dtype=float) @ np.asarray(P, dtype=float) @ np.asarray(F, dtype=float).T
+        """, "missing Q"),
+    "biased sample covariance": ("ch08_lab", "sample_covariance", """
+        def sample_covariance(z):
+            z = np.asarray(z, dtype=float)
+            centred = z - z.mean(axis=0)
+            return centred.T @ centred / z.shape[0]
+        """, "n, not n - 1"),
+    "bearings not unwrapped": ("ch08_lab", "measure_samples", """
+        def measure_samples(samples, ref_bearing):
+            samples = np.asarray(samples, dtype=float)
+            return np.column_stack([np.hypot(samples[:, 0], samples[:, 1]), np.arctan2(samples[:, 1], samples[:, 0])])
+        """, "not unwrapped"),
+    "linearized covariance with sigma": ("ch08_lab", "linearized_measurement_cov", """
+        def linearized_measurement_cov(x, y, sigma):
+            H = H_jacobian(x, y)
+            return float(sigma) * (H @ H.T)
+        """, "sigma not squared"),
+    "innovation not wrapped": ("ch08_lab", "ekf_update", """
+        def ekf_update(x, P, z, R):
+            x, P, z, R = (np.asarray(a, dtype=float) for a in (x, P, z, R))
+            H = H_jacobian(x[0], x[1])
+            innovation = z - range_bearing(x[0], x[1])
+            S = H @ P @ H.T + R
+            K = P @ H.T @ np.linalg.inv(S)
+            return x + K @ innovation, (np.eye(2) - K @ H) @ P
+        """, "innovation not wrapped"),
+    "R left out of the gain": ("ch08_lab", "ekf_update", """
+        def ekf_update(x, P, z, R):
+            x, P, z, R = (np.asarray(a, dtype=float) for a in (x, P, z, R))
+            H = H_jacobian(x[0], x[1])
+            innovation = z - range_bearing(x[0], x[1])
+            innovation[1] = (innovation[1] + np.pi) % (2 * np.pi) - np.pi
+            S = H @ P @ H.T
+            K = P @ H.T @ np.linalg.inv(S)
+            return x + K @ innovation, (np.eye(2) - K @ H) @ P
+        """, "R missing"),
+    "gradient by forward differences": ("ch09_choose_your_tool", "gradient_fd", """
+        def gradient_fd(f, x, h=1e-5):
+            x = np.asarray(x, dtype=float)
+            base = float(f(x))
+            out = np.zeros(x.size)
+            for j in range(x.size):
+                e = np.zeros_like(x)
+                e[j] = h
+                out[j] = (f(x + e) - base) / h
+            return out
+        """, "forward difference"),
+    "gradient_fd as a row": ("ch09_choose_your_tool", "gradient_fd", """
+        def gradient_fd(f, x, h=1e-5):
+            x = np.asarray(x, dtype=float)
+            out = np.zeros((1, x.size))
+            for j in range(x.size):
+                e = np.zeros_like(x)
+                e[j] = h
+                out[0, j] = (f(x + e) - f(x - e)) / (2 * h)
+            return out
+        """, "row instead of flat"),
+}
+
+
+def grade_one(root: Path, chapter: str):
+    from grader.grading import grade
+    from grader.runner import Session
+    from grader.submission import Submission
+
+    return grade(Session(Submission(root, "exercises")), [chapter]).chapters[0]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--verbose", action="store_true")
+    args = parser.parse_args()
+    named = 0
+    with tempfile.TemporaryDirectory() as folder:
+        right = grade_one(build_submission(Path(folder) / "right"), "ch00")
+        offered = []
+        for chapter in [f"ch0{i}" for i in range(10)]:
+            from grader.chapters import BY_ID
+
+            report = grade_one(build_submission(Path(folder) / f"right-{chapter}"), chapter)
+            offered += [(chapter, c.id, c.mistake) for c in report.checks if c.mistake]
+        del right
+        for i, (name, (module, function, source, wanted)) in enumerate(CODE.items()):
+            root = build_submission(Path(folder) / f"bug{i}", {module: replace_function(module, function, source)})
+            chapter = module[:4]
+            result = grade_one(root, chapter)
+            got = sorted({c.mistake for c in result.checks if c.function == function and c.mistake})
+            ok = wanted in got
+            named += ok
+            if args.verbose or not ok:
+                print(f"{'named' if ok else 'MISSED':6} {name:34} wanted {wanted!r:24} got {got}")
+    share = named / len(CODE)
+    print(f"\ncode: {named} of {len(CODE)} one-bug submissions named correctly ({share:.0%}; target >= 80%)")
+    print(f"diagnoses offered on right answers: {len(offered)}" + (f" {offered}" if offered else ""))
+    del BY_ID
+
+
+if __name__ == "__main__":
+    main()
