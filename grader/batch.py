@@ -1,11 +1,18 @@
 """Batch grading of a folder of submissions: discover, stage, grade in parallel, write every output.
 
 Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied
-or safely extracted into OUT/.staging/<learner>/exercises/ and graded by a worker process, in a
+or safely extracted into OUT/.staging/<folder>/exercises/ and graded by a worker process, in a
 child forked by that worker's sandboxed fork server (grader.forkserver), and its outputs are written
-atomically into OUT/<learner>/. A learner whose staged
-files hash the same as last time is not graded again. The gradebook, JUnit file and class summary
-are rebuilt from the per-learner reports at the end, so an interrupted run loses nothing graded.
+atomically into OUT/<folder>/, where <folder> is the learner's id kept as given where it is plain
+and percent-encoded otherwise (folder_name): no id can name a class output, a hidden folder or a
+path outside OUT. A learner whose staged files hash the same as last time is not graded again. The
+gradebook, JUnit file and class summary are rebuilt from the per-learner reports at the end, so an
+interrupted run loses nothing graded.
+
+An infrastructure failure (the sandbox or the child process could not start, for no reason of the
+learner's) is never a grade: the batch does not start when a probe of the sandbox fails, and a
+learner whose report says so is tried once more, then listed as `error` with empty score cells and
+graded again by the next run.
 """
 
 from __future__ import annotations
@@ -19,23 +26,38 @@ import os
 import re
 import sys
 import time
+import unicodedata
 import zipfile
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
 from grader.chapters import CHAPTERS
+from grader.safe_text import for_json, unicode_clean
 
 CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.py$")
 ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
 MAX_FILE_BYTES = 1 << 20
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
-SAFE_ID = re.compile(r"[^A-Za-z0-9_.@-]+")
+STAGING = ".staging"
+CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html")
+_PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
+_MAX_FOLDER = 160
+_BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+RETRY_PAUSE = 1.0  # seconds before a learner whose child could not start is tried again
 
 
 class StagingError(ValueError):
     """A submission that cannot be staged (the message says why)."""
+
+
+class RosterError(ValueError):
+    """A roster that cannot be read (the message names the file and line)."""
+
+
+class InfrastructureError(RuntimeError):
+    """Grading cannot work here (the sandbox does not start): no learner is graded."""
 
 
 @dataclass
@@ -44,27 +66,114 @@ class Entry:
     source: Path
 
 
-def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
-    """Learner folders and .zip files in `folder`; ids from their names or the roster CSV
-    (columns `submission` and `learner`)."""
-    names = {}
-    if roster is not None:
-        with open(roster, newline="", encoding="utf-8") as handle:
-            for row in csv.DictReader(handle):
-                names[row["submission"].strip()] = row["learner"].strip()
-    entries = []
-    for path in sorted(folder.iterdir()):
-        if path.name.startswith("."):
+@dataclass
+class Skipped:
+    """Something in the submissions folder that is not graded, and why."""
+
+    name: str
+    reason: str
+    submission: bool = False  # a learner's folder or zip, skipped because its id is unusable
+
+
+def folder_name(learner: str) -> str:
+    """The learner's folder in OUT (and OUT/.staging): the id itself where it has only letters, digits
+    and _ . @ + -, else each other character percent-encoded as UTF-8 (zoë -> zo%C3%AB); a leading '.'
+    and the names of the class outputs get their dots encoded (%2E), a leading '-' too (%2D), and a long
+    id is shortened with a hash. Different ids never share a folder; no id names a class output or a
+    hidden folder."""
+    encoded = "".join(ch if ch in _PLAIN else "".join(f"%{b:02X}" for b in ch.encode("utf-8", "surrogatepass"))
+                      for ch in learner)
+    if encoded.casefold() in CLASS_OUTPUTS or encoded.casefold() == STAGING or encoded.startswith("."):
+        encoded = encoded.replace(".", "%2E")
+    if encoded.startswith("-"):  # not an option to the shell tools that will handle the folder
+        encoded = "%2D" + encoded[1:]
+    if len(encoded) > _MAX_FOLDER:  # '~' never appears otherwise
+        digest = hashlib.sha256(learner.encode("utf-8", "surrogatepass")).hexdigest()[:20]
+        encoded = f"{encoded[:_MAX_FOLDER - 21]}~{digest}"
+    return encoded
+
+
+def id_problem(learner: str) -> str | None:
+    """Why `learner` cannot be a learner id (empty, '.' or '..', a path separator, a control
+    character), or None. Any other text is an id, kept exactly as given."""
+    if not learner.strip():
+        return "is empty"
+    if learner in (".", ".."):
+        return f"is {learner!r}"
+    if "/" in learner or "\\" in learner:
+        return "contains a path separator (/ or \\)"
+    for ch in learner:
+        if ch in _BIDI or unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp"):
+            return f"contains the control character U+{ord(ch):04X}"
+    return None
+
+
+def read_roster(roster: Path) -> dict[str, tuple[str, int]]:
+    """The roster CSV as {submission: (learner id, line)}: columns `submission` and `learner` in any
+    order and case, separated by ',' or ';' (or a tab), UTF-8 with or without a byte-order mark."""
+    try:
+        text = roster.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise RosterError(f"{roster}: not UTF-8 text (byte {exc.start}); save it as CSV in UTF-8") from None
+    except OSError as exc:
+        raise RosterError(f"{roster}: {exc.strerror}") from None
+    header = text.splitlines()[0] if text.strip() else ""
+    rows = csv.reader(io.StringIO(text, newline=""), delimiter=max(",;\t", key=header.count))
+    columns = [column.strip().lower() for column in next(rows, [])]
+    if "submission" not in columns or "learner" not in columns:
+        raise RosterError(f"{roster}, line 1: the header must name the columns submission and learner "
+                          f"(it has: {', '.join(map(repr, columns)) or 'nothing'})")
+    at_submission, at_learner = columns.index("submission"), columns.index("learner")
+    names: dict[str, tuple[str, int]] = {}
+    for row in rows:
+        if not any(cell.strip() for cell in row) or len(row) <= at_submission:
             continue
-        if path.is_symlink() or path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip"):
-            stem = path.stem if path.is_file() else path.name
-            learner = SAFE_ID.sub("_", names.get(path.name) or names.get(stem) or stem)
-            taken = {e.learner for e in entries}
-            unique, n = learner, 2
-            while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
-                unique, n = f"{learner}-{n}", n + 1
-            entries.append(Entry(unique, path))
-    return entries
+        names[row[at_submission].strip()] = (row[at_learner].strip() if len(row) > at_learner else "", rows.line_num)
+    return names
+
+
+def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[Skipped]]:
+    """The submissions in `folder` (learner folders and .zip files) with their learner ids, and what
+    is skipped with the reason: other files, hidden (dot-named) entries the roster does not name,
+    ids that cannot be ids (id_problem). An id comes from the roster (--roster), else from the name;
+    two submissions with one id become id and id-2."""
+    names = read_roster(roster) if roster is not None else {}
+    entries: list[Entry] = []
+    skipped: list[Skipped] = []
+    taken: set[str] = set()
+    for path in sorted(folder.iterdir()):
+        shown = unicode_clean(path.name)
+        if not (path.is_symlink() or path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip")):
+            skipped.append(Skipped(shown, "not a folder or a .zip file"))
+            continue
+        stem = path.stem if path.is_file() else path.name
+        named = names.get(path.name) or names.get(stem)
+        if named is None and path.name.startswith("."):
+            skipped.append(Skipped(shown, "a hidden (dot-named) entry, as tools leave behind (.git, .DS_Store, "
+                                          "._name); to grade it, rename it or name it in a roster (--roster)"))
+            continue
+        if named is not None:
+            learner, line = named
+            problem = id_problem(learner)
+            why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
+        else:
+            learner = unicode_clean(stem)  # bytes that are not UTF-8 become U+FFFD
+            problem = id_problem(learner)
+            why = f"its name, the learner id, {problem}; rename it or give its id in a roster (--roster)"
+        if problem is not None:
+            skipped.append(Skipped(shown, why, submission=True))
+            continue
+        unique, n = learner, 2
+        while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
+            unique, n = f"{learner}-{n}", n + 1
+        taken.add(unique)
+        entries.append(Entry(unique, path))
+    return entries, skipped
+
+
+def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
+    """Learner folders and .zip files in `folder` with their ids (survey, without what is skipped)."""
+    return survey(folder, roster)[0]
 
 
 def _wanted(relative: str) -> str | None:
@@ -79,9 +188,9 @@ def _wanted(relative: str) -> str | None:
 
 
 def stage(entry: Entry, staging: Path) -> Path:
-    """Copy the submission's chapter and answer files into staging/<learner>/exercises/ (a file
+    """Copy the submission's chapter and answer files into staging/<folder>/exercises/ (a file
     already staged with the same bytes is left as it is; files no longer submitted are removed)."""
-    root = staging / entry.learner
+    root = staging / folder_name(entry.learner)
     package = root / "exercises"
     files: dict[str, bytes] = {"__init__.py": b""}
     total = 0
@@ -175,67 +284,151 @@ def write_atomically(path: Path, text: str) -> None:
 _worker_state: dict = {}
 
 
-def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
-               limits: dict) -> tuple[str, str, str]:
-    """Stage and grade one submission (in a worker process); returns (learner, status, message).
+def isolation_line(sandboxed: bool = True) -> str:
+    """What holds for learner code in this batch (grader.sandbox.Sandbox.describe, or why there is no
+    sandbox when the instructor turned it off)."""
+    from grader.sandbox import Sandbox
 
-    A submission whose staged files hash as at its last grading is not graded again."""
-    from grader.forkserver import ForkServer
+    if sandboxed:
+        return Sandbox().describe()
+    return ("isolation: no sandbox (turned off with --no-sandbox): learner code runs as you, with resource limits "
+            "only, and can read every file you can (answers included, wherever the references and keys are "
+            "installed)")
+
+
+def check_infrastructure(sandboxed: bool = True) -> None:
+    """Start one child interpreter the way the workers will (grader.sandbox.probe); InfrastructureError
+    with the reason when it does not start, so that no learner is graded on a broken sandbox."""
+    from grader.sandbox import Sandbox, probe
+
+    reason = probe(Sandbox() if sandboxed else None)
+    if reason is not None:
+        raise InfrastructureError(reason)
+
+
+def _launcher(sandboxed: bool):
+    """This worker's way to start a child: its fork server (started on first use), or a fresh
+    interpreter per learner with GRADER_FORK_SERVER=off (slower)."""
+    if "launcher" not in _worker_state:
+        from grader.forkserver import ForkServer
+        from grader.sandbox import Sandbox
+        from grader.spawn import start_child
+
+        wrap = Sandbox() if sandboxed else None
+        if os.environ.get("GRADER_FORK_SERVER") == "off":
+            _worker_state["launcher"] = functools.partial(start_child, wrap=wrap)
+        else:  # one fork server per worker; it sees no learner's files, they come with each request
+            server = ForkServer(wrap)
+            _worker_state.update(launcher=server.start, server=server)
+    return _worker_state["launcher"]
+
+
+def _drop_launcher() -> None:
+    """Stop this worker's fork server: the next learner gets a new one."""
+    _worker_state.pop("launcher", None)
+    server = _worker_state.pop("server", None)
+    if server is not None:
+        server.close()
+
+
+def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
+                  sandboxed: bool):
+    """One learner's report; tried a second time, with a new fork server, when the first attempt
+    failed for a reason outside the learner's code (Report.infrastructure)."""
     from grader.pipeline import Request, build_report
-    from grader.render import lms
     from grader.runner import Limits, Session
     from grader.submission import Submission
-    from grader.sandbox import Sandbox
-    from grader.spawn import start_child
+
+    for attempt in (1, 2):
+        session = Session(Submission(root, "exercises"), Limits(**limits), launcher=_launcher(sandboxed))
+        report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots, label=learner))
+        if not report.infrastructure:
+            break
+        _drop_launcher()
+        if attempt == 1:
+            time.sleep(RETRY_PAUSE)
+    return report
+
+
+def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
+               limits: dict, sandboxed: bool = True) -> tuple[str, str, str]:
+    """Stage and grade one submission (in a worker process); returns (learner, status, message).
+
+    A submission whose staged files hash as at its last grading is not graded again. One whose child
+    could not start, twice, is `error`: its report.json keeps why (and no hash, so the next run grades
+    it again), and no results.json or report.html stays to look like a grade."""
+    from grader.render import lms
 
     started = time.monotonic()
     learner = entry.learner
-    staging = Path(out) / ".staging"
     try:
-        root = stage(entry, staging)
+        root = stage(entry, Path(out) / STAGING)
     except StagingError as exc:
         return learner, "unreadable", f"{entry.source.name}: {exc}"
     digest = content_hash(root, chapters, seed)
-    folder = Path(out) / learner
+    folder = Path(out) / folder_name(learner)
     if _previous_hash(folder) == digest:
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
-    if "launcher" not in _worker_state:
-        sandbox = Sandbox()
-        if os.environ.get("GRADER_FORK_SERVER") == "off":  # a fresh interpreter per learner (slower)
-            _worker_state["launcher"] = functools.partial(start_child, wrap=sandbox)
-        else:  # one fork server per worker; it sees no learner's files, they come with each request
-            _worker_state["launcher"] = ForkServer(sandbox).start
-    submission = Submission(root, "exercises")
-    session = Session(submission, Limits(**limits), launcher=_worker_state["launcher"])
-    report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots, label=learner))
+    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed)
     data = report.to_dict()
-    data["batch"] = {"hash": digest, "seconds": round(time.monotonic() - started, 3),
-                     "learner_output": report.learner_output[:4000]}
+    data["batch"] = {"seconds": round(time.monotonic() - started, 3), "learner_output": report.learner_output[:4000]}
+    if report.infrastructure:
+        for name in ("results.json", "report.html"):
+            (folder / name).unlink(missing_ok=True)
+        write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")
+        return learner, "error", (f"not graded, twice, for a reason outside the learner's code: {report.infrastructure}"
+                                  "; the next run grades it again")
+    data["batch"]["hash"] = digest
     write_atomically(folder / "results.json", lms.gradescope(report))
     if html:
         from grader.render import html as html_renderer
 
         write_atomically(folder / "report.html", html_renderer.render(report))
-    write_atomically(folder / "report.json", json.dumps(data, allow_nan=False) + "\n")  # last: marks done
+    write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
     problems = sum(bool(c.problems) for c in report.chapters)
     return learner, "graded", f"{report.score:g}/{report.max_score:g}" + (f", {problems} chapter(s) with problems" if problems else "")
 
 
-def _previous_hash(folder: Path) -> str | None:
+def _load(folder: Path) -> dict | None:
     try:
-        return json.loads((folder / "report.json").read_text())["batch"]["hash"]
-    except (OSError, ValueError, KeyError, TypeError):
+        data = json.loads((folder / "report.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
         return None
+    return data if isinstance(data, dict) else None
+
+
+def _report(data: dict | None):
+    """The grader.model.Report in a report.json's data, or None."""
+    from grader.model import Report
+
+    try:
+        return None if data is None else Report.from_dict(data)
+    except (TypeError, ValueError, KeyError, AttributeError):
+        return None
+
+
+def _previous_hash(folder: Path) -> str | None:
+    """The content hash of the learner's last grading; None if there is none to keep (no report, or
+    one that records an infrastructure failure: that is never kept)."""
+    data = _load(folder)
+    if data is None or data.get("infrastructure"):
+        return None
+    batch = data.get("batch")
+    return batch.get("hash") if isinstance(batch, dict) else None
 
 
 def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None, roster: Path | None = None,
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
-              limits: dict | None = None, progress=None) -> dict:
-    """Grade every submission in `submissions` into `out`; returns counts for the end summary."""
+              limits: dict | None = None, progress=None, sandboxed: bool = True) -> dict:
+    """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
+    learner, what was skipped and the isolation line, for the end summary. InfrastructureError (and
+    nothing written) when a child interpreter does not start here; RosterError for a roster that
+    cannot be read. `sandboxed=False` grades without bubblewrap (--no-sandbox)."""
     chapters = chapters or [c.id for c in CHAPTERS]
+    entries, skipped = survey(submissions, roster)
+    check_infrastructure(sandboxed)
     out.mkdir(parents=True, exist_ok=True)
-    entries = discover(submissions, roster)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}
     jobs = jobs or os.cpu_count() or 1
@@ -243,8 +436,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     done = 0
     limits = limits or {}
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits): entry.learner
-                   for entry in entries}
+        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed):
+                   entry.learner for entry in entries}
         for future in as_completed(futures):
             learner = futures[future]
             try:
@@ -254,41 +447,50 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
             done += 1
             if progress:
                 progress(done, len(entries), time.monotonic() - started)
-    write_summaries(out, [e.learner for e in entries], chapters, statuses, messages)
+    isolation = isolation_line(sandboxed)
+    write_summaries(out, [e.learner for e in entries], chapters, statuses, messages, skipped, isolation)
     counts: dict[str, int] = {}
     for status in statuses.values():
         counts[status] = counts.get(status, 0) + 1
     graded_now = sum(status == "graded" for status in statuses.values())
     return {"counts": counts, "seconds": time.monotonic() - started, "graded_now": graded_now,
-            "messages": messages, "statuses": statuses}
+            "messages": messages, "statuses": statuses, "skipped": skipped,
+            "isolation": isolation}
 
 
-def write_summaries(out: Path, learners: list[str], chapters: list[str], statuses: dict, messages: dict) -> None:
-    """gradebook.csv, junit.xml and summary.html from the per-learner reports on disk."""
-    from grader.model import Report
-    from grader.render import lms
+def write_summaries(out: Path, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
+                    skipped: list[Skipped] = (), isolation: str = "") -> None:
+    """gradebook.csv, junit.xml and summary.html from the per-learner reports on disk. A learner who is
+    not graded (unreadable, an error, a report recording an infrastructure failure) has empty score
+    cells and the reason in the gradebook's message column, and is in no other total."""
+    from grader.render import lms, summary
 
     reports = []
+    not_graded: dict[str, str] = {}
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     writer.writerow(lms.gradebook_header(chapters))
     for learner in learners:
+        status, message = statuses.get(learner, "graded"), messages.get(learner, "")
+        data = _load(out / folder_name(learner))
         report = None
-        try:
-            report = Report.from_dict(json.loads((out / learner / "report.json").read_text()))
-            reports.append((learner, report))
-        except (OSError, ValueError, KeyError):
-            pass
-        status = statuses.get(learner, "graded")
-        status = "graded" if status == "unchanged" and report else status
-        writer.writerow(lms.gradebook_row(learner, report, chapters, status))
+        if data is not None and data.get("infrastructure"):
+            status = "error"
+            message = message if statuses.get(learner) == "error" else f"not graded: {data['infrastructure']}"
+        elif status not in ("error", "unreadable"):  # graded now, or unchanged since it was
+            report = _report(data)
+            if report is None:
+                status, message = "error", "no readable report.json"
+            else:
+                status, message = "graded", ""
+                reports.append((learner, report))
+        if status != "graded":
+            not_graded[learner] = message
+        writer.writerow(lms.gradebook_row(learner, report, chapters, status, message))
     write_atomically(out / "gradebook.csv", buffer.getvalue())
     write_atomically(out / "junit.xml", lms.junit(reports))
-    from grader.render import summary
-    from grader.sandbox import Sandbox
-
-    unreadable = {k: v for k, v in messages.items() if statuses.get(k) in ("error", "unreadable")}
-    write_atomically(out / "summary.html", summary.render(reports, unreadable, Sandbox().describe()))
+    write_atomically(out / "summary.html", summary.render(reports, not_graded, isolation or isolation_line(),
+                                                          [(s.name, s.reason) for s in skipped]))
 
 
 def progress_bar(stream=sys.stderr):

@@ -262,7 +262,7 @@ def release_command(out: str, course_file: str | None, force: bool) -> None:
 @click.argument("submissions", type=click.Path(exists=True, file_okay=False))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Output folder.")
 @click.option("--roster", type=click.Path(exists=True, dir_okay=False), default=None,
-              help="CSV with columns submission,learner mapping folder/zip names to learner ids.")
+              help="CSV with columns submission,learner mapping folder/zip names to learner ids (',' or ';').")
 @click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
 @click.option("--jobs", type=int, default=None, help="Parallel workers (default: all cores).")
 @click.option("--seed", type=int, default=None,
@@ -271,27 +271,49 @@ def release_command(out: str, course_file: str | None, force: bool) -> None:
               help="The course configuration (default: solutions/course.yaml beside the references).")
 @click.option("--no-html", is_flag=True, help="Skip the per-learner report.html.")
 @click.option("--plots", is_flag=True, help="Draw plots in each report.html (about 2 s per learner).")
+@click.option("--no-sandbox", is_flag=True,
+              help="Run learner code without bubblewrap even where it is installed (the isolation line says so).")
+@click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
+              help="Seconds for one learner's code, all chapters together; the quiz gets what is left.")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
-                  seed: int | None, course_file: str | None, no_html: bool, plots: bool) -> None:
+                  seed: int | None, course_file: str | None, no_html: bool, plots: bool, no_sandbox: bool,
+                  time_budget: float) -> None:
     """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
     at the course seed, hidden checks included."""
     from pathlib import Path
 
-    from grader.batch import progress_bar, run_batch
-    from grader.sandbox import Sandbox
+    from grader import batch
+    from grader.safe_text import for_terminal
 
     picked = chapters_from(tuple(chapter_list.split(",")))
     the_course = _instructor_course(course_file, "grade batch")
-    click.echo(Sandbox().describe(), err=True)
-    result = run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
-                       roster=Path(roster) if roster else None, jobs=jobs,
-                       seed=the_course.grading_seed if seed is None else seed, html=not no_html, plots=plots,
-                       progress=progress_bar())
+    isolation = batch.isolation_line(sandboxed=not no_sandbox)
+    click.echo(isolation, err=True)
+    try:
+        result = batch.run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
+                                 roster=Path(roster) if roster else None, jobs=jobs,
+                                 seed=the_course.grading_seed if seed is None else seed, html=not no_html,
+                                 plots=plots, limits={"learner_seconds": time_budget}, sandboxed=not no_sandbox,
+                                 progress=batch.progress_bar())
+    except batch.RosterError as exc:
+        raise click.BadParameter(for_terminal(str(exc)), param_hint="--roster") from None
+    except batch.InfrastructureError as exc:
+        click.echo(f"grade batch: no learner was graded: learner code cannot run here. "
+                   f"{for_terminal(str(exc), one_line=True)}\n"
+                   "Fix the sandbox (bubblewrap: `bwrap --version`, user namespaces) and run again, or pass "
+                   "--no-sandbox to grade without it (learner code then runs as you).", err=True)
+        sys.exit(EXIT_USAGE)
     counts = ", ".join(f"{n} {status}" for status, n in sorted(result["counts"].items()))
-    click.echo(f"{len(result['statuses'])} submissions: {counts}; graded {result['graded_now']} in "
-               f"{result['seconds']:.1f} s. Gradebook: {Path(out_dir) / 'gradebook.csv'}")
+    skipped = f"; {len(result['skipped'])} skipped" if result["skipped"] else ""
+    click.echo(f"{len(result['statuses'])} submissions: {counts or 'none'}{skipped}; graded {result['graded_now']} "
+               f"in {result['seconds']:.1f} s. Gradebook: {Path(out_dir) / 'gradebook.csv'}")
     for learner, message in sorted(result["messages"].items()):
         if result["statuses"][learner] in ("error", "unreadable"):
-            click.echo(f"  {learner}: {message}", err=True)
-    click.echo(Sandbox().describe(), err=True)
-    sys.exit(0 if all(s in ("graded", "unchanged") for s in result["statuses"].values()) else 1)
+            click.echo(f"  {for_terminal(learner, one_line=True)}: {for_terminal(message, one_line=True)}", err=True)
+    for entry in result["skipped"]:
+        click.echo(f"  skipped {for_terminal(entry.name, one_line=True)}: {for_terminal(entry.reason, one_line=True)}",
+                   err=True)
+    click.echo(result["isolation"], err=True)
+    complete = all(s in ("graded", "unchanged") for s in result["statuses"].values()) and not any(
+        entry.submission for entry in result["skipped"])
+    sys.exit(EXIT_ALL_PASSED if complete else EXIT_NOT_ALL_PASSED)
