@@ -231,3 +231,25 @@ def test_fork_server_and_fresh_interpreters_give_the_same_verdicts(submissions, 
     assert sorted(verdicts["fork"]) == ["alice", "bob", "carol"]
     assert verdicts["fork"] == verdicts["off"]
     assert any(status == "fail" for _, status, _ in verdicts["fork"]["carol"])
+
+
+def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
+    """--time-budget is one learner's time for the code of all chapters together: a learner whose every
+    H_jacobian call takes 1.5 s (each within the 5 s call limit) is stopped after the budget, and the
+    learner after them is graded as ever."""
+    folder = tmp_path / "submissions"
+    slow = replace_function("ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import time\n"
+                            "    time.sleep(1.5)\n    return np.eye(2)\n")
+    build_submission(folder / "slow", {"ch06_measurement": slow})
+    build_submission(folder / "steady")
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(folder), "--out", str(tmp_path / "out"),
+                           "--chapters", "ch03,ch06", "--jobs", "1", "--no-html", "--time-budget", "3"],
+                          cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=120)
+    assert time.monotonic() - started < 15, done.stdout + done.stderr  # without the budget: over 20 s
+    assert done.returncode == 0, done.stdout + done.stderr
+    rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
+    assert rows["steady"]["ch06_code"] == "15" and rows["slow"]["ch03_code"] == "10"
+    report = json.loads((tmp_path / "out" / "slow" / "report.json").read_text())
+    messages = [c["message"] for c in report["chapters"][1]["checks"] if c["function"] == "H_jacobian"]
+    assert any("3 s" in m and "ran out" in m for m in messages), messages
