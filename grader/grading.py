@@ -145,7 +145,7 @@ def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
     try:
         verdict = _finish(pending, run)
     except Skip as skip:
-        return _result(check, Status.SKIP, 0.0, str(skip))
+        return _result(check, Status.SKIP, check.points if skip.costs_nothing else 0.0, str(skip))
     except Exception:
         return _result(check, Status.ERROR, 0.0,
                        f"grader error while judging this check:\n{_trace()}")
@@ -175,6 +175,21 @@ def import_problem(error: dict, module_file: str) -> str:
     return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "")
 
 
+def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
+    """Blame once: a failing check of a function usually written with the learner's own helpers (of this
+    chapter or an earlier one graded in the same report) says first that a helper fails its checks."""
+    failing = {c.function for ch in report.chapters for c in ch.checks if c.kind == "code" and c.status == Status.FAIL}
+    for chapter in report.chapters:
+        uses = chapters[chapter.chapter].builds_on if chapter.chapter in chapters else {}
+        for check in chapter.checks:
+            helpers = [h for h in uses.get(check.function, ()) if h in failing and h != check.function]
+            if check.status == Status.FAIL and helpers:
+                named = " and ".join(helpers)
+                check.message = (f"{check.function} usually builds on your {named}, which "
+                                 f"{'fails its' if len(helpers) == 1 else 'fail their'} own checks: fix "
+                                 f"{'it' if len(helpers) == 1 else 'them'} first.\n{check.message}")
+
+
 def _plots(chapter_id: str) -> list:
     """The plot-data gatherers of a chapter (grader/plots.py), for the HTML report."""
     from grader.plots import PLOTS
@@ -195,6 +210,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
     for plan in plans:
         module_file = f"{submission.package}/{plan.chapter.info.module}.py"
         report.chapters.append(plan.judge(runs[plan.chapter.info.id], module_file))
+    point_upstream(report, {plan.chapter.info.id: plan.chapter for plan in plans})
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()
               if run.import_error and run.import_error.get("infrastructure")]

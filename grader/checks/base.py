@@ -20,7 +20,15 @@ from grader.checks.draws import Draws
 
 
 class Skip(Exception):
-    """The check cannot be judged because something it depends on failed; the message says what."""
+    """The check cannot be judged because something it depends on failed; the message says what.
+
+    `costs_nothing`: the check exists only to localise a fault (your H against the finite difference of
+    your own range_bearing) and what it depends on is wrong: its points are not lost, the failure is
+    charged once, where it is (blame once)."""
+
+    def __init__(self, message: str, costs_nothing: bool = False) -> None:
+        super().__init__(message)
+        self.costs_nothing = costs_nothing
 
 
 @dataclass(frozen=True)
@@ -55,6 +63,13 @@ class ChapterChecks:
 
     info: ChapterInfo
     checks: list[Check] = field(default_factory=list)
+
+    builds_on: dict[str, tuple[str, ...]] = field(default_factory=dict)  # function -> learner functions it uses
+
+    def uses(self, function: str, *helpers: str) -> None:
+        """Declare that a learner's `function` is usually written with their own `helpers` (maybe of an
+        earlier chapter): when both fail, the function's failures point at the helper first."""
+        self.builds_on[function] = tuple(helpers)
 
     def check(self, function: str, points: float = 1, description: str | None = None,
               id: str | None = None) -> Callable[[CheckBody], CheckBody]:

@@ -21,6 +21,8 @@ from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_prob
 from grader.wire import call
 
 CHECKS = chapter_checks("ch00")
+CHECKS.uses("superposition_gap", "range_reading")
+CHECKS.uses("mean_shift", "range_reading")
 
 STANDARD_ERRORS = 5.0
 REF = reference("ch00")

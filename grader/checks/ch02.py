@@ -19,6 +19,7 @@ from grader.compare import Entries, all_of, compare_arrays, expect, expect_raise
 from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch02")
+CHECKS.uses("contour_direction", "bowl_gradient")
 REF = reference("ch02")
 
 GRAD_F = Entries("grad f", rows=("d f/d x", "d f/d y"), cols=("x", "y"))

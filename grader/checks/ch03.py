@@ -17,6 +17,7 @@ from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch03")
+CHECKS.uses("area_scale", "polar_to_cartesian_jacobian")
 REF = reference("ch03")
 
 P = Entries("p", rows=("x", "y"))
@@ -105,11 +106,13 @@ def area_scale_is_det_of_your_jacobian(ctx):
             return fail(problem)
         problem = value_problem(g["J"], (2, 2), _label("polar_to_cartesian_jacobian", r, t))
         if problem:
-            raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J.")
+            raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J: not judged, no "
+                       "points lost.", costs_nothing=True)
         own_det = float(np.linalg.det(g["J"].as_array()))
         if not np.isclose(own_det, scale, rtol=1e-9, atol=1e-12):
             raise Skip(f"the determinant of your {_label('polar_to_cartesian_jacobian', r, t)} is {fmt(own_det)}, "
-                       f"not {fmt(scale)}: fix J first (see its checks).")
+                       f"not {fmt(scale)}: fix J first (see its checks); not judged, no points lost.",
+                       costs_nothing=True)
         verdicts.append(compare_arrays(g["det"].as_array(), own_det, label=label, rtol=1e-9, atol=1e-12,
                                        expected_name="det of your J"))
     return all_of(verdicts)

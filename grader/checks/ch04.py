@@ -19,6 +19,8 @@ from grader.expected import reference
 from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch04")
+CHECKS.uses("pipeline_jacobian", "polar_to_cartesian", "polar_to_cartesian_jacobian", "g_stage", "g_jacobian",
+            "compose_jacobian")
 REF = reference("ch04")
 
 G = Entries("g", rows=("u1^2 + u2", "u1 u2"))

@@ -35,6 +35,8 @@ from grader.expected import reference
 from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch05")
+CHECKS.uses("max_jacobian_error", "jacobian_fd")
+CHECKS.uses("best_step", "central_difference")
 REF = reference("ch05")
 
 SLOPE_STEPS = (0.1, 0.05, 0.025, 0.0125)

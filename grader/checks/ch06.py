@@ -12,6 +12,7 @@ from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch06")
+CHECKS.uses("measurement_covariance", "H_jacobian")
 REF = reference("ch06")
 
 Z = Entries("z", rows=("range", "bearing"))

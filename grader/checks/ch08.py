@@ -43,6 +43,11 @@ from grader.expected import reference
 from grader.wire import Array, Rng, call
 
 CHECKS = chapter_checks("ch08")
+CHECKS.uses("linearized_measurement_cov", "H_jacobian")
+CHECKS.uses("measure_samples", "range_bearing")
+CHECKS.uses("linearization_mismatch", "sample_positions", "measure_samples", "sample_covariance",
+            "linearized_measurement_cov")
+CHECKS.uses("ekf_update", "H_jacobian", "range_bearing")
 REF = reference("ch08")
 
 RTOL, ATOL = 1e-9, 1e-12

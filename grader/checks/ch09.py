@@ -34,6 +34,7 @@ from grader.expected import reference
 from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch09")
+CHECKS.uses("hessian_fd", "gradient_fd", "jacobian_fd")
 REF = reference("ch09")
 
 EPS = float(np.finfo(float).eps)

@@ -147,19 +147,24 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
             for r in [g["at"], *g["plus"], *g["minus"]]:
                 problem = value_problem(r, forward_out.shape, d.forward)
                 if problem:
-                    raise Skip(f"{problem} So {symbol} cannot be compared with the finite difference of your {d.forward_name}.")
+                    raise Skip(f"{problem} So {symbol} cannot be compared with the finite difference of your "
+                               f"{d.forward_name}: not judged, no points lost; fix {d.forward} first.",
+                               costs_nothing=True)
+            if not np.allclose(g["at"].as_array(), forward_out, rtol=1e-9, atol=1e-12):
+                raise Skip(f"your {d.forward_name} differs from the reference at {fmt_array(point)}, so its "
+                           f"finite difference says nothing about your {symbol}: not judged, no points lost. Fix "
+                           f"{d.forward} first (see its checks); {symbol} is still checked against the reference.",
+                           costs_nothing=True)
             h = steps(point)
             fd = np.stack([(p.as_array() - m.as_array()) / (2 * h[j])
                            for j, (p, m) in enumerate(zip(g["plus"], g["minus"]))], axis=-1)
             v = compare_arrays(g["jac"].as_array(), fd, label=label, rtol=FD_RTOL, atol=FD_ATOL,
                                entries=d.entries, expected_name="finite difference of your " + d.forward_name)
             if not v.passed:
-                own_right = np.allclose(g["at"].as_array(), forward_out, rtol=1e-9, atol=1e-12)
-                blame = (f"your {d.forward} matches the reference here, so the mistake is in {d.jacobian}"
-                         if own_right else
-                         f"your {d.forward} itself differs from the reference here: fix it first (see its check)")
                 v.message = (f"your {symbol} disagrees with the finite difference of your {d.forward_name} in "
-                             f"{_columns_text(v.details['wrong'], d.entries)}; {blame}.\n{v.message}")
+                             f"{_columns_text(v.details['wrong'], d.entries)}; your {d.forward} matches the reference "
+                             f"here, so the mistake is in {d.jacobian} (or in a function of yours it calls).\n"
+                             f"{v.message}")
             verdicts.append(v)
         return all_of(verdicts)
 
