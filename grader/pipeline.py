@@ -49,6 +49,6 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     if request.quiz:
         from grader.quiz import add_quiz_results
 
-        submission = session.submission
-        add_quiz_results(report, submission.root, submission.package, request.learner)
+        submission = session.submission  # the quiz gets what is left of the learner's time budget
+        add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
     return report
