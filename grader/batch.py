@@ -334,16 +334,23 @@ def _drop_launcher() -> None:
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
                   sandboxed: bool):
     """One learner's report; tried a second time, with a new fork server, when the first attempt
-    failed for a reason outside the learner's code (Report.infrastructure)."""
+    failed for a reason outside the learner's code (Report.infrastructure, or no process could be
+    started at all: an OSError, raised again if the second attempt meets it too)."""
     from grader.pipeline import Request, build_report
     from grader.runner import Limits, Session
     from grader.submission import Submission
 
     for attempt in (1, 2):
-        session = Session(Submission(root, "exercises"), Limits(**limits), launcher=_launcher(sandboxed))
-        report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots, label=learner))
-        if not report.infrastructure:
-            break
+        try:
+            session = Session(Submission(root, "exercises"), Limits(**limits), launcher=_launcher(sandboxed))
+        except OSError:
+            if attempt == 2:
+                raise
+        else:
+            report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots,
+                                                   label=learner))
+            if not report.infrastructure:
+                break
         _drop_launcher()
         if attempt == 1:
             time.sleep(RETRY_PAUSE)
@@ -387,7 +394,8 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         write_atomically(folder / "report.html", html_renderer.render(report))
     write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
     problems = sum(bool(c.problems) for c in report.chapters)
-    return learner, "graded", f"{report.score:g}/{report.max_score:g}" + (f", {problems} chapter(s) with problems" if problems else "")
+    with_problems = f", {problems} chapter(s) with problems" if problems else ""
+    return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
 
 
 def _load(folder: Path) -> dict | None:

@@ -49,7 +49,8 @@ def test_integers_too_large_for_a_float_fail_their_question_with_file_and_line(t
     results, _ = _grade(tmp_path, HUGE_ANSWERS + "dbearing_dy: 2001-13-01\n")
     for line, qid in ((2, "H_at_point"), (3, "bearing_variance"), (4, "dbearing_dx")):
         assert results[qid].status == Status.FAIL and results[qid].points == 0
-        assert results[qid].message == f"exercises/answers/ch06.yaml, line {line}, question {qid}: the number is too large"
+        assert results[qid].message == (f"exercises/answers/ch06.yaml, line {line}, question {qid}: "
+                                        "the number is too large")
     assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
 
 

@@ -260,7 +260,8 @@ class Simplifier:
     SIMPLIFY_SECONDS), with CPU-time and memory limits (resource.setrlimit where the platform has
     it), and killed with its process group when an answer takes longer than SIMPLIFY_SECONDS or the
     learner's `deadline` (a time.monotonic() value) passes (then `out_of_time`). After a kill every
-    further question to this Simplifier is undecided at once. Use it as a context manager: the process ends with the block."""
+    further question to this Simplifier is undecided at once. Use it as a context manager: the process
+    ends with the block."""
 
     def __init__(self, deadline: float | None = None) -> None:
         self.deadline = deadline

@@ -57,7 +57,8 @@ def gradebook_header(chapters: list[str]) -> list[str]:
     return columns + ["total", "max_total", "status", "message"]
 
 
-def gradebook_row(learner: str, report: Report | None, chapters: list[str], status: str, message: str = "") -> list[str]:
+def gradebook_row(learner: str, report: Report | None, chapters: list[str], status: str,
+                  message: str = "") -> list[str]:
     """The learner's row: their id as given (a spreadsheet formula neutralised), code and quiz score
     per chapter, total, status and why it is not graded. Without a report (not graded: unreadable, an
     infrastructure failure) every score cell is empty, never 0."""
