@@ -83,7 +83,7 @@ def test_allowed_but_odd_expressions_are_decided_quickly_and_never_equal_by_defa
     for answer in ["exp(exp(exp(exp(10))))", "sqrt(-1 - x^2)", "e^(x*99999)", "log(-x^2 - y^2)"]:
         started = time.perf_counter()
         assert not equivalent(answer, "-y/(x^2 + y^2)", ("x", "y"))
-        assert time.perf_counter() - started < symbolic.SIMPLIFY_SECONDS + 1.0
+        assert time.perf_counter() - started < symbolic.SIMPLIFY_SECONDS + 3.0  # + starting sympy's process
 
 
 def test_undecided_is_never_equal(monkeypatch):

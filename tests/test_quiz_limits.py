@@ -20,6 +20,7 @@ from grader.model import ChapterResult, Report, Status
 from grader.quiz import OUT_OF_TIME, add_quiz_results, grade_quiz, symbolic
 from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
 from test_quiz_hardening import _sympy_workers
+from test_quiz_recorded import handout  # noqa: F401  (a fixture: the banks without their keys)
 from tests.conftest import REPO, build_submission
 
 # Allowed, and undefined (overflowing) at every point, so numbers cannot decide; sympy's simplify of it
@@ -96,6 +97,13 @@ def test_questions_after_the_deadline_say_the_learners_time_ran_out(tmp_path):
         assert checks[qid].status == Status.SKIP and checks[qid].points == 0
         assert "the time for this learner ran out" in checks[qid].message and checks[qid].message == OUT_OF_TIME
     assert checks["H_at_point"].message == "not answered yet"
+
+
+def test_answers_with_no_key_here_are_recorded_even_after_the_deadline(tmp_path, handout):
+    """A handout has no keys: its answers are only read and format-checked (quick), never 'out of time'."""
+    results, _ = _grade(tmp_path, f"bearing_near_dish: {RIGHT_CHOICE}\nbearing_variance: 0.1\n",
+                        quiz_dir=handout, deadline=time.monotonic() - 1)
+    assert results["bearing_near_dish"].status == results["bearing_variance"].status == Status.RECORDED
 
 
 def test_the_deadline_stops_sympy_too(tmp_path):

@@ -120,9 +120,6 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.message = "not answered yet"
             continue
         result.got = answer.text
-        if _time_is_up(deadline):
-            result.status, result.message = Status.SKIP, OUT_OF_TIME
-            continue
         where = f"{shown}, line {answer.line}, question {question.id}"
         key = keys.get(question.id)
         try:
@@ -130,9 +127,12 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
                 right_value = None if key is None else key.value_for(chapter, values)
             except bank.KeyUnavailable:
                 key = None
-            if key is None:
+            if key is None:  # read and format-checked only: quick, whatever the time
                 read_answer(question, answer.value, lettering)
                 result.status, result.message = Status.RECORDED, RECORDED_MESSAGE
+                continue
+            if _time_is_up(deadline):
+                result.status, result.message = Status.SKIP, OUT_OF_TIME
                 continue
             verdict = judge(question, key, answer.value, right_value,
                             bank.variant_seed("points", chapter, question.id), lettering, deadline)
