@@ -35,6 +35,7 @@ class ReferenceUnavailable(LookupError):
     """The reference cannot answer here (not installed, or not recorded for this question)."""
 
 
+@functools.lru_cache(maxsize=None)
 def reference_function(chapter: str, name: str) -> Callable:
     """The instructor-side reference `name` of `chapter`: solutions.oracle.<chapter>, then the
     chapter's reference solution. ReferenceUnavailable where the references are not installed."""
@@ -97,6 +98,28 @@ def decode(data: object) -> object:
     return data
 
 
+def normal(value: object) -> object:
+    """What decode(encode(value)) gives, without the detour through lists (the live backend's hot path)."""
+    if value is None or isinstance(value, (bool, str, int, float)):
+        return value
+    if isinstance(value, tuple):
+        return tuple(normal(v) for v in value)
+    if isinstance(value, list):
+        return [normal(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): normal(v) for k, v in value.items()}
+    if hasattr(value, "shape") and hasattr(value, "dtype"):
+        import numpy as np
+
+        array = np.asarray(value)
+        if array.dtype.kind in "US":
+            return str(array)
+        if array.ndim == 0:
+            return float(array) if array.dtype.kind == "f" else normal(array.item())
+        return array.astype(float)  # a copy: a check may change it without touching the reference's
+    return decode(encode(value))  # anything else: the same error or form as a recording
+
+
 def _same_argument(a: object, b: object) -> bool:
     """Encoded arguments equal up to the last bits of a float."""
     if isinstance(a, float) and isinstance(b, (float, int)) and not isinstance(b, bool):
@@ -114,7 +137,7 @@ class Live:
     """Ask the installed references."""
 
     def answer(self, asked: _Planning, chapter: str, name: str, args: tuple, kwargs: dict) -> object:
-        return decode(encode(reference_function(chapter, name)(*args, **kwargs)))
+        return normal(reference_function(chapter, name)(*args, **kwargs))
 
 
 @dataclass

@@ -87,18 +87,24 @@ def for_json(value: object) -> object:
     return clean_value(value, unicode_clean)
 
 
+_PLAIN = frozenset({int, float, bool, type(None)})
+
+
 def clean_value(value: object, clean: Callable[[str], str]) -> object:
     """`value` with `clean` applied to every string inside it: dict keys and values, list and tuple
     items and the fields of dataclasses (copied, never changed in place). Enums, numbers and arrays
     are left as they are."""
-    if isinstance(value, Enum):
+    kind = type(value)
+    if kind in _PLAIN or isinstance(value, Enum):
         return value
     if isinstance(value, str):
         return clean(value)
     if isinstance(value, dict):
         return {clean_value(k, clean): clean_value(v, clean) for k, v in value.items()}
-    if type(value) in (list, tuple):
-        return type(value)(clean_value(v, clean) for v in value)
+    if kind in (list, tuple):
+        if all(type(v) in _PLAIN for v in value):  # numbers (a matrix row, a plot's curve): nothing to clean
+            return value
+        return kind(clean_value(v, clean) for v in value)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         changes = {f.name: clean_value(getattr(value, f.name), clean) for f in dataclasses.fields(value) if f.init}
         return dataclasses.replace(value, **changes)
