@@ -12,7 +12,7 @@ from grader.compare import Verdict
 from grader.course import PUBLIC_SEED
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.runner import ChapterRequest, ChapterRun, Session
-from grader.wire import Call, Returned
+from grader.wire import NOT_IMPLEMENTED, Call, Returned
 
 DEFAULT_SEED = PUBLIC_SEED
 
@@ -152,7 +152,11 @@ def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
     if not isinstance(verdict, Verdict):
         return _result(check, Status.ERROR, 0.0, f"grader error: check returned {type(verdict).__name__}")
     status = Status.PASS if verdict.passed else Status.FAIL
-    return _result(check, status, check.points if verdict.passed else 0.0, verdict.message, verdict)
+    result = _result(check, status, check.points if verdict.passed else 0.0, verdict.message, verdict)
+    mine = [run.results[i] for i in pending.slots if run.results[i] is not None and run.results[i].function == check.function]
+    if not verdict.passed and mine and all(r.kind == NOT_IMPLEMENTED for r in mine):
+        result.details["not_implemented"] = True  # the renderer folds such checks into one line per function
+    return result
 
 
 def import_problem(error: dict, module_file: str) -> str:

@@ -69,15 +69,36 @@ def test_stubs_score_zero_with_not_implemented_and_exit_1(runner, repo_root, mon
     assert all("not implemented yet" in c["message"] for c in code)
 
 
-def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, repo_root):
-    result = runner.invoke(main, ["ch06", "--submission", str(repo_root)])
+def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, repo_root, tmp_path):
+    from tests.conftest import build_submission, replace_function
+
+    root = build_submission(tmp_path, {"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    return np.zeros((2, 2))\n")})
+    result = runner.invoke(main, ["ch06", "--submission", str(root)])
     assert result.exit_code == 1
     lines = result.output.splitlines()
-    assert lines[0] == "Quiz answers graded for learner anonymous (from default)."
+    assert lines[0].startswith("Quiz answers graded for learner")
     assert lines[1].startswith("ch06")
     assert any(line.strip().startswith("✗ [0/2] H at the lesson's point (3, 4)") for line in lines)
-    assert "ch06 total: 0/" in result.output
+    assert any(line.strip().startswith("✓ [1/1] range_bearing at the lesson's point") for line in lines)
+    assert "ch06 total: " in result.output
     assert "\x1b[" not in result.output
+
+
+def test_untouched_stubs_say_where_to_start_and_fold_each_function_to_one_line(runner, repo_root):
+    result = runner.invoke(main, ["ch06", "--submission", str(repo_root), "--no-quiz"])
+    lines = result.output.splitlines()
+    assert lines[0].startswith("Start here: write range_bearing in exercises/ch06_measurement.py")
+    assert "range_bearing at the lesson's point (3, 4) gives (5, 0.9273)" in lines[0]
+    from grader import checks
+
+    registered = checks.load("ch06").checks
+    functions = list(dict.fromkeys(c.function for c in registered))
+    folded = [line.strip() for line in lines if "not implemented yet (" in line]
+    assert folded == [f"✗ [0/{sum(c.points for c in registered if c.function == f):g}] {f}: not implemented yet "
+                      f"({sum(c.function == f for c in registered)} checks; -v lists them)" for f in functions]
+    verbose = runner.invoke(main, ["ch06", "--submission", str(repo_root), "--no-quiz", "-v"]).output
+    assert verbose.count("is not implemented yet (it raises NotImplementedError)") == len(registered)  # all, with -v
 
 
 def test_seed_changes_random_inputs_but_not_the_verdict(runner):

@@ -39,6 +39,37 @@ def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose:
     return lines
 
 
+def _untouched(checks: list[CheckResult]) -> dict[str, list[CheckResult]]:
+    """Functions every check of which failed only because the function is not written yet."""
+    by_function: dict[str, list[CheckResult]] = {}
+    for check in checks:
+        by_function.setdefault(check.function, []).append(check)
+    return {f: cs for f, cs in by_function.items() if all(c.details.get("not_implemented") for c in cs)}
+
+
+def _folded_line(function: str, checks: list[CheckResult], colour: bool, unicode_ok: bool) -> str:
+    mark = _mark(Status.FAIL, unicode_ok)
+    mark = click.style(mark, fg=_COLOURS[Status.FAIL], bold=True) if colour else mark
+    worth = sum(c.max_points for c in checks)
+    return f"  {mark} [0/{_points(worth)}] {function}: not implemented yet ({_count(len(checks), 'check')}; -v lists them)"
+
+
+def start_here(report: Report) -> list[str]:
+    """On untouched stubs, where to begin: the first function not written yet, and its worked example."""
+    code = [c for ch in report.chapters for c in ch.checks if c.kind == "code"]
+    if not code or any(c.status == Status.PASS for c in code):
+        return []
+    chapter = next(ch for ch in report.chapters if any(c.kind == "code" for c in ch.checks))
+    untouched = _untouched([c for c in chapter.checks if c.kind == "code"])
+    if not untouched:
+        return []
+    function, checks = next(iter(untouched.items()))
+    from grader.chapters import BY_ID
+
+    return [f"Start here: write {function} in exercises/{BY_ID[chapter.chapter].module}.py (its docstring says what it "
+            f"computes); the first check is: {checks[0].description}. Then run `grade {chapter.chapter}` again.", ""]
+
+
 def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
@@ -63,7 +94,7 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
     (messages, tracebacks, printed output, ids) reaches the terminal without its control characters
     and escape sequences (grader.safe_text.for_terminal): only this renderer's own styles remain."""
     report = safe_text.clean_report(report, safe_text.for_terminal)
-    out: list[str] = []
+    out: list[str] = start_here(report)
     if report.learner and any(c.kind == "quiz" for ch in report.chapters for c in ch.checks):
         out.append(f"Quiz answers graded for learner {report.learner}.")
     for chapter in report.chapters:
@@ -78,8 +109,12 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
             if any(c.kind == "quiz" for c in chapter.checks):
                 out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}"
                            + _pending_note(chapter.recorded_score_of(kind), "recorded, graded when you submit"))
+            folded = _untouched(checks) if kind == "code" and not verbose else {}
             for check in checks:
-                out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose))
+                if check.function not in folded:
+                    out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose))
+                elif check is folded[check.function][0]:  # one line for a function not written yet
+                    out.append(_folded_line(check.function, folded[check.function], colour, unicode_ok))
         if chapter.hidden_checks:
             out.append(f"  + {_count(chapter.hidden_checks, 'hidden check')} ({_points(chapter.hidden_points)} points) "
                        "run when you submit")
