@@ -160,7 +160,7 @@ def _measure_verdict(returned, wanted: tuple, label: str):
 
 @CHECKS.check("measure_samples", points=1)
 def measure_samples_worked_example(ctx):
-    """measure_samples([[3, 4], [-1, -0.01]], 3.1) is [[5, 0.9273], [1.00005, 3.1516]]"""
+    """measure_samples(np.array([[3, 4], [-1, -0.01]]), 3.1) is [[5, 0.9273], [1.00005, 3.1516]]"""
     samples = np.array([[3.0, 4.0], [-1.0, -0.01]])
     wanted = _measure_expected(samples, 3.1)
     got = yield call("measure_samples", Array(samples.tolist()), 3.1)

@@ -214,7 +214,7 @@ def _classify_label(m: np.ndarray, eigenvalues=None) -> str:
 
 @CHECKS.check("classify_critical_point", points=1)
 def classify_worked_example(ctx):
-    """classify_critical_point([[2, 1], [1, 0]]) is "saddle" (the Hessian of x^2 + x y)"""
+    """classify_critical_point(np.array([[2, 1], [1, 0]])) is "saddle" (the Hessian of x^2 + x y)"""
     want = REF.classify_critical_point(np.array([[2.0, 1.0], [1.0, 0.0]]))
     got = yield call("classify_critical_point", Array([[2, 1], [1, 0]], "int64"))
     return expect_text(got, want, label="classify_critical_point(np.array([[2, 1], [1, 0]]))")
