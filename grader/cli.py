@@ -94,13 +94,18 @@ def chapter_and_submission_options(command):
 @click.option("--no-sandbox", is_flag=True, help="Do not run your code inside bubblewrap even where it is installed.")
 @click.option("--html", "html_path", type=click.Path(dir_okay=False, writable=True), default=None,
               help="Also write a self-contained HTML report with plots made from your functions.")
+@click.option("--watch", is_flag=True, help="Stay running: grade again each time a chapter's file is saved, and "
+              "say which checks newly pass or fail (Ctrl-C ends it).")
 def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
                 output_format: str, seed: int | None, verbose: bool, learner: str | None,
-                no_quiz: bool, no_sandbox: bool, html_path: str | None) -> None:
+                no_quiz: bool, no_sandbox: bool, html_path: str | None, watch: bool) -> None:
     """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
     picked = chapters_from(chapters)
     seed = _seed_here(seed)
     submission = find_submission(submission_dir, use_solutions)
+    if watch:
+        _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose)
+        return
     # the child may already run (grader.launch); else start it now, to overlap our imports below
     session = launch.take(submission)
     if session is not None and no_sandbox and session.wrap is not None:
@@ -132,6 +137,51 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
         write_atomically(html_path, html.render(report))
     _emit(report, output_format, verbose)
+
+
+def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,
+           no_sandbox: bool, verbose: bool) -> None:
+    """`--watch`: a resident fork server grades each saved chapter again (grader.watch)."""
+    import functools
+    import time
+
+    from grader import watch
+    from grader.pipeline import Request
+    from grader.render import text
+    from grader.sandbox import learner_sandbox
+    from grader.spawn import start_child
+
+    prestarted = launch.take(submission)
+    if prestarted is not None:
+        prestarted.close()
+    sandbox = None if no_sandbox else learner_sandbox()
+    server = None
+    if hasattr(os, "fork"):
+        from grader.forkserver import ForkServer
+
+        server = ForkServer(sandbox)
+        launcher = server.start
+    else:  # no fork here: a fresh interpreter per run
+        launcher = functools.partial(start_child, wrap=sandbox)
+    watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz),
+                            launcher)
+    stream = sys.stdout
+
+    def show(report, changes: list[str], seconds: float, saved: list[str]) -> None:
+        why = f" after saving {', '.join(saved)}" if saved else ""
+        click.echo(f"--- {time.strftime('%H:%M:%S')}: graded {', '.join(c.chapter for c in report.chapters)} in "
+                   f"{seconds * 1000:.0f} ms{why}")
+        click.echo(text.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream), verbose=verbose),
+                   nl=False, color=_use_colour(stream))
+        for line in changes:
+            click.echo(line)
+        click.echo("(watching for saves; Ctrl-C to stop)")
+
+    try:
+        watch.run(watcher, show)
+    finally:
+        if server is not None:
+            server.close()
 
 
 def _seed_here(seed: int | None) -> int:

@@ -109,6 +109,13 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
             if any(c.kind == "quiz" for c in chapter.checks):
                 out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}"
                            + _pending_note(chapter.recorded_score_of(kind), "recorded, graded when you submit"))
+            if kind == "code" and len(checks) > 1 and all(c.status == Status.ERROR for c in checks) \
+                    and len({c.message for c in checks}) == 1:  # the file did not import: one line says it
+                mark = _mark(Status.ERROR, unicode_ok)
+                mark = click.style(mark, fg=_COLOURS[Status.ERROR], bold=True) if colour else mark
+                out.append(f"  {mark} [0/{_points(sum(c.max_points for c in checks))}] none of the "
+                           f"{len(checks)} checks ran: {checks[0].message.split(': ', 1)[-1]}")
+                continue
             folded = _untouched(checks) if kind == "code" and not verbose else {}
             for check in checks:
                 if check.function not in folded:
