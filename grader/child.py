@@ -216,15 +216,19 @@ def _write_files(files: dict, root: str) -> None:
 def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
     """Grade one request and leave the process (never returns)."""
     request = json.loads(request_text)
+    limits = dict(request.get("limits", {}))
     if request.get("confine"):  # in a sandbox: the learner's own namespaces, /tmp and caps (grader.confine)
         from grader.confine import enter
 
-        enter(request.get("limits", {}), [p for p in sys.path if os.path.isabs(p)])
+        if enter(limits, [p for p in sys.path if os.path.isabs(p)]) and limits.get("memory_bytes"):
+            # memory used is capped for all processes together: no cap on address space reserved (jax and
+            # torch reserve far more than they use)
+            limits.pop("address_space", None)
     out = os.fdopen(result_fd, "w", buffering=1)
     _write_files(request["files"], request["root"])  # the learner's files come with the request
     os.chdir(request["root"])
     _redirect_output(capture_fd)
-    _apply_limits(request.get("limits", {}))
+    _apply_limits(limits)
     run(request, out)
     out.close()
     os._exit(0)  # skip learner atexit handlers and finalizers

@@ -142,8 +142,16 @@ class _Child:
         code = self.handle.returncode
         if code is None:
             return "it was still running"
-        if code < 0:
-            return f"killed by signal {signal.Signals(-code).name}"
+        if code < 0 or code > 128:  # killed by a signal (as the sandbox's init passes it on: 128 + signal)
+            number = -code if code < 0 else code - 128
+            try:
+                name = signal.Signals(number).name
+            except ValueError:
+                return f"exit status {code}"
+            what = {"SIGSEGV": "a crash in native code (segmentation fault)", "SIGABRT": "an abort in native code",
+                    "SIGBUS": "a crash in native code (bus error)", "SIGFPE": "a floating-point trap in native code",
+                    "SIGKILL": "killed", "SIGILL": "an illegal instruction in native code"}.get(name, "killed")
+            return f"{what}, signal {name}"
         if code == OUT_OF_MEMORY and limits.memory_bytes:
             return (f"it ran out of memory: all its processes together may use at most "
                     f"{limits.memory_bytes >> 20} MiB")

@@ -170,11 +170,41 @@ def _type_name(value: object) -> str:
     return name if module in ("builtins", "") else f"{module}.{name}"
 
 
+ARRAY_LIBRARIES = frozenset({"jax", "jaxlib", "torch"})  # their arrays count as numpy arrays (the contract)
+
+
+def from_array_library(value: object):
+    """A jax array or a torch tensor (on the CPU, also one that requires grad) as a numpy array, or None
+    when `value` is not one (or cannot be converted: then the message says how to return an array)."""
+    import numpy as np
+
+    module = (getattr(type(value), "__module__", "") or "").split(".")[0]
+    if module not in ARRAY_LIBRARIES:
+        return None
+    try:
+        if module == "torch" and hasattr(value, "detach"):
+            value = value.detach().cpu()
+        converted = np.asarray(value)
+    except Exception:  # noqa: BLE001 - an array the library cannot hand over (a GPU tensor, ...)
+        return None
+    return converted if type(converted) is np.ndarray else None
+
+
 def encode_value(value: object, depth: int = 0) -> dict:
-    """The child's side: a learner's return value as plain JSON data, without calling any of its methods."""
+    """The child's side: a learner's return value as plain JSON data. Nothing of it is called but an
+    array library's own conversion to numpy (a jax array, a torch tensor: the contract counts them)."""
     import numpy as np
 
     kind = type(value)
+    if kind is not np.ndarray and kind not in _real_scalar_types():
+        converted = from_array_library(value)
+        if converted is not None:
+            if converted.ndim == 0 and converted.dtype.kind in "fiu":
+                return {"t": T_SCALAR, "type": _type_name(value), "data": float(converted)}
+            value, kind = converted, np.ndarray
+        elif (getattr(kind, "__module__", "") or "").split(".")[0] in ARRAY_LIBRARIES:
+            return {"t": T_OTHER, "type": f"{_type_name(value)} (convert it with np.asarray(...); a torch tensor "
+                                          "with .detach().cpu().numpy())"}
     if kind is np.ndarray:
         if value.dtype.kind not in "fiu":
             return {"t": T_NDARRAY_OTHER, "type": f"ndarray of dtype {value.dtype}"}
