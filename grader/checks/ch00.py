@@ -4,7 +4,9 @@ mean_shift samples, so it is graded statistically: for R = |N(m, sigma^2 I)| wit
 mean and variance are known (R is Rice distributed), and the learner's sample mean over n draws
 must lie within 5 standard errors, 5 sqrt(Var R / n), of E[R] - r. A correct function fails that
 with probability below 1e-6; dropping the "- range(mean)", taking the range of the mean sample
-or scaling the noise by sigma^2 moves the result by 6 or more standard errors at the inputs drawn.
+or scaling the noise by sigma^2 moves the result by 6 or more standard errors at the inputs drawn
+(r in [2, 3], sigma in [1.25, 1.6], n 6000..9000: no more samples than that takes, so a learner's
+plain-Python loop stays quick).
 Closed forms (range, superposition gap) are compared with rtol 1e-9.
 """
 
@@ -104,9 +106,9 @@ def mean_shift_random_inputs(ctx):
     forms = ["tuple", "list", "array", "list", "tuple"]
     cases = []
     for form in forms:
-        mean = planar_point(rng, 2.0, 4.0)
-        sigma = float(rng.choice([rng.uniform(0.5, 0.8), rng.uniform(1.25, 1.6)]))  # never 1
-        cases.append((mean, sigma, int(rng.integers(30_000, 60_000)), int(rng.integers(2**31)), form))
+        mean = planar_point(rng, 2.0, 3.0)
+        sigma = float(rng.uniform(1.25, 1.6))  # never 1, and a shift sigma^2/2r >= 0.26 that few samples show
+        cases.append((mean, sigma, int(rng.integers(6_000, 9_000)), int(rng.integers(2**31)), form))
     laws = [REF.shift_law(m, s) for m, s, *_ in cases]
     got = yield [call("mean_shift", vector_form(m, form), s, n, seed) for m, s, n, seed, form in cases]
     return all_of([_shift_verdict(g, law, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})")

@@ -242,8 +242,8 @@ def sample_covariance_matches_np_cov(ctx):
 @CHECKS.check("linearization_mismatch", points=2)
 def mismatch_far_small_near_large(ctx):
     """linearization_mismatch with sigma 0.8, n 5000: < 0.1 at (3, 4) (the ellipse fits), > 0.4 at (0.3, 0.2) (it fails)"""
-    seeds = _seeds(ctx.rng, 4)
-    cases = [(3, 4, s, "<", 0.1) for s in seeds[:2]] + [(0.3, 0.2, s, ">", 0.4) for s in seeds[2:]]
+    seeds = _seeds(ctx.rng, 2)
+    cases = [(3, 4, seeds[0], "<", 0.1), (0.3, 0.2, seeds[1], ">", 0.4)]
     got = yield [call("linearization_mismatch", x, y, 0.8, 5000, s) for x, y, s, _, _ in cases]
     for g, (x, y, s, side, bound) in zip(got, cases):
         label = f"linearization_mismatch({fmt(x)}, {fmt(y)}, 0.8, 5000, seed={s})"
@@ -272,9 +272,9 @@ def mismatch_reproducible(ctx):
 def mismatch_matches_simulation(ctx):
     """linearization_mismatch is within 6 standard deviations of its simulated mean, also for a cloud straddling +-pi"""
     rng = ctx.rng
-    cases = [(-float(rng.uniform(2.5, 3.5)), float(rng.choice([-1, 1]) * rng.uniform(0.1, 0.3)), 0.8, 5000),
-             (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 0.5, 6000),
-             (*(float(v) for v in planar_point(rng, 0.5, 0.8)), 0.8, 5000)]
+    cases = [(-float(rng.uniform(2.5, 3.5)), float(rng.choice([-1, 1]) * rng.uniform(0.1, 0.3)), 0.8, 2000),
+             (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 0.5, 2500),
+             (*(float(v) for v in planar_point(rng, 0.5, 0.8)), 0.8, 2000)]
     seeds = _seeds(rng, len(cases))
     distributions = [REF.mismatch_distribution(*case) for case in cases]
     got = yield [call("linearization_mismatch", x, y, s, n, seed) for (x, y, s, n), seed in zip(cases, seeds)]
