@@ -102,7 +102,8 @@ def _apply_limits(limits: dict) -> None:
         import resource
     except ImportError:  # pragma: no cover - not POSIX
         return
-    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # an oversized write fails instead of killing us
+    if hasattr(signal, "SIGXFSZ"):
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # an oversized write fails instead of killing us
     table = {
         "address_space": resource.RLIMIT_AS,
         "cpu_seconds": resource.RLIMIT_CPU,
@@ -224,7 +225,7 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
             # memory used is capped for all processes together: no cap on address space reserved (jax and
             # torch reserve far more than they use)
             limits.pop("address_space", None)
-    out = os.fdopen(result_fd, "w", buffering=1)
+    out = os.fdopen(result_fd, "w", buffering=1, encoding="utf-8", newline="\n")
     _write_files(request["files"], request["root"])  # the learner's files come with the request
     os.chdir(request["root"])
     _redirect_output(capture_fd)
@@ -235,9 +236,15 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """A spawned child: argv is [result pipe fd, capture file fd]; the request arrives on stdin."""
+    """A spawned child. argv is [result pipe fd, capture file fd] ("posix" strategy, grader.spawn), or
+    ["--portable", capture file path]: then results go to what was stdout. The request arrives on stdin."""
     argv = sys.argv[1:] if argv is None else argv
-    serve(sys.stdin.read(), int(argv[0]), int(argv[1]))
+    request = sys.stdin.buffer.read().decode("utf-8")
+    if argv[0] == "--portable":
+        result_fd = os.dup(1)  # the pipe to the parent, kept apart from what learner code prints
+        capture_fd = os.open(argv[1], os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_BINARY", 0), 0o600)
+        serve(request, result_fd, capture_fd)
+    serve(request, int(argv[0]), int(argv[1]))
 
 
 if __name__ == "__main__":

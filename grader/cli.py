@@ -2,6 +2,9 @@
 
     grade ch06 | grade 6 | grade all       grade code (and quizzes) of chapters
     grade list                             chapters, functions and points
+    grade quiz ch06                        only the quiz
+    grade classroom all                    GitHub Classroom's per-check results
+    grade release / batch / gradescope     the instructor's side
 """
 
 from __future__ import annotations
@@ -20,12 +23,32 @@ EXIT_ALL_PASSED, EXIT_NOT_ALL_PASSED, EXIT_USAGE = 0, 1, 2
 
 
 class _DefaultToRun(click.Group):
-    """`grade ch06 ...` means `grade run ch06 ...`: anything that is not a subcommand is a chapter."""
+    """`grade ch06 ...` means `grade run ch06 ...`: anything that is not a subcommand is a chapter. A word
+    that is neither a chapter nor a command but close to a command (`grade lst`) is a usage error that
+    names the command."""
 
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         if args and args[0] not in self.commands and args[0] not in ("--help", "-h", "--version"):
+            if not args[0].startswith("-") and not _is_chapter(args[0]):
+                import difflib
+
+                close = difflib.get_close_matches(args[0].lower(), [c for c in self.commands if c != "run"], n=1,
+                                                  cutoff=0.6)
+                if close:
+                    raise click.UsageError(f"no command or chapter {args[0]!r}; did you mean `grade {close[0]}`? "
+                                           "(`grade --help` lists the commands, `grade list` the chapters)", ctx)
             args = ["run", *args]
         return super().parse_args(ctx, args)
+
+
+def _is_chapter(name: str) -> bool:
+    if name.lower() == "all":
+        return True
+    try:
+        resolve(name)
+    except KeyError:
+        return False
+    return True
 
 
 @click.group(cls=_DefaultToRun, context_settings={"help_option_names": ["-h", "--help"]})
@@ -58,7 +81,18 @@ def find_submission(directory: str | None, use_solutions: bool) -> Submission:
 
 
 def _use_colour(stream) -> bool:
-    return "NO_COLOR" not in os.environ and hasattr(stream, "isatty") and stream.isatty()
+    """Colour on a terminal. NO_COLOR (no-color.org) and FORCE_COLOR (force-color.org) count when set to
+    something other than the empty string; NO_COLOR wins over FORCE_COLOR, as in Python itself."""
+    if os.environ.get("NO_COLOR", ""):
+        return False
+    if os.environ.get("FORCE_COLOR", ""):
+        return True
+    return hasattr(stream, "isatty") and stream.isatty()
+
+
+def plural(count: float, word: str, words: str | None = None) -> str:
+    """'1 point', '2 points', '0.5 points'."""
+    return f"{count:g} {word if count == 1 else (words or word + 's')}"
 
 
 def _unicode_ok(stream) -> bool:
@@ -155,13 +189,13 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
     if prestarted is not None:
         prestarted.close()
     sandbox = None if no_sandbox else learner_sandbox()
-    server = None
-    if hasattr(os, "fork"):
-        from grader.forkserver import ForkServer
+    from grader.forkserver import ForkServer, fork_server_safe
 
+    server = None
+    if fork_server_safe():
         server = ForkServer(sandbox)
         launcher = server.start
-    else:  # no fork here: a fresh interpreter per run
+    else:  # no safe fork here (Windows, macOS): a fresh interpreter per run
         launcher = functools.partial(start_child, wrap=sandbox)
     watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz),
                             launcher)
@@ -255,13 +289,14 @@ def list_command(show_checks: bool) -> None:
         hidden = hidden_ids(the_course, (info.id,))
         here = [c for c in chapter.checks if f"{info.id}/{c.id}" not in hidden]
         total = sum(c.points for c in here)
-        extra = f" + {sum(c.points for c in chapter.checks) - total:g} in hidden checks" if hidden else ""
-        click.echo(f"{info.id}  {info.title}  ({total:g} points{extra})  exercises/{info.module}.py")
+        extra = (f" + {plural(sum(c.points for c in chapter.checks) - total, 'point')} in hidden checks"
+                 if hidden else "")
+        click.echo(f"{info.id}  {info.title}  ({plural(total, 'point')}{extra})  exercises/{info.module}.py")
         functions: dict[str, float] = {}
         for check in here:
             functions[check.function] = functions.get(check.function, 0) + check.points
         for function, points in functions.items():
-            click.echo(f"    {function:<28} {points:g} points")
+            click.echo(f"    {function:<28} {plural(points, 'point')}")
             if show_checks:
                 for check in (c for c in here if c.function == function):
                     click.echo(f"        {check.id:<44} {check.points:g}  {check.description}")

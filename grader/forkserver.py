@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 from grader.spawn import (
     CommandWrapper, become_subreaper, capture_file, child_environment, child_path, kill_orphans, read_capture,
-    temp_dir,
+    read_chunk, temp_dir,
 )
 
 if TYPE_CHECKING:  # the server runs in the sandbox, where only the child's grader modules exist
@@ -35,6 +35,16 @@ if TYPE_CHECKING:  # the server runs in the sandbox, where only the child's grad
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.forkserver import serve; serve()"
 _MESSAGE = 4096
 _REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
+
+
+def fork_server_safe() -> bool:
+    """Whether this system offers what the fork server needs and deems forking a process that has loaded
+    numpy safe: fork, descriptors over Unix sockets, and a multiprocessing default other than "spawn"
+    (macOS defaults to spawn because fork after its system libraries is not safe)."""
+    import multiprocessing
+
+    return (hasattr(os, "fork") and hasattr(socket, "send_fds") and hasattr(socket, "AF_UNIX")
+            and multiprocessing.get_start_method(allow_none=False) != "spawn")
 
 
 class ForkServer:
@@ -141,6 +151,9 @@ class ForkedChild:
                 pipe.write(json.dumps(request).encode())
         except OSError:
             pass
+
+    def read(self, timeout: float) -> bytes:
+        return read_chunk(self.read_fd, timeout)
 
     def wait(self, timeout: float) -> None:
         if self._returncode is None:

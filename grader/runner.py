@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import functools
 import json
-import os
-import selectors
 import signal
 import time
 from dataclasses import dataclass, field
@@ -26,11 +24,12 @@ from grader.wire import (
 
 
 class ChildHandle(Protocol):
-    """A started child process as the runner drives it (grader.spawn.SpawnedChild, grader.forkserver.ForkedChild)."""
-
-    read_fd: int
+    """A started child process as the runner drives it (grader.spawn.SpawnedChild and PortableChild,
+    grader.forkserver.ForkedChild)."""
 
     def send(self, request: dict) -> None: ...
+
+    def read(self, timeout: float) -> bytes: ...
 
     def wait(self, timeout: float) -> None: ...
 
@@ -111,26 +110,17 @@ class _Child:
         """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes. A line that
         is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
         the caller stops the child for it."""
-        read_fd = self.handle.read_fd
-        selector = selectors.DefaultSelector()
-        selector.register(read_fd, selectors.EVENT_READ)
-        try:
-            while True:
-                while b"\n" in self.buffer:
-                    line, self.buffer = self.buffer.split(b"\n", 1)
-                    yield _parse(line)
-                if len(self.buffer) > MAX_LINE:
-                    yield MALFORMED
-                    return
-                remaining = deadline() - time.monotonic()
-                if remaining <= 0 or not selector.select(remaining):
-                    raise TimeoutError
-                chunk = os.read(read_fd, 1 << 16)
-                if not chunk:
-                    return
-                self.buffer += chunk
-        finally:
-            selector.close()
+        while True:
+            while b"\n" in self.buffer:
+                line, self.buffer = self.buffer.split(b"\n", 1)
+                yield _parse(line)
+            if len(self.buffer) > MAX_LINE:
+                yield MALFORMED
+                return
+            chunk = self.handle.read(deadline() - time.monotonic())  # TimeoutError when nothing comes in time
+            if not chunk:
+                return
+            self.buffer += chunk
 
     def stop(self) -> str:
         """Kill the child and everything it started; return what learner code printed (capped)."""

@@ -166,7 +166,10 @@ class Sandbox:
     """A grader.spawn CommandWrapper: `start_child(submission, wrap=Sandbox())`."""
 
     def __init__(self) -> None:
-        self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
+        from grader.spawn import strategy
+
+        portable = strategy() == "portable"  # no process groups, no passed descriptors: no bubblewrap either
+        self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" or portable else shutil.which("bwrap")
         self.setpriv = shutil.which("setpriv")
         self.drops_to_nobody = hasattr(os, "geteuid") and os.geteuid() == 0 and self.setpriv is not None
 
@@ -178,11 +181,15 @@ class Sandbox:
         """The isolation line: what holds for learner code here, per learner as well."""
         if not self.available:
             from grader.course import in_handout
+            from grader.spawn import strategy
 
             readable = ("this handout holds no answers" if in_handout()
                         else "answers included, wherever the references and keys are installed")
-            return ("isolation: no sandbox (bubblewrap not found; apt-get install bubblewrap): learner code runs "
-                    f"as you, with resource limits only, and can read every file you can ({readable})")
+            why = ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "
+                   "killed on a timeout (a job object, with its memory capped, where Windows offers one)"
+                   if strategy() == "portable" else
+                   "bubblewrap not found; apt-get install bubblewrap: learner code runs with resource limits only")
+            return (f"isolation: no sandbox ({why}); it runs as you and can read every file you can ({readable})")
         who = "as uid 65534" if self.drops_to_nobody else "as you"
         from grader.runner import Limits
 

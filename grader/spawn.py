@@ -1,5 +1,15 @@
 """Start the child interpreter (grader/child.py): the first thing `grade` does, so it imports light.
 
+Two strategies behind one call, `start_child`, chosen in one place (`strategy`) by what the system
+offers, never by its name, so a test can force either:
+- "posix": process groups and descriptors passed to the child (pass_fds): the result pipe and an
+  unnamed capture file are the child's own descriptors; a timeout kills the process group, and on
+  Linux the orphans this process adopted as a subreaper;
+- "portable" (Windows, or wherever process groups are missing): the request goes to the child's
+  stdin, its results come back on its stdout (the child moves learner output to a capture file it
+  is given by name), and a timeout kills the process tree through a Windows job object where there is
+  one, else the process.
+(The batch's and the watch's fork server, grader.forkserver, is a third, where fork is safe.)
 Only os, sys and subprocess here: grader.launch starts the child before the heavy imports
 (click, numpy) and grader.runner adopts it.
 """
@@ -29,7 +39,11 @@ def temp_dir() -> str:
     for name in ("TMPDIR", "TEMP", "TMP"):
         if os.path.isdir(os.environ.get(name, "")):
             return os.environ[name]
-    return "/tmp"
+    if os.path.isdir("/tmp"):
+        return "/tmp"
+    import tempfile
+
+    return tempfile.gettempdir()
 
 
 def child_environment() -> dict:
@@ -47,14 +61,13 @@ def become_subreaper() -> None:
     """Linux: adopt orphaned descendants (a learner's `setsid` grandchildren, which leave the
     process group) so that kill_orphans() can find them. Elsewhere a no-op."""
     global _SUBREAPER
-    if _SUBREAPER or not sys.platform.startswith("linux"):
+    if _SUBREAPER:
         return
     try:
         import ctypes
 
-        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)  # PR_SET_CHILD_SUBREAPER
-        _SUBREAPER = True
-    except (OSError, AttributeError):
+        _SUBREAPER = ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0) == 0  # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError, TypeError):  # no prctl here (not Linux)
         pass
 
 
@@ -99,11 +112,53 @@ def capture_file() -> int:
 def read_capture(fd: int, limit: int) -> str:
     """Up to `limit` bytes of what learner code printed; closes the descriptor."""
     try:
-        return os.pread(fd, limit, 0).decode("utf-8", "replace")
+        os.lseek(fd, 0, os.SEEK_SET)
+        return os.read(fd, limit).decode("utf-8", "replace")
     except OSError:
         return ""
     finally:
         os.close(fd)
+
+
+def read_chunk(fd: int, timeout: float) -> bytes:
+    """The next bytes from a pipe (b"" at its end); TimeoutError when none come within `timeout`."""
+    import select
+
+    poller = select.poll()
+    poller.register(fd, select.POLLIN | select.POLLHUP | select.POLLERR)
+    if timeout <= 0 or not poller.poll(timeout * 1000):
+        raise TimeoutError
+    return os.read(fd, 1 << 16)
+
+
+def strategy() -> str:
+    """How children start here: "posix" where process groups and passed descriptors exist, else
+    "portable"; GRADER_LAUNCHER forces one (for tests of the other)."""
+    forced = os.environ.get("GRADER_LAUNCHER", "")
+    if forced in ("posix", "portable"):
+        return forced
+    return "posix" if hasattr(os, "killpg") and hasattr(os, "setsid") and hasattr(os, "fork") else "portable"
+
+
+def _scratch(sandboxed: bool) -> tuple[str, str]:
+    """(a folder for the child's work, where it writes the learner's files): in the sandbox's own /tmp,
+    else a fresh private folder on the host (removed when the child stops)."""
+    if sandboxed:
+        return "/tmp", "/tmp/submission"
+    import tempfile
+
+    scratch = tempfile.mkdtemp(prefix="grade-", dir=temp_dir())
+    return scratch, os.path.join(scratch, "submission")
+
+
+def _send(stream, request: dict) -> None:
+    import json
+
+    try:
+        stream.write(json.dumps(request).encode("utf-8"))
+        stream.close()
+    except (BrokenPipeError, OSError):
+        pass
 
 
 class SpawnedChild:
@@ -120,14 +175,10 @@ class SpawnedChild:
 
     def send(self, request: dict) -> None:
         """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
-        import json
+        _send(self.process.stdin, dict(request, root=self.root, confine=not self.host_root))
 
-        request = dict(request, root=self.root, confine=not self.host_root)
-        try:
-            self.process.stdin.write(json.dumps(request).encode())
-            self.process.stdin.close()
-        except (BrokenPipeError, OSError):
-            pass
+    def read(self, timeout: float) -> bytes:
+        return read_chunk(self.read_fd, timeout)
 
     def wait(self, timeout: float) -> None:
         try:
@@ -157,20 +208,141 @@ class SpawnedChild:
         return read_capture(self.capture_fd, output_limit)
 
 
-def start_child(submission, wrap: CommandWrapper | None = None) -> SpawnedChild:
-    """Start a fresh child interpreter for `submission`, wrapped (e.g. sandboxed) by `wrap`; the
-    submission's files reach it in the request (grader.wire), written under a folder of its own."""
+class PortableChild:
+    """A child started without process groups or passed descriptors (strategy "portable"): request on
+    its stdin, results on its stdout (read by a thread: Windows pipes cannot be selected), learner
+    output in a capture file it was given by name, its process tree in a Windows job object if any."""
+
+    def __init__(self, process: subprocess.Popen, capture: str, scratch: str, root: str, job: object) -> None:
+        import queue
+        import threading
+
+        self.process = process
+        self.capture = capture
+        self.scratch = scratch
+        self.root = root
+        self.job = job
+        self.chunks: queue.Queue = queue.Queue()
+        threading.Thread(target=self._pump, daemon=True).start()
+
+    def _pump(self) -> None:
+        stream = self.process.stdout
+        while True:
+            chunk = stream.read1(1 << 16) if hasattr(stream, "read1") else stream.read(1 << 16)
+            self.chunks.put(chunk)
+            if not chunk:
+                return
+
+    def send(self, request: dict) -> None:
+        _send(self.process.stdin, dict(request, root=self.root, confine=False))
+
+    def read(self, timeout: float) -> bytes:
+        import queue
+
+        try:
+            return self.chunks.get(timeout=max(timeout, 0.0)) if timeout > 0 else self.chunks.get_nowait()
+        except queue.Empty:
+            raise TimeoutError from None
+
+    def wait(self, timeout: float) -> None:
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            pass
+
+    @property
+    def returncode(self) -> int | None:
+        return self.process.poll()
+
+    def stop(self, output_limit: int) -> str:
+        """Kill the child's process tree; return what learner code printed."""
+        if not _end_job(self.job):
+            try:
+                self.process.kill()
+            except OSError:
+                pass
+        self.process.wait()
+        for stream in (self.process.stdout, self.process.stdin):
+            try:
+                stream.close()
+            except OSError:
+                pass
+        try:
+            with open(self.capture, "rb") as handle:
+                printed = handle.read(output_limit).decode("utf-8", "replace")
+        except OSError:
+            printed = ""
+        import shutil
+
+        shutil.rmtree(self.scratch, ignore_errors=True)
+        return printed
+
+
+def _job_for(process: subprocess.Popen, memory_bytes: int | None) -> object:
+    """Windows: a job object holding the child (and all it starts), killed as a whole, its memory capped;
+    None elsewhere (or if the system refuses)."""
+    try:
+        import ctypes
+        from ctypes import wintypes
+
+        kernel32 = ctypes.WinDLL("kernel32", use_last_error=True)
+    except (ImportError, AttributeError, OSError):
+        return None
+
+    class Limits(ctypes.Structure):
+        _fields_ = [("PerProcessUserTimeLimit", ctypes.c_int64), ("PerJobUserTimeLimit", ctypes.c_int64),
+                    ("LimitFlags", wintypes.DWORD), ("MinimumWorkingSetSize", ctypes.c_size_t),
+                    ("MaximumWorkingSetSize", ctypes.c_size_t), ("ActiveProcessLimit", wintypes.DWORD),
+                    ("Affinity", ctypes.c_size_t), ("PriorityClass", wintypes.DWORD),
+                    ("SchedulingClass", wintypes.DWORD)]
+
+    class Counters(ctypes.Structure):
+        _fields_ = [(name, ctypes.c_uint64) for name in ("r", "w", "o", "rb", "wb", "ob")]
+
+    class Extended(ctypes.Structure):
+        _fields_ = [("Basic", Limits), ("Io", Counters), ("ProcessMemoryLimit", ctypes.c_size_t),
+                    ("JobMemoryLimit", ctypes.c_size_t), ("PeakProcessMemoryUsed", ctypes.c_size_t),
+                    ("PeakJobMemoryUsed", ctypes.c_size_t)]
+
+    job = kernel32.CreateJobObjectW(None, None)
+    if not job:
+        return None
+    info = Extended()
+    info.Basic.LimitFlags = 0x2000 | (0x200 if memory_bytes else 0)  # KILL_ON_JOB_CLOSE, JOB_MEMORY
+    info.JobMemoryLimit = memory_bytes or 0
+    kernel32.SetInformationJobObject(job, 9, ctypes.byref(info), ctypes.sizeof(info))  # extended limits
+    if not kernel32.AssignProcessToJobObject(job, int(process._handle)):
+        kernel32.CloseHandle(job)
+        return None
+    return (kernel32, job)
+
+
+def _end_job(job: object) -> bool:
+    if job is None:
+        return False
+    kernel32, handle = job
+    done = bool(kernel32.TerminateJobObject(handle, 1))
+    kernel32.CloseHandle(handle)
+    return done
+
+
+def start_child(submission, wrap: CommandWrapper | None = None, memory_bytes: int | None = 1 << 30):
+    """Start a fresh child interpreter for `submission` (the strategy this system offers), wrapped
+    (e.g. sandboxed) by `wrap`; the submission's files reach it in the request (grader.wire),
+    written under a folder of its own."""
+    if strategy() == "portable":  # no bubblewrap where this runs (Windows): the child on the host
+        scratch, root = _scratch(False)
+        capture = os.path.join(scratch, "printed.txt")
+        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), "--portable", capture]
+        process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                                   env=child_environment(), cwd=scratch,
+                                   creationflags=getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0))
+        return PortableChild(process, capture, scratch, root, _job_for(process, memory_bytes))
+    sandboxed = bool(getattr(wrap, "available", False))  # then the child has a /tmp of its own
+    scratch, root = _scratch(sandboxed)
     read_fd, write_fd = os.pipe()
     capture_fd = capture_file()
     command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
-    sandboxed = bool(getattr(wrap, "available", False))  # then the child has a /tmp of its own
-    if sandboxed:
-        scratch, root = "/tmp", "/tmp/submission"
-    else:
-        import tempfile
-
-        scratch = tempfile.mkdtemp(prefix="grade-", dir=temp_dir())
-        root = os.path.join(scratch, "submission")
     if wrap is not None:
         command = wrap(command)
     process = subprocess.Popen(
