@@ -183,16 +183,16 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
     from grader.pipeline import Request
     from grader.render import text
     from grader.sandbox import learner_sandbox
-    from grader.spawn import start_child
+    from grader.spawn import fork_is_safe, start_child
 
     prestarted = launch.take(submission)
     if prestarted is not None:
         prestarted.close()
     sandbox = None if no_sandbox else learner_sandbox()
-    from grader.forkserver import ForkServer, fork_server_safe
+    from grader.forkserver import ForkServer
 
     server = None
-    if fork_server_safe():
+    if fork_is_safe():
         server = ForkServer(sandbox)
         launcher = server.start
     else:  # no safe fork here (Windows, macOS): a fresh interpreter per run

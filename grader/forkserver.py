@@ -37,16 +37,6 @@ _MESSAGE = 4096
 _REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
 
 
-def fork_server_safe() -> bool:
-    """Whether this system offers what the fork server needs and deems forking a process that has loaded
-    numpy safe: fork, descriptors over Unix sockets, and a multiprocessing default other than "spawn"
-    (macOS defaults to spawn because fork after its system libraries is not safe)."""
-    import multiprocessing
-
-    return (hasattr(os, "fork") and hasattr(socket, "send_fds") and hasattr(socket, "AF_UNIX")
-            and multiprocessing.get_start_method(allow_none=False) != "spawn")
-
-
 class ForkServer:
     """The parent's end: starts the server (inside `wrap`, e.g. a grader.sandbox.Sandbox) on first use
     and again whenever it has died; `start` is a grader.runner Launcher."""

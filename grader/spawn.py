@@ -140,6 +140,20 @@ def strategy() -> str:
     return "posix" if hasattr(os, "killpg") and hasattr(os, "setsid") and hasattr(os, "fork") else "portable"
 
 
+def fork_is_safe() -> bool:
+    """Whether a process that has loaded numpy may fork here (grader.forkserver, the HTML report's
+    drawing): fork and descriptors over Unix sockets exist and multiprocessing does not default to
+    "spawn" (macOS does: fork after its system libraries is unsafe there); not where GRADER_LAUNCHER
+    forces the portable strategy (Windows' route)."""
+    if os.environ.get("GRADER_LAUNCHER") == "portable":
+        return False
+    import multiprocessing
+    import socket
+
+    return (hasattr(os, "fork") and hasattr(socket, "send_fds") and hasattr(socket, "AF_UNIX")
+            and multiprocessing.get_start_method(allow_none=False) != "spawn")
+
+
 def _scratch(sandboxed: bool) -> tuple[str, str]:
     """(a folder for the child's work, where it writes the learner's files): in the sandbox's own /tmp,
     else a fresh private folder on the host (removed when the child stops)."""

@@ -352,11 +352,13 @@ def render(report: Report) -> str:
 
 
 def _all_figures(report: Report) -> dict[str, list[_Figure]]:
-    """Every chapter's figures, drawn by two forked processes where possible (drawing is most of
-    the report's cost); serially where fork is unavailable or fails."""
+    """Every chapter's figures, drawn by two forked processes where forking is safe (drawing is most of
+    the report's cost); serially where it is not (Windows, macOS) or fails."""
     chapters = [c for c in report.chapters if c.plots]
     out: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
-    if len(chapters) > 1:
+    from grader.spawn import fork_is_safe
+
+    if len(chapters) > 1 and fork_is_safe():
         try:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
