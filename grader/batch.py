@@ -41,7 +41,7 @@ MAX_FILE_BYTES = 1 << 20
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
-CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html")
+CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv")
 _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
 _MAX_FOLDER = 160
 _BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
@@ -60,10 +60,15 @@ class InfrastructureError(RuntimeError):
     """Grading cannot work here (the sandbox does not start): no learner is graded."""
 
 
+class NoSubmissions(ValueError):
+    """The submissions folder holds nothing to grade (the message says what it holds instead)."""
+
+
 @dataclass
 class Entry:
     learner: str
     source: Path
+    origin: str = ""  # where the id comes from, for messages: "its name" or "roster.csv, line 3"
 
 
 @dataclass
@@ -156,10 +161,12 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
             learner, line = named
             problem = id_problem(learner)
             why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
+            origin = f"the roster {roster.name}, line {line}"
         else:
             learner = unicode_clean(stem)  # bytes that are not UTF-8 become U+FFFD
             problem = id_problem(learner)
             why = f"its name, the learner id, {problem}; rename it or give its id in a roster (--roster)"
+            origin = f"the name of {shown}"
         if problem is not None:
             skipped.append(Skipped(shown, why, submission=True))
             continue
@@ -167,7 +174,7 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
         while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
             unique, n = f"{learner}-{n}", n + 1
         taken.add(unique)
-        entries.append(Entry(unique, path))
+        entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique"))
     return entries, skipped
 
 
@@ -357,13 +364,29 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
     return report
 
 
+def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[str]:
+    """A staged submission's own answers/learner.yaml naming someone other than the id it is graded as
+    (its folder or zip name, or the roster): the quiz numbers and option letters are the graded id's, so
+    answers worked out for the other id's do not match. One sentence saying so, or nothing."""
+    from grader.quiz import learner_id
+
+    who, source = learner_id(root / "exercises" / "answers", None)
+    if not source.endswith("learner.yaml") or who == learner:
+        return []
+    where = f" (from {origin})" if origin else ""
+    return [(f"learner.yaml names {who!r}, but this submission is graded as {learner!r}{where}: it gets the quiz "
+             f"numbers and option letters of {learner!r}, so answers worked out with those of {who!r} do not match; "
+             "correct the roster or the file and grade again")]
+
+
 def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
-               limits: dict, sandboxed: bool = True) -> tuple[str, str, str]:
+               limits: dict, sandboxed: bool = True, hidden: frozenset[str] = frozenset()) -> tuple[str, str, str]:
     """Stage and grade one submission (in a worker process); returns (learner, status, message).
 
     A submission whose staged files hash as at its last grading is not graded again. One whose child
     could not start, twice, is `error`: its report.json keeps why (and no hash, so the next run grades
-    it again), and no results.json or report.html stays to look like a grade."""
+    it again), and no results.json or report.html stays to look like a grade. `hidden` (the course's
+    hidden check ids) are shown in results.json only after grades are published."""
     from grader.render import lms
 
     started = time.monotonic()
@@ -377,9 +400,12 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     if _previous_hash(folder) == digest:
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
+    warnings = learner_yaml_warnings(root, learner, entry.origin)
     report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed)
+    seconds = time.monotonic() - started
     data = report.to_dict()
-    data["batch"] = {"seconds": round(time.monotonic() - started, 3), "learner_output": report.learner_output[:4000]}
+    data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
+                     "warnings": warnings}
     if report.infrastructure:
         for name in ("results.json", "report.html"):
             (folder / name).unlink(missing_ok=True)
@@ -387,14 +413,15 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         return learner, "error", (f"not graded, twice, for a reason outside the learner's code: {report.infrastructure}"
                                   "; the next run grades it again")
     data["batch"]["hash"] = digest
-    write_atomically(folder / "results.json", lms.gradescope(report))
+    write_atomically(folder / "results.json", lms.gradescope(report, hidden=hidden, execution_time=seconds,
+                                                             heading=[f"Graded as {learner}."], notes=warnings))
     if html:
         from grader.render import html as html_renderer
 
         write_atomically(folder / "report.html", html_renderer.render(report))
     write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
     problems = sum(bool(c.problems) for c in report.chapters)
-    with_problems = f", {problems} chapter(s) with problems" if problems else ""
+    with_problems = f", {lms.plural(problems, 'chapter')} with problems" if problems else ""
     return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
 
 
@@ -428,13 +455,23 @@ def _previous_hash(folder: Path) -> str | None:
 
 def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None, roster: Path | None = None,
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
-              limits: dict | None = None, progress=None, sandboxed: bool = True) -> dict:
+              limits: dict | None = None, progress=None, sandboxed: bool = True,
+              hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = ()) -> dict:
     """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
-    learner, what was skipped and the isolation line, for the end summary. InfrastructureError (and
-    nothing written) when a child interpreter does not start here; RosterError for a roster that
-    cannot be read. `sandboxed=False` grades without bubblewrap (--no-sandbox)."""
+    learner, what was skipped, what was flagged and the isolation line, for the end summary.
+    NoSubmissions (and nothing written) when the folder holds nothing to grade; InfrastructureError when a
+    child interpreter does not start here; RosterError for a roster that cannot be read.
+    `sandboxed=False` grades without bubblewrap (--no-sandbox); `hidden` are the course's hidden check ids
+    (results.json shows them after grades are published); `lms_layouts` ("canvas", "moodle") adds those
+    gradebooks."""
     chapters = chapters or [c.id for c in CHAPTERS]
+    if jobs is not None and jobs < 1:
+        raise ValueError(f"jobs must be at least 1, not {jobs}")
     entries, skipped = survey(submissions, roster)
+    if not entries:
+        what = "; ".join(f"{s.name}: {s.reason}" for s in skipped[:5])
+        raise NoSubmissions(f"{submissions} holds no submission to grade (a folder or .zip file per learner)"
+                            + (f"; it holds only what is skipped: {what}" if what else ": it is empty"))
     check_infrastructure(sandboxed)
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
@@ -444,8 +481,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     done = 0
     limits = limits or {}
     with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed):
-                   entry.learner for entry in entries}
+        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
+                               frozenset(hidden)): entry.learner for entry in entries}
         for future in as_completed(futures):
             learner = futures[future]
             try:
@@ -456,28 +493,32 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
             if progress:
                 progress(done, len(entries), time.monotonic() - started)
     isolation = isolation_line(sandboxed)
-    write_summaries(out, [e.learner for e in entries], chapters, statuses, messages, skipped, isolation)
+    flagged = write_summaries(out, [e.learner for e in entries], chapters, statuses, messages, skipped, isolation,
+                              lms_layouts)
     counts: dict[str, int] = {}
     for status in statuses.values():
         counts[status] = counts.get(status, 0) + 1
     graded_now = sum(status == "graded" for status in statuses.values())
     return {"counts": counts, "seconds": time.monotonic() - started, "graded_now": graded_now,
-            "messages": messages, "statuses": statuses, "skipped": skipped,
+            "messages": messages, "statuses": statuses, "skipped": skipped, "flagged": flagged,
             "isolation": isolation}
 
 
 def write_summaries(out: Path, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
-                    skipped: list[Skipped] = (), isolation: str = "") -> None:
-    """gradebook.csv, junit.xml and summary.html from the per-learner reports on disk. A learner who is
-    not graded (unreadable, an error, a report recording an infrastructure failure) has empty score
-    cells and the reason in the gradebook's message column, and is in no other total."""
+                    skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = ()
+                    ) -> dict[str, list[str]]:
+    """gradebook.csv, junit.xml and summary.html (and gradebook-canvas.csv, gradebook-moodle.csv as asked)
+    from the per-learner reports on disk. A learner who is not graded (unreadable, an error, a report
+    recording an infrastructure failure) has empty score cells and the reason in the gradebook's message
+    column, and is in no other total; a graded learner's message column holds what was flagged (a
+    learner.yaml naming someone else). Returns what was flagged, per learner."""
     from grader.render import lms, summary
 
     reports = []
+    extras: dict[str, dict] = {}
+    flagged: dict[str, list[str]] = {}
     not_graded: dict[str, str] = {}
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(lms.gradebook_header(chapters))
+    rows = []
     for learner in learners:
         status, message = statuses.get(learner, "graded"), messages.get(learner, "")
         data = _load(out / folder_name(learner))
@@ -490,15 +531,31 @@ def write_summaries(out: Path, learners: list[str], chapters: list[str], statuse
             if report is None:
                 status, message = "error", "no readable report.json"
             else:
-                status, message = "graded", ""
+                status = "graded"
+                batch = data.get("batch") if isinstance(data.get("batch"), dict) else {}
+                warnings = [str(w) for w in batch.get("warnings") or []]
+                message = "; ".join(warnings)
+                if warnings:
+                    flagged[learner] = warnings
                 reports.append((learner, report))
+                extras[learner] = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", "")}
         if status != "graded":
             not_graded[learner] = message
+        rows.append((learner, report, status, message))
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(lms.gradebook_header(chapters))
+    for learner, report, status, message in rows:
         writer.writerow(lms.gradebook_row(learner, report, chapters, status, message))
     write_atomically(out / "gradebook.csv", buffer.getvalue())
-    write_atomically(out / "junit.xml", lms.junit(reports))
+    if "canvas" in lms_layouts:
+        write_atomically(out / "gradebook-canvas.csv", lms.canvas_gradebook(rows, chapters))
+    if "moodle" in lms_layouts:
+        write_atomically(out / "gradebook-moodle.csv", lms.moodle_gradebook(rows, chapters))
+    write_atomically(out / "junit.xml", lms.junit(reports, extras))
     write_atomically(out / "summary.html", summary.render(reports, not_graded, isolation or isolation_line(),
-                                                          [(s.name, s.reason) for s in skipped]))
+                                                          [(s.name, s.reason) for s in skipped], flagged))
+    return flagged
 
 
 def progress_bar(stream=sys.stderr):

@@ -328,9 +328,11 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
 @click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="The course configuration (default: solutions/course.yaml beside the references).")
 @click.option("--force", is_flag=True, help="Replace what OUT holds.")
-def release_command(out: str, course_file: str | None, force: bool) -> None:
-    """Build the learners' handout in OUT: stubs, answer templates, the grader as a wheel and a README;
-    no reference solution, quiz key or reference answer in any of it."""
+@click.option("--no-classroom", is_flag=True,
+              help="Leave out the GitHub Classroom workflow (.github/workflows/classroom.yml).")
+def release_command(out: str, course_file: str | None, force: bool, no_classroom: bool) -> None:
+    """Build the learners' handout in OUT: stubs, answer templates, the grader as a wheel, a README and a
+    GitHub Classroom workflow; no reference solution, quiz key or reference answer in any of it."""
     from pathlib import Path
 
     from grader import release
@@ -341,6 +343,12 @@ def release_command(out: str, course_file: str | None, force: bool) -> None:
     except release.ReleaseError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(release.describe(built))
+    if not no_classroom:
+        from grader import classroom
+
+        path = classroom.write_template(Path(out), built.wheel.name)
+        click.echo(f"GitHub Classroom: {path} runs `grade classroom all` on every push of a learner's repository "
+                   "and reports each check's points (use OUT as the assignment's template repository).")
 
 
 @main.command("batch")
@@ -349,7 +357,7 @@ def release_command(out: str, course_file: str | None, force: bool) -> None:
 @click.option("--roster", type=click.Path(exists=True, dir_okay=False), default=None,
               help="CSV with columns submission,learner mapping folder/zip names to learner ids (',' or ';').")
 @click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
-@click.option("--jobs", type=int, default=None, help="Parallel workers (default: all cores).")
+@click.option("--jobs", type=click.IntRange(min=1), default=None, help="Parallel workers (default: all cores).")
 @click.option("--seed", type=int, default=None,
               help="Seed for the random test inputs (default: the course seed of solutions/course.yaml).")
 @click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
@@ -360,9 +368,12 @@ def release_command(out: str, course_file: str | None, force: bool) -> None:
               help="Run learner code without bubblewrap even where it is installed (the isolation line says so).")
 @click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
               help="Seconds for one learner's code, all chapters together; the quiz gets what is left.")
+@click.option("--lms", "lms_layouts", type=click.Choice(["canvas", "moodle"]), multiple=True,
+              help="Also write the gradebook as that system imports it: gradebook-canvas.csv, gradebook-moodle.csv "
+                   "(repeat for both).")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
                   seed: int | None, course_file: str | None, no_html: bool, plots: bool, no_sandbox: bool,
-                  time_budget: float) -> None:
+                  time_budget: float, lms_layouts: tuple[str, ...]) -> None:
     """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
     at the course seed, hidden checks included."""
     from pathlib import Path
@@ -379,9 +390,12 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                  roster=Path(roster) if roster else None, jobs=jobs,
                                  seed=the_course.grading_seed if seed is None else seed, html=not no_html,
                                  plots=plots, limits={"learner_seconds": time_budget}, sandboxed=not no_sandbox,
-                                 progress=batch.progress_bar())
+                                 progress=batch.progress_bar(), hidden=the_course.hidden,
+                                 lms_layouts=tuple(lms_layouts))
     except batch.RosterError as exc:
         raise click.BadParameter(for_terminal(str(exc)), param_hint="--roster") from None
+    except batch.NoSubmissions as exc:
+        raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="SUBMISSIONS") from None
     except batch.InfrastructureError as exc:
         click.echo(f"grade batch: no learner was graded: learner code cannot run here. "
                    f"{for_terminal(str(exc), one_line=True)}\n"
@@ -390,11 +404,16 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
         sys.exit(EXIT_USAGE)
     counts = ", ".join(f"{n} {status}" for status, n in sorted(result["counts"].items()))
     skipped = f"; {len(result['skipped'])} skipped" if result["skipped"] else ""
-    click.echo(f"{len(result['statuses'])} submissions: {counts or 'none'}{skipped}; graded {result['graded_now']} "
-               f"in {result['seconds']:.1f} s. Gradebook: {Path(out_dir) / 'gradebook.csv'}")
+    flagged = f"; {len(result['flagged'])} flagged" if result["flagged"] else ""
+    click.echo(f"{plural(len(result['statuses']), 'submission')}: {counts or 'none'}{skipped}{flagged}; graded "
+               f"{result['graded_now']} in {result['seconds']:.1f} s. Gradebook: {Path(out_dir) / 'gradebook.csv'}")
     for learner, message in sorted(result["messages"].items()):
         if result["statuses"][learner] in ("error", "unreadable"):
             click.echo(f"  {for_terminal(learner, one_line=True)}: {for_terminal(message, one_line=True)}", err=True)
+    for learner, warnings in sorted(result["flagged"].items()):
+        for warning in warnings:
+            click.echo(f"  flagged {for_terminal(learner, one_line=True)}: {for_terminal(warning, one_line=True)}",
+                       err=True)
     for entry in result["skipped"]:
         click.echo(f"  skipped {for_terminal(entry.name, one_line=True)}: {for_terminal(entry.reason, one_line=True)}",
                    err=True)
@@ -402,3 +421,117 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     complete = all(s in ("graded", "unchanged") for s in result["statuses"].values()) and not any(
         entry.submission for entry in result["skipped"])
     sys.exit(EXIT_ALL_PASSED if complete else EXIT_NOT_ALL_PASSED)
+
+
+@main.command("gradescope")
+@click.argument("out", type=click.Path(dir_okay=False))
+@click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="The course configuration (default: solutions/course.yaml beside the references).")
+@click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
+@click.option("--learner-id", "learner_field", type=click.Choice(["email", "sid", "id", "name"]), default="email",
+              show_default=True, help="Which field of the submitter in Gradescope's submission metadata is the "
+                                      "learner id (their quiz numbers).")
+@click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
+              help="Seconds for one learner's code, all chapters together.")
+@click.option("--sandbox", type=click.Choice(["auto", "required"]), default="auto", show_default=True,
+              help="auto: bubblewrap where it starts on Gradescope's image, else grade without it and say so; "
+                   "required: grade nothing without it.")
+@click.option("--force", is_flag=True, help="Replace OUT if it exists.")
+def gradescope_command(out: str, course_file: str | None, chapter_list: str, learner_field: str,
+                       time_budget: float, sandbox: str, force: bool) -> None:
+    """Build a Gradescope autograder zip (setup.sh, run_autograder, the instructor's grader, the course
+    config) that grades every submission at the course seed, hidden checks included, into Gradescope's
+    results.json. It holds the references and keys: upload it to Gradescope, never hand it out."""
+    from pathlib import Path
+
+    from grader import gradescope
+
+    picked = chapters_from(tuple(chapter_list.split(",")))
+    the_course = _instructor_course(course_file, "grade gradescope")
+    try:
+        built, settings = gradescope.build(Path(out), the_course, chapters=[c.id for c in picked],
+                                           learner_field=learner_field, time_budget=time_budget, sandbox=sandbox,
+                                           force=force)
+    except gradescope.GradescopeError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(gradescope.describe(built, settings))
+
+
+@main.command("classroom")
+@chapter_and_submission_options
+@click.option("--learner", default=None, help="Learner id for per-learner quiz numbers.")
+@click.option("--output", "output_file", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="Write the results JSON to this file instead of standard output.")
+@click.option("--github-output", "github_output", type=click.Path(dir_okay=False), default=None,
+              help="Also append `result=<the results, base64>` to this file (a step's $GITHUB_OUTPUT).")
+@click.option("--sandbox", type=click.Choice(["auto", "required", "off"]), default="auto", show_default=True,
+              help="auto: bubblewrap where it starts here, else grade without it and say so; required: exit 2 "
+                   "without it.")
+def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
+                      output_format: str, learner: str | None, output_file: str | None, github_output: str | None,
+                      sandbox: str) -> None:
+    """Grade CHAPTER... for GitHub Classroom: every judged check with its own points, in the format its
+    autograding reporter reads (the text report goes to standard error). Exits 0 whenever the results
+    are written, whatever they say: the reporter gives the points."""
+    from grader import classroom
+    from grader.render import lms, text
+
+    picked = chapters_from(chapters)
+    submission = find_submission(submission_dir, use_solutions)
+    seed = _seed_here(None)
+    session = launch.take(submission)
+    wrap, isolation, reason = classroom.sandbox_for(sandbox)
+    if reason and sandbox == "required":
+        if session is not None:
+            session.close()
+        raise click.UsageError(f"the sandbox is required and does not start here: {reason}")
+    if session is not None and (wrap is None) != (session.wrap is None):
+        session.close()
+        session = None
+    if session is None:
+        session = Session(submission, wrap=wrap)
+    from grader.pipeline import Request, build_report
+
+    try:
+        report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner))
+    finally:
+        session.close()
+    stream = sys.stderr
+    click.echo(text.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream), verbose=False),
+               nl=False, err=True, color=_use_colour(stream))
+    click.echo(isolation, err=True)
+    results = lms.classroom(report, message=isolation if reason else "")
+    if output_file:
+        write_atomically(output_file, results)
+    else:
+        click.echo(results, nl=False)
+    if github_output:
+        with open(github_output, "a", encoding="utf-8") as handle:
+            handle.write(classroom.github_output_line(results))
+
+
+EXAMPLES = {
+    "run": ["grade ch06                      grade chapter 6 (code and quiz)",
+            "grade all --html report.html    every chapter, and a report with plots",
+            "grade 6 --format json -v        machine-readable; -v adds tracebacks"],
+    "list": ["grade list", "grade list --checks            also every check's id and points"],
+    "quiz": ["grade quiz ch06", "grade quiz ch06 --show          the questions with your numbers and letters"],
+    "classroom": ["grade classroom all --github-output \"$GITHUB_OUTPUT\"   in a GitHub Actions step",
+                  "grade classroom ch06 --output results.json"],
+    "release": ["grade release handout/", "grade release handout/ --course my-course.yaml --force"],
+    "batch": ["grade batch submissions/ --out graded/",
+              "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas"],
+    "gradescope": ["grade gradescope autograder.zip",
+                   "grade gradescope autograder.zip --learner-id sid --chapters ch06,ch07"],
+}
+
+
+def _examples(lines: list[str]) -> str:
+    return "\b\nExamples:\n" + "\n".join(f"  {line}" for line in lines)
+
+
+main.epilog = _examples(["grade ch06", "grade all", "grade list", "grade quiz ch06 --show",
+                         "grade batch submissions/ --out graded/"])
+for _name, _command in main.commands.items():
+    if _name in EXAMPLES:
+        _command.epilog = _examples(EXAMPLES[_name])

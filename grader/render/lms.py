@@ -1,54 +1,251 @@
-"""Renderers for instructors' systems: Gradescope results.json, JUnit XML, the gradebook CSV row.
+"""Renderers for instructors' systems: Gradescope results.json, GitHub Classroom results, JUnit XML,
+and the gradebooks (generic, Canvas, Moodle).
 
 Learner text (ids, messages) is made safe for each format by grader.safe_text: JSON that is valid
-UTF-8, XML without the characters XML forbids, CSV cells that no spreadsheet runs as a formula."""
+UTF-8, XML without the characters XML forbids, CSV cells that no spreadsheet runs as a formula.
+The JSON outputs are described by the JSON Schemas in grader/schemas/ (grader.schemas_path)."""
 
 from __future__ import annotations
 
+import csv
+import io
 import json
+from collections.abc import Collection, Iterable
+from pathlib import Path
 from xml.etree import ElementTree
 
-from grader.model import Report, Status
-from grader.safe_text import for_csv, for_json, for_xml
+from grader.chapters import BY_ID
+from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.safe_text import clean_value, for_csv, for_json, for_terminal, for_xml
+
+SCHEMA_DIR = Path(__file__).resolve().parent.parent / "schemas"
+SCHEMAS = ("report", "batch-report", "gradescope-results", "classroom")
 
 
-def gradescope(report: Report) -> str:
-    """Gradescope's autograder format: score, tests[] with name, score, max_score, status, output."""
+def schema(name: str) -> dict:
+    """The JSON Schema (draft 2020-12) of one JSON output: report (grade ... --format json), batch-report
+    (grade batch's report.json), gradescope-results (results.json), classroom (grade classroom)."""
+    return json.loads((SCHEMA_DIR / f"{name}.schema.json").read_text(encoding="utf-8"))
+
+
+# What a status means where a format has fewer words for it than the grader (Gradescope: passed or
+# failed; GitHub Classroom: pass, fail or error).
+ERROR_PREFIX = "Could not be graded (an error, not a wrong answer): "
+SKIP_PREFIX = "Not judged (skipped): "
+RECORDED_PREFIX = "Recorded, graded on submission: "
+
+
+def plural(count: float, word: str, words: str | None = None) -> str:
+    """'1 point', '2 points', '0.5 points', '1 submission'."""
+    return f"{count:g} {word if count == 1 else (words or word + 's')}"
+
+
+def check_message(check: CheckResult, chapter: ChapterResult) -> str:
+    """The check's message; for a check that could not be graded (error) the chapter's messages too, which
+    its message points to ("see the chapter's message")."""
+    message = check.message or ""
+    if check.status == Status.ERROR and chapter.problems:
+        message = f"{message}\n\nThe chapter's message:\n" + "\n".join(chapter.problems)
+    return message
+
+
+def _explained(check: CheckResult, chapter: ChapterResult) -> str:
+    """The message with what its status means, for formats that only know passed and failed."""
+    prefix = {Status.ERROR: ERROR_PREFIX, Status.SKIP: SKIP_PREFIX, Status.RECORDED: RECORDED_PREFIX}
+    return prefix.get(check.status, "") + check_message(check, chapter)
+
+
+def check_key(chapter: str, check: CheckResult) -> str:
+    """The check's id as the course config names it: ch06/H_rows_orthogonal (quiz questions: ch06/quiz_...)."""
+    return f"{chapter}/{check.id}"
+
+
+# ------------------------------------------------------------------------------------ Gradescope
+
+def summary_lines(report: Report) -> list[str]:
+    """Score per chapter and what stopped a chapter being graded: the top of every results file."""
+    lines = []
+    for chapter in report.chapters:
+        parts = [f"code {chapter.score_of('code'):g}/{chapter.max_score_of('code'):g}"]
+        if chapter.max_score_of("quiz") or chapter.recorded_score_of("quiz"):
+            parts.append(f"quiz {chapter.score_of('quiz'):g}/{chapter.max_score_of('quiz'):g}")
+        lines.append(f"{chapter.chapter} {chapter.title}: {chapter.score:g}/{chapter.max_score:g} ({', '.join(parts)})")
+        lines += [f"  {chapter.chapter}: {problem.splitlines()[0] if problem else ''}" for problem in chapter.problems]
+    errors = sum(c.status == Status.ERROR for ch in report.chapters for c in ch.checks)
+    if errors:
+        lines.append(f"{plural(errors, 'check')} could not be graded (status error: the file did not import, hung, "
+                     "or the grader broke); they are not wrong answers. Their tests say why.")
+    return lines
+
+
+def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_time: float | None = None,
+                    heading: Iterable[str] = (), notes: Iterable[str] = (), isolation: str = "") -> dict:
+    """Gradescope's results.json as data (its autograder specification): score, execution_time, output and
+    output_format, stdout_visibility, and one test per check with name, number, score, max_score, status
+    ("passed"/"failed"; an error or skipped check is "failed", told apart by its output, its tags and
+    extra_data.status), output, tags (chapter, kind, function, status) and visibility: checks the course
+    hides (`hidden`, "ch06/H_rows_orthogonal") are "after_published", all others "visible". Chapter-level
+    messages (a file that does not import) are tests of 0 points. `heading` and `notes` go before and after
+    the score lines of the top-level output."""
+    tests = []
+    for chapter_index, chapter in enumerate(report.chapters):
+        number = int(chapter.chapter[2:]) if chapter.chapter[2:].isdigit() else chapter_index
+        for problem in chapter.problems:
+            tests.append({"name": f"{chapter.chapter}: chapter message", "number": f"{number}.0",
+                          "score": 0, "max_score": 0, "status": "failed", "output": problem, "output_format": "text",
+                          "tags": [chapter.chapter, "chapter"], "visibility": "visible",
+                          "extra_data": {"id": f"{chapter.chapter}/chapter", "status": "error"}})
+        for index, check in enumerate(chapter.checks, 1):
+            test = {
+                "name": f"{chapter.chapter} {check.kind}: {check.description}",
+                "number": f"{number}.{index}",
+                "score": check.points, "max_score": check.max_points if check.status.counted else 0,
+                "output": _explained(check, chapter), "output_format": "text",
+                "tags": [chapter.chapter, check.kind, check.function, check.status.value],
+                "visibility": "after_published" if check_key(chapter.chapter, check) in hidden else "visible",
+                "extra_data": {"id": check_key(chapter.chapter, check), "status": check.status.value},
+            }
+            if check.status != Status.RECORDED:
+                test["status"] = "passed" if check.status == Status.PASS else "failed"
+            tests.append(test)
+    output = [*heading, *summary_lines(report), *notes]
+    if isolation:
+        output.append(isolation)
+    data = {"score": report.score, "output": "\n".join(output), "output_format": "simple_format",
+            "test_output_format": "text", "stdout_visibility": "hidden",
+            "extra_data": {"max_score": report.max_score, "learner": report.learner}, "tests": tests}
+    if execution_time is not None:
+        data["execution_time"] = round(max(0.0, execution_time), 2)
+    return data
+
+
+def for_display(data: dict) -> str:
+    """JSON text whose strings show as they read: no terminal escape sequence or control character (but
+    line breaks and tabs) from learner text survives into what Gradescope's page or GitHub's log shows
+    (the log renders colours), and valid UTF-8."""
+    return json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False) + "\n"
+
+
+def gradescope(report: Report, **options) -> str:
+    """gradescope_data as the text of results.json."""
+    return for_display(gradescope_data(report, **options))
+
+
+def gradescope_not_graded(message: str, *, execution_time: float | None = None, heading: Iterable[str] = (),
+                          isolation: str = "") -> str:
+    """results.json for a submission that could not be graded at all (no chapter files, not a readable
+    submission): score 0, the reason on top and as the one test."""
+    output = [*heading, message]
+    if isolation:
+        output.append(isolation)
+    data = {"score": 0, "output": "\n".join(output), "output_format": "simple_format", "stdout_visibility": "hidden",
+            "tests": [{"name": "submission", "score": 0, "max_score": 0, "status": "failed", "output": message,
+                       "output_format": "text", "tags": ["submission"], "visibility": "visible",
+                       "extra_data": {"id": "submission", "status": "fail"}}]}
+    if execution_time is not None:
+        data["execution_time"] = round(max(0.0, execution_time), 2)
+    return for_display(data)
+
+
+# ------------------------------------------------------------------------------------ GitHub Classroom
+
+def classroom_data(report: Report, *, message: str = "") -> dict:
+    """The results format GitHub Classroom's autograding-grading-reporter reads from a runner (base64 in
+    the step output `result`): version, status ("pass", "fail" or "error"), max_score, message and one test
+    per judged check with name, status, score (the check's own points: the reporter adds them up),
+    max_score, message, filename and line_no. Answers recorded for grading on submission and hidden
+    checks are not judged here: they are in no test, and `message` says how many points they hold."""
     tests = []
     for chapter in report.chapters:
+        info = BY_ID.get(chapter.chapter)
+        filename = f"exercises/{info.module}.py" if info else ""
         for problem in chapter.problems:
-            tests.append({"name": f"{chapter.chapter}: problem", "score": 0, "max_score": 0,
-                          "status": "failed", "output": problem, "visibility": "visible"})
+            tests.append({"name": f"{chapter.chapter}: chapter message", "status": "error", "score": 0,
+                          "max_score": 0, "message": problem, "filename": filename, "line_no": 0})
         for check in chapter.checks:
-            tests.append({
-                "name": f"{chapter.chapter} {check.kind}: {check.description}",
-                "score": check.points, "max_score": check.max_points,
-                "status": "passed" if check.status == Status.PASS else "failed",
-                "output": check.message, "visibility": "visible",
-            })
-    return json.dumps(for_json({"score": report.score, "tests": tests})) + "\n"
+            if not check.status.counted:
+                continue
+            status = {Status.PASS: "pass", Status.ERROR: "error"}.get(check.status, "fail")
+            quiz_file = f"exercises/answers/{chapter.chapter}.yaml"
+            tests.append({"name": f"{chapter.chapter} {check.kind}: {check.description}", "status": status,
+                          "score": check.points, "max_score": check.max_points,
+                          "message": _explained(check, chapter),
+                          "filename": quiz_file if check.kind == "quiz" else filename, "line_no": 0})
+    statuses = {t["status"] for t in tests}
+    status = "error" if "error" in statuses else "fail" if "fail" in statuses else "pass"
+    pending = report.pending_score
+    said = [f"{report.score:g}/{report.max_score:g} points judged here"]
+    if pending:
+        said.append(f"{plural(pending, 'more point')} (recorded quiz answers, hidden checks) are graded when you "
+                    "submit")
+    if message:
+        said.append(message)
+    return {"version": 1, "status": status, "max_score": report.max_score, "message": "; ".join(said),
+            "tests": tests}
 
 
-def junit(reports: list[tuple[str, Report]]) -> str:
-    """One <testsuite> per learner, one <testcase> per check."""
+def classroom(report: Report, **options) -> str:
+    return for_display(classroom_data(report, **options))
+
+
+# ------------------------------------------------------------------------------------ JUnit
+
+def _time(seconds: float) -> str:
+    return f"{max(0.0, seconds):.3f}"
+
+
+def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = None) -> str:
+    """One <testsuite> per learner (its time: that learner's grading, all chapters), one <testcase> per check
+    and one per chapter with chapter-level messages (a file that did not import); a failed check has a
+    <failure>, a check that could not be graded an <error>, both with the first line as `message` and the
+    whole message (with the chapter's message for errors) as text; skipped and recorded checks <skipped>.
+    `extras` maps a learner to {"seconds": ..., "output": what their code printed} (from report.json).
+    Valid against Jenkins' junit-10.xsd."""
+    extras = extras or {}
     suites = ElementTree.Element("testsuites", name="jacobians-grader")
+    totals = {"tests": 0, "failures": 0, "errors": 0, "time": 0.0}
     for learner, report in reports:
-        learner = for_xml(learner)
-        checks = [(ch, c) for ch in report.chapters for c in ch.checks]
-        suite = ElementTree.SubElement(suites, "testsuite", name=learner, tests=str(len(checks)),
-                                       failures=str(sum(c.status == Status.FAIL for _, c in checks)),
-                                       errors=str(sum(c.status == Status.ERROR for _, c in checks)),
-                                       skipped=str(sum(c.status in (Status.SKIP, Status.RECORDED) for _, c in checks)))
-        for chapter, check in checks:
-            case = ElementTree.SubElement(suite, "testcase", classname=f"{learner}.{chapter.chapter}",
-                                          name=for_xml(f"{check.kind}:{check.id}"))
-            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
-                   Status.RECORDED: "skipped"}.get(check.status)
+        name = for_xml(learner)
+        extra = extras.get(learner, {})
+        cases = []
+        for chapter in report.chapters:
+            classname = f"{name}.{chapter.chapter}"
+            if chapter.problems:
+                broken = any(c.status == Status.ERROR for c in chapter.checks)
+                text = "\n".join(chapter.problems)
+                cases.append((classname, f"{chapter.chapter}:chapter", "error" if broken else "failure", text,
+                              "chapter"))
+            for check in chapter.checks:
+                tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
+                       Status.RECORDED: "skipped"}.get(check.status)
+                cases.append((classname, f"{check.kind}:{check.id}", tag, check_message(check, chapter),
+                              check.status.value))
+        counts = {tag: sum(c[2] == tag for c in cases) for tag in ("failure", "error", "skipped")}
+        seconds = float(extra.get("seconds") or 0.0)
+        suite = ElementTree.SubElement(suites, "testsuite", name=name, tests=str(len(cases)),
+                                       failures=str(counts["failure"]), errors=str(counts["error"]),
+                                       skipped=str(counts["skipped"]), time=_time(seconds))
+        for classname, case_name, tag, text, kind in cases:
+            case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
             if tag:
-                message = check.message.splitlines()[0][:200] if check.message else ""
-                ElementTree.SubElement(case, tag, message=for_xml(message))
+                first = text.splitlines()[0][:200] if text else ""
+                element = ElementTree.SubElement(case, tag, message=for_xml(first), type=kind)
+                if tag != "skipped" or text:
+                    element.text = for_xml(text)
+        output = extra.get("output") or ""
+        if output:
+            ElementTree.SubElement(suite, "system-out").text = for_xml(output)
+        totals["tests"] += len(cases)
+        totals["failures"] += counts["failure"]
+        totals["errors"] += counts["error"]
+        totals["time"] += seconds
+    for key in ("tests", "failures", "errors"):
+        suites.set(key, str(totals[key]))
+    suites.set("time", _time(totals["time"]))
     return ElementTree.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"
 
+
+# ------------------------------------------------------------------------------------ gradebooks
 
 def gradebook_header(chapters: list[str]) -> list[str]:
     columns = ["learner"]
@@ -60,8 +257,8 @@ def gradebook_header(chapters: list[str]) -> list[str]:
 def gradebook_row(learner: str, report: Report | None, chapters: list[str], status: str,
                   message: str = "") -> list[str]:
     """The learner's row: their id as given (a spreadsheet formula neutralised), code and quiz score
-    per chapter, total, status and why it is not graded. Without a report (not graded: unreadable, an
-    infrastructure failure) every score cell is empty, never 0."""
+    per chapter, total, status and why it is not graded (or what was flagged). Without a report (not
+    graded: unreadable, an infrastructure failure) every score cell is empty, never 0."""
     row = [for_csv(learner)]
     by_id = {c.chapter: c for c in report.chapters} if report else {}
     for chapter in chapters:
@@ -69,3 +266,64 @@ def gradebook_row(learner: str, report: Report | None, chapters: list[str], stat
         row += ["", ""] if result is None else [f"{result.score_of('code'):g}", f"{result.score_of('quiz'):g}"]
     row += ["", ""] if report is None else [f"{report.score:g}", f"{report.max_score:g}"]
     return row + [status, for_csv(message)]
+
+
+def points_possible(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> dict[str, float]:
+    """Per chapter, the points a graded learner could get (every learner is graded on the same checks)."""
+    possible: dict[str, float] = {}
+    for _, report, _, _ in rows:
+        for chapter in report.chapters if report else []:
+            if chapter.chapter in chapters:
+                possible[chapter.chapter] = max(possible.get(chapter.chapter, 0), chapter.max_score)
+    return possible
+
+
+def _column(chapter: str) -> str:
+    info = BY_ID.get(chapter)
+    return f"{chapter} {info.title}" if info else chapter
+
+
+def _score(report: Report | None, chapter: str) -> str:
+    found = [c for c in report.chapters if c.chapter == chapter] if report else []
+    return f"{found[0].score:g}" if found else ""
+
+
+LMS_LAYOUTS = ("canvas", "moodle")
+CANVAS_ID_COLUMNS = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"]
+
+
+def canvas_gradebook(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> str:
+    """Canvas' gradebook import: the columns Student, ID, SIS User ID, SIS Login ID and Section (the learner
+    id in Student and SIS Login ID; Canvas matches a row by ID, SIS User ID or SIS Login ID), one column per
+    chapter ("ch06 <title>", a new assignment on import) and a "Points Possible" row as Canvas' own export
+    writes it. A learner not graded has empty cells (Canvas changes nothing there). `rows` holds (learner,
+    report or None, status, message)."""
+    possible = points_possible(rows, chapters)
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(CANVAS_ID_COLUMNS + [_column(c) for c in chapters])
+    writer.writerow(["    Points Possible", "", "", "", ""] + [f"{possible[c]:g}" if c in possible else ""
+                                                                 for c in chapters])
+    for learner, report, _, _ in rows:
+        cell = for_csv(learner)
+        writer.writerow([cell, "", "", cell, ""] + [_score(report, c) for c in chapters])
+    return buffer.getvalue()
+
+
+def moodle_gradebook(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> str:
+    """Moodle's "Import grades from CSV": a column identifying the learner ("Learner id": map it to the user
+    field your ids are, ID number, email address or username), one grade column per chapter with the points
+    possible in its name ("ch06 <title> (out of 25)": give the grade item that maximum, or map to an
+    existing one), a total and a feedback column (why a learner is not graded, or what was flagged: the
+    learner sees it). A learner not graded has empty grade cells."""
+    possible = points_possible(rows, chapters)
+    total = sum(possible.values())
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(["Learner id"] + [f"{_column(c)} (out of {possible.get(c, 0):g})" for c in chapters]
+                    + [f"Total (out of {total:g})", "Feedback"])
+    for learner, report, status, message in rows:
+        feedback = message if status == "graded" else f"{status}: {message}"
+        writer.writerow([for_csv(learner)] + [_score(report, c) for c in chapters]
+                        + ["" if report is None else f"{report.score:g}", for_csv(feedback)])
+    return buffer.getvalue()

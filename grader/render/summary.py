@@ -19,14 +19,21 @@ def escape(text: str) -> str:
     return _escape(for_html(str(text)))
 
 
+def _count(n: int, word: str, words: str | None = None) -> str:
+    return f"{n} {word if n == 1 else (words or word + 's')}"
+
+
 def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolation: str = "",
-           skipped: list[tuple[str, str]] = ()) -> str:
+           skipped: list[tuple[str, str]] = (), flagged: dict[str, list[str]] | None = None) -> str:
     """The page; `unreadable` maps each learner not graded (unreadable submission, infrastructure
     failure) to why, `skipped` lists (entry, why) of what in the submissions folder was not taken as a
-    submission at all."""
+    submission at all, `flagged` maps graded learners to what an instructor should look at (a
+    learner.yaml naming someone else)."""
+    flagged = flagged or {}
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
-             f"<p>{len(reports)} learners graded; {len(unreadable)} could not be graded; {len(skipped)} skipped.</p>",
+             f"<p>{_count(len(reports), 'learner')} graded; {len(unreadable)} could not be graded; "
+             f"{len(skipped)} skipped; {len(flagged)} flagged.</p>",
              f"<p id='isolation'>{escape(isolation)}</p>" if isolation else ""]
     if reports:
         top = max(r.max_score for _, r in reports) or 1
@@ -60,6 +67,10 @@ def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolat
         for (chapter, message), count in messages.most_common(25):
             parts.append(f"<tr><td class='num'>{count}</td><td>{escape(chapter)}</td><td>{escape(message)}</td></tr>")
         parts.append("</table>")
+    if flagged:
+        parts.append("<h2 id='flagged'>Flagged (graded; look at these)</h2><ul>")
+        parts.extend(f"<li>{escape(k)}: {escape('; '.join(v))}</li>" for k, v in sorted(flagged.items()))
+        parts.append("</ul>")
     if unreadable:
         parts.append("<h2 id='not-graded'>Not graded</h2><ul>")
         parts.extend(f"<li>{escape(k)}: {escape(v)}</li>" for k, v in sorted(unreadable.items()))

@@ -1,0 +1,355 @@
+"""`grade gradescope OUT.zip`: a Gradescope autograder that grades submissions officially, and its run.
+
+The zip follows Gradescope's autograder layout (https://gradescope-autograders.readthedocs.io/en/latest/specs/):
+at its root `setup.sh` (run once, as root, when Gradescope builds the image: installs bubblewrap and
+Python's venv where missing, then the grader into /autograder/source/venv) and `run_autograder`
+(copied to /autograder/run_autograder, run for every submission), beside the instructor's grader as a
+wheel (references, oracle and quiz keys included: this zip is for Gradescope only, never for learners),
+the course config (its secret course seed and hidden checks) and `autograder.json` (the settings this
+module reads back).
+
+Each run (`python -m grader.gradescope run /autograder`) grades /autograder/submission exactly as
+`grade batch` grades one learner: staged the same way, at the course seed, hidden checks included, in
+bubblewrap where it starts (else, with --sandbox auto, without it, and the output says so), and always
+writes /autograder/results/results.json: a submission without chapter files gets score 0 and the reason;
+a failure outside the learner's code gets score 0 with "NOT GRADED", the reason, and a non-zero exit so
+the instructor sees the run failed. The learner id (their quiz numbers) comes from
+/autograder/submission_metadata.json (the field chosen at build time, email by default); a learner.yaml
+in the submission naming someone else is flagged in the output.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+import time
+import zipfile
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+SETTINGS_FILE = "autograder.json"
+COURSE_FILE = "course.yaml"
+LEARNER_FIELDS = ("email", "sid", "id", "name")
+SANDBOX_MODES = ("auto", "required")
+PROJECT = Path(__file__).resolve().parent.parent
+
+
+class GradescopeError(RuntimeError):
+    """The autograder cannot be built (the message says why)."""
+
+
+@dataclass
+class Settings:
+    """What the autograder zip's autograder.json holds: how every run grades."""
+
+    course: str
+    chapters: list[str]
+    learner_field: str = "email"
+    time_budget: float = 60.0
+    sandbox: str = "auto"  # "auto": bubblewrap where it starts, else without it (said in the output); "required"
+    grader: str = ""  # the wheel's file name
+    hidden: list[str] = field(default_factory=list)  # for the instructor's eyes; the run reads course.yaml
+
+    @classmethod
+    def read(cls, path: Path) -> Settings:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        return cls(**{k: v for k, v in data.items() if k in cls.__dataclass_fields__})
+
+
+SETUP_SH = r"""#!/usr/bin/env bash
+# Gradescope runs this once, as root, when it builds the autograder's image. It installs what is missing
+# (Python's venv, bubblewrap for the sandbox), then the course's grader into source/venv, and says
+# whether learner code can run in the sandbox on this image.
+set -euo pipefail
+SOURCE="$(cd "$(dirname "$0")" && pwd)"
+need=()
+command -v python3 >/dev/null 2>&1 || need+=(python3)
+python3 -c "import ensurepip, venv" >/dev/null 2>&1 || need+=(python3-venv)
+command -v bwrap >/dev/null 2>&1 || need+=(bubblewrap)
+if [ "${#need[@]}" -gt 0 ]; then
+    if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+        export DEBIAN_FRONTEND=noninteractive
+        apt-get update -q && apt-get install -y -q --no-install-recommends "${need[@]}" \
+            || echo "setup.sh: could not install ${need[*]}" >&2
+    else
+        echo "setup.sh: missing ${need[*]} and no apt-get as root to install them" >&2
+    fi
+fi
+python3 -c "import sys; sys.exit(0 if sys.version_info >= (3, 10) else 'setup.sh: the grader needs Python 3.10 or later, this image has ' + sys.version.split()[0])"
+python3 -m venv "$SOURCE/venv"
+"$SOURCE/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$SOURCE/{wheel}"
+"$SOURCE/venv/bin/python" -m grader.gradescope check "$(dirname "$SOURCE")"
+"""
+
+RUN_AUTOGRADER = r"""#!/usr/bin/env bash
+# Gradescope runs this for every submission: it grades submission/ into results/results.json (always
+# written) with the course's grader, at the course seed, hidden checks included.
+ROOT="$(cd "$(dirname "$0")" && pwd)"
+PYTHON="$ROOT/source/venv/bin/python"
+if [ ! -x "$PYTHON" ]; then
+    mkdir -p "$ROOT/results"
+    printf '%s\n' '{"score": 0, "output": "NOT GRADED: the autograder is not installed (setup.sh failed when the image was built). This is not your grade: your instructor will fix it and grade again.", "tests": [], "stdout_visibility": "hidden", "extra_data": {"not_graded": "setup.sh failed"}}' > "$ROOT/results/results.json"
+    echo "run_autograder: $PYTHON is missing: setup.sh failed; see the image build's log" >&2
+    exit 1
+fi
+exec "$PYTHON" -m grader.gradescope run "$ROOT"
+"""
+
+README = """The Gradescope autograder of the course {course}, built by `grade gradescope` ({grader}).
+
+Upload this zip as the autograder of a Gradescope programming assignment (Configure Autograder,
+Zip file upload). It holds the instructor's grader with the reference solutions and quiz keys, and the
+course config with its secret seed: never give it to learners.
+
+Every submission is graded at the course seed, hidden checks included (shown to the learner after
+grades are published), chapters {chapters}, {budget:g} s for a learner's code; the learner id (their
+quiz numbers and option letters) is the submitter's `{field}` in Gradescope's submission metadata.
+Learners submit their chapter files (exercises/chNN_*.py, or the files at the top of the upload) and
+quiz answers (answers/chNN.yaml).
+
+Sandbox: {sandbox}. Try it on your machine as root (Linux, bubblewrap installed):
+  mkdir -p /tmp/ag/source && unzip {zipname} -d /tmp/ag/source && bash /tmp/ag/source/setup.sh
+  cp /tmp/ag/source/run_autograder /tmp/ag/ && cp -r SOME_SUBMISSION /tmp/ag/submission
+  /tmp/ag/run_autograder; cat /tmp/ag/results/results.json
+"""
+
+
+# ------------------------------------------------------------------------------------ build
+
+def _project_root() -> Path:
+    if not (PROJECT / "pyproject.toml").is_file() or not (PROJECT / "solutions").is_dir():
+        raise GradescopeError(f"no project checkout around the grader ({PROJECT} has no pyproject.toml and "
+                              "solutions/): run `grade gradescope` in the lesson's project, which has the references")
+    return PROJECT
+
+
+def build(out: Path, course, *, chapters: list[str], learner_field: str = "email", time_budget: float = 60.0,
+          sandbox: str = "auto", force: bool = False) -> tuple[Path, Settings]:
+    """Write the autograder zip to `out` (refused if it exists, unless `force`)."""
+    from grader.release import ReleaseError, _build_wheel
+
+    if out.exists() and not force:
+        raise GradescopeError(f"{out} exists; choose another name (or --force to replace it)")
+    if course.seed is None:
+        raise GradescopeError(f"{course.source}: the course has no seed; a Gradescope autograder grades at the course "
+                              "seed (a submission hard-coding the public values would pass at the public one): set "
+                              "`seed:` in the course config")
+    if not course.source or not Path(course.source).is_file():
+        raise GradescopeError("no course config file to ship (solutions/course.yaml or --course FILE)")
+    project = _project_root()
+    with tempfile.TemporaryDirectory(prefix="gradescope-") as temporary:
+        try:
+            wheel = _build_wheel(project, Path(temporary))
+        except ReleaseError as exc:
+            raise GradescopeError(str(exc)) from None
+        settings = Settings(course=course.id, chapters=list(chapters), learner_field=learner_field,
+                            time_budget=float(time_budget), sandbox=sandbox, grader=wheel.name,
+                            hidden=sorted(course.hidden))
+        described = ("bubblewrap where it starts on Gradescope's image, else without it (the output says so)"
+                     if sandbox == "auto" else "required: where bubblewrap does not start, nothing is graded")
+        out.parent.mkdir(parents=True, exist_ok=True)
+        partial = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+        with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+            def add(name: str, text: str | bytes, mode: int = 0o644) -> None:
+                info = zipfile.ZipInfo(name, date_time=(2026, 1, 1, 0, 0, 0))
+                info.external_attr = (0o100000 | mode) << 16
+                info.compress_type = zipfile.ZIP_DEFLATED
+                archive.writestr(info, text)
+
+            add("setup.sh", SETUP_SH.replace("{wheel}", wheel.name), 0o755)
+            add("run_autograder", RUN_AUTOGRADER, 0o755)
+            add(wheel.name, wheel.read_bytes())
+            add(COURSE_FILE, Path(course.source).read_bytes())
+            add(SETTINGS_FILE, json.dumps(asdict(settings), indent=1) + "\n")
+            add("README.txt", README.format(course=course.id, grader=wheel.name, chapters=", ".join(chapters),
+                                            budget=time_budget, field=learner_field, sandbox=described,
+                                            zipname=out.name))
+        os.replace(partial, out)
+    return out, settings
+
+
+def describe(out: Path, settings: Settings) -> str:
+    return (f"Gradescope autograder in {out} ({out.stat().st_size / 1024:.0f} KiB): setup.sh, run_autograder, "
+            f"{settings.grader}, {COURSE_FILE} and {SETTINGS_FILE}; chapters {', '.join(settings.chapters)}; learner id: "
+            f"the submitter's {settings.learner_field}; sandbox {settings.sandbox}. It holds the references, the "
+            "keys and the course seed: upload it to Gradescope, never hand it out.")
+
+
+# ------------------------------------------------------------------------------------ run
+
+def learner_from_metadata(root: Path, learner_field: str) -> tuple[str | None, str]:
+    """(the learner id from submission_metadata.json, or None; a sentence saying where it came from or why not)."""
+    from grader.batch import id_problem
+
+    path = root / "submission_metadata.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        return None, f"{path.name} cannot be read ({type(exc).__name__})"
+    users = data.get("users") if isinstance(data, dict) else None
+    if not isinstance(users, list) or not users or not isinstance(users[0], dict):
+        return None, f"{path.name} names no submitter"
+    value = users[0].get(learner_field)
+    who = str(value).strip() if value is not None else ""
+    if not who:
+        return None, f"{path.name}: the submitter has no {learner_field}"
+    problem = id_problem(who)
+    if problem:
+        return None, f"{path.name}: the submitter's {learner_field} {problem}"
+    group = f"; a group of {len(users)}: the quiz is graded with the first submitter's numbers" if len(users) > 1 else ""
+    return who, f"the submitter's {learner_field} in {path.name}{group}"
+
+
+def _sandbox_state(mode: str) -> tuple[bool, str, str]:
+    """(sandboxed, isolation line, reason it is not); with mode "required" and no sandbox the reason is fatal."""
+    from grader.batch import isolation_line
+    from grader.sandbox import Sandbox, probe
+
+    if os.environ.get("GRADER_SANDBOX") == "off":
+        reason = "turned off (GRADER_SANDBOX=off)"
+    elif not Sandbox().available:
+        reason = "bubblewrap is not installed"
+    else:
+        reason = probe(Sandbox()) or ""
+        if not reason:
+            return True, isolation_line(True), ""
+    line = (f"isolation: no sandbox: bubblewrap cannot run on this image ({reason}); learner code runs as "
+            f"{'root' if os.geteuid() == 0 else 'the autograder user'} in this submission's own container, with "
+            "resource limits and a process-tree kill only")
+    return False, line, reason
+
+
+def _stage(root: Path, learner: str, staging: Path) -> Path:
+    """The submission staged as grade batch stages one (chapter and answer files only); an upload that is
+    one .zip is read from inside it. StagingError when there is nothing to grade."""
+    from grader.batch import Entry, StagingError, stage
+
+    submission = root / "submission"
+    if not submission.is_dir():
+        raise StagingError("the submission folder is missing")
+    try:
+        return stage(Entry(learner, submission), staging)
+    except StagingError:
+        zips = [p for p in submission.iterdir() if p.suffix.lower() == ".zip" and p.is_file() and not p.is_symlink()]
+        if len(zips) != 1:
+            raise
+        return stage(Entry(learner, zips[0]), staging)
+
+
+def _write(results: Path, text: str) -> None:
+    results.mkdir(parents=True, exist_ok=True)
+    temporary = results / f".results.json.{os.getpid()}.tmp"
+    temporary.write_text(text, encoding="utf-8")
+    os.replace(temporary, results / "results.json")
+
+
+def _not_graded(reason: str, started: float, heading: list[str], isolation: str) -> str:
+    from grader.render import lms
+
+    message = (f"NOT GRADED: the autograder could not grade this submission for a reason outside your code "
+               f"({reason}). This is not your grade: your instructor sees this and will grade it again.")
+    data = json.loads(lms.gradescope_not_graded(message, execution_time=time.monotonic() - started, heading=heading,
+                                                isolation=isolation))
+    data["extra_data"] = {"not_graded": reason}
+    return json.dumps(data, allow_nan=False) + "\n"
+
+
+def run(root: Path) -> int:
+    """Grade root/submission into root/results/results.json (always written). 0 when graded (whatever the
+    score) or when the submission holds nothing to grade; 1 when it could not be graded for a reason outside
+    the learner's code (the results say NOT GRADED)."""
+    from grader.safe_text import for_terminal
+
+    started = time.monotonic()
+    results = root / "results"
+    heading: list[str] = []
+    isolation = ""
+    try:
+        settings = Settings.read(root / "source" / SETTINGS_FILE)
+        from grader import batch
+        from grader import course as courses
+        from grader.render import lms
+
+        course = courses.current(str(root / "source" / COURSE_FILE))
+        learner, source = learner_from_metadata(root, settings.learner_field)
+        sandboxed, isolation, reason = _sandbox_state(settings.sandbox)
+        print(isolation, flush=True)
+        with tempfile.TemporaryDirectory(prefix="gradescope-staging-") as staging:
+            os.chmod(staging, 0o755)
+            try:
+                staged = _stage(root, learner or "submission", Path(staging))
+            except batch.StagingError as exc:
+                message = (f"Your submission could not be graded: {exc}. Submit your chapter files (exercises/chNN_*.py,"
+                           " or the files at the top of the upload) and your quiz answers (answers/chNN.yaml).")
+                _write(results, lms.gradescope_not_graded(message, execution_time=time.monotonic() - started))
+                print(for_terminal(message), flush=True)
+                return 0
+            if learner is None:  # no usable id from Gradescope: the submission's own learner.yaml, else anonymous
+                from grader.quiz import learner_id
+
+                learner, said = learner_id(staged / "exercises" / "answers", None)
+                source = f"{source}; taken from {said}"
+            heading = [f"Graded as {learner} ({source}), at the course seed."]
+            if settings.sandbox == "required" and not sandboxed:
+                _write(results, _not_graded(f"the sandbox does not start here: {reason}", started, heading, isolation))
+                print(f"NOT GRADED: the sandbox is required and does not start: {for_terminal(reason)}", flush=True)
+                return 1
+            warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata")
+            try:
+                report = batch._grade_report(staged, learner, list(settings.chapters), course.grading_seed, False,
+                                             {"learner_seconds": settings.time_budget}, sandboxed)
+            finally:
+                batch._drop_launcher()
+        if report.infrastructure:
+            _write(results, _not_graded(report.infrastructure, started, heading, isolation))
+            print(f"NOT GRADED: {for_terminal(report.infrastructure)}", flush=True)
+            return 1
+        _write(results, lms.gradescope(report, hidden=course.hidden, execution_time=time.monotonic() - started,
+                                       heading=heading, notes=warnings, isolation=isolation))
+        print(for_terminal(f"{heading[0]} Score {report.score:g}/{report.max_score:g}."), flush=True)
+        for line in lms.summary_lines(report) + warnings:
+            print(for_terminal(line), flush=True)
+        if report.learner_output:
+            print("What the learner's code printed (first 2000 characters):", flush=True)
+            print(for_terminal(report.learner_output[:2000]), flush=True)
+        return 0
+    except Exception as exc:  # noqa: BLE001  the grader itself broke: never a silent zero, never no results
+        import traceback
+
+        traceback.print_exc()
+        _write(results, _not_graded(f"the grader failed: {type(exc).__name__}: {exc}", started, heading, isolation))
+        return 1
+
+
+def check(root: Path) -> int:
+    """At image build time: say whether learner code can run in the sandbox here (never fails the build)."""
+    try:
+        settings = Settings.read(root / "source" / SETTINGS_FILE)
+    except (OSError, ValueError, TypeError) as exc:
+        print(f"grader.gradescope check: {SETTINGS_FILE} cannot be read: {exc}", file=sys.stderr)
+        return 1
+    sandboxed, isolation, _ = _sandbox_state(settings.sandbox)
+    print(isolation)
+    if not sandboxed and settings.sandbox == "required":
+        print("WARNING: this autograder requires the sandbox and it does not start on this image: no submission "
+              "will be graded (every run says NOT GRADED). Build the zip with --sandbox auto to grade without it.")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) != 2 or args[0] not in ("run", "check"):
+        print("usage: python -m grader.gradescope run|check AUTOGRADER_ROOT   (Gradescope's is /autograder)",
+              file=sys.stderr)
+        return 2
+    root = Path(args[1]).resolve()
+    return run(root) if args[0] == "run" else check(root)
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # everything is written; skip the slow teardown of numpy & co

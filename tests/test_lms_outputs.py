@@ -1,0 +1,181 @@
+"""What `grade batch` writes for instructors' systems, from one real batch: gradebooks (generic, Canvas,
+Moodle) that read back through csv and pandas with every id exactly as given, hostile and Unicode ones
+included; a roster as spreadsheets save it (byte-order mark, ';', extra columns, quoted cells); junit.xml
+valid against Jenkins' junit-10.xsd with times, failure text and chapter-level errors; report.json and
+results.json valid against their published schemas; and a submission whose learner.yaml names someone
+else flagged wherever its grade shows."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from grader.batch import folder_name
+from grader.render import lms
+from tests.conftest import REPO, build_submission, replace_function
+from tests.test_outputs_safety import hostile_module
+
+jsonschema = pytest.importorskip("jsonschema")
+pandas = pytest.importorskip("pandas")
+etree = pytest.importorskip("lxml.etree")
+
+XSD = Path(__file__).resolve().parent / "fixtures" / "junit-10.xsd"
+HIDDEN = "ch06/H_rows_orthogonal"
+COURSE = f"course: lms-test\nseed: 5550123\nquiz_feedback: recorded\nhidden: [{HIDDEN}]\n"
+# submission folder -> learner id, as the roster gives them: formulas, Unicode, quotes, separators, and
+# texts a spreadsheet or pandas would take for something else (a number, a date, missing, a boolean)
+ROSTER = {"s01": "=1+2", "s02": "007", "s03": "NA", "s04": "null", "s05": 'O\'Brien, "Jr"', "s06": "a;b",
+          "s07": "李 雷", "s08": "zoë", "s09": "ann+cs101@uni.edu", "s10": "-x+1", "s11": "TRUE", "s12": "1e5",
+          "s13": "2026-01-02", "alice": "alice", "bob.zip": "bob", "carol": "carol", "hostile": "hostile",
+          "dave.zip": "dave"}
+FORMULAS = {"=1+2", "-x+1"}
+CHAPTERS = ["ch03", "ch06"]
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    base = tmp_path_factory.mktemp("lms")
+    submissions = base / "submissions"
+    submissions.mkdir()
+    for folder in [f"s{n:02d}" for n in range(1, 14)] + ["alice"]:
+        build_submission(submissions / folder)
+    answers = submissions / "alice" / "exercises" / "answers"
+    answers.mkdir()
+    (answers / "learner.yaml").write_text("learner: alice\n", encoding="utf-8")  # agrees: not flagged
+    bob = build_submission(base / "bob", {"ch06_measurement": replace_function(
+        "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n"
+                                          "    return np.array([[x / r, y / r], [y / r2, x / r2]])\n")})
+    with zipfile.ZipFile(submissions / "bob.zip", "w") as archive:
+        for path in sorted((bob / "exercises").glob("*.py")):
+            archive.write(path, f"exercises/{path.name}")
+        archive.writestr("exercises/answers/learner.yaml", "learner: robert\n")  # someone else's numbers
+    build_submission(submissions / "carol", {"ch03_jacobian": "def J(:\n"})  # does not import
+    build_submission(submissions / "hostile", {"ch06_measurement": hostile_module()})
+    (submissions / "dave.zip").write_bytes(b"not a zip")
+    roster = base / "roster.csv"  # as a spreadsheet saves it: BOM, ';', other columns, quoted cells, CRLF
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, delimiter=";", lineterminator="\r\n")
+    writer.writerow(["Name", "Learner", "Submission", "Email; work"])
+    for submission, learner in ROSTER.items():
+        writer.writerow([f"Name of {learner}", learner, submission, "x@y; z"])
+    roster.write_bytes(buffer.getvalue().encode("utf-8-sig"))
+    (base / "course.yaml").write_text(COURSE, encoding="utf-8")
+    out = base / "out"
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out), "--roster",
+                           str(roster), "--chapters", ",".join(CHAPTERS), "--course", str(base / "course.yaml"),
+                           "--lms", "canvas", "--lms", "moodle", "--no-html", "--jobs", "2"],
+                          cwd=REPO, capture_output=True, text=True, timeout=300)
+    return out, done
+
+
+def _shown(learner: str) -> str:
+    return "'" + learner if learner in FORMULAS else learner
+
+
+def test_the_gradebook_round_trips_every_id_through_csv_and_pandas(graded):
+    out, done = graded
+    assert done.returncode == 1, done.stderr[-3000:]  # dave's zip cannot be read
+    expected = {_shown(learner) for learner in ROSTER.values()}
+    with open(out / "gradebook.csv", newline="", encoding="utf-8") as handle:
+        rows = {row["learner"]: row for row in csv.DictReader(handle)}
+    assert set(rows) == expected
+    frame = pandas.read_csv(out / "gradebook.csv", dtype=str, keep_default_na=False, encoding="utf-8")
+    assert sorted(frame["learner"]) == sorted(expected)
+    assert rows["007"]["ch06_code"] == rows["李 雷"]["ch06_code"] == "15" and rows["dave"]["total"] == ""
+    # what a spreadsheet would run is neutralised, and only that: the rest is exactly as given
+    assert all(not cell.startswith(("=", "+", "-", "@")) for cell in frame["learner"])
+
+
+def test_canvas_and_moodle_gradebooks_have_their_imports_columns_and_points_possible(graded):
+    out, _ = graded
+    canvas = pandas.read_csv(out / "gradebook-canvas.csv", dtype=str, keep_default_na=False)
+    titles = [lms._column(c) for c in CHAPTERS]
+    assert list(canvas.columns) == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *titles]
+    assert canvas.iloc[0]["Student"].strip() == "Points Possible"
+    possible = {c: float(canvas.iloc[0][lms._column(c)]) for c in CHAPTERS}
+    assert possible["ch03"] >= 10 and possible["ch06"] >= 15  # code, and the quiz as graded
+    learners = canvas.iloc[1:].set_index("SIS Login ID")
+    assert sorted(learners.index) == sorted(_shown(v) for v in ROSTER.values())
+    assert float(learners.loc["zoë", titles[1]]) >= 15 and learners.loc["dave", titles[1]] == ""
+    assert float(learners.loc["bob", titles[1]]) < float(learners.loc["alice", titles[1]])
+    moodle = pandas.read_csv(out / "gradebook-moodle.csv", dtype=str, keep_default_na=False)
+    assert list(moodle.columns) == ["Learner id", *[f"{t} (out of {possible[c]:g})" for t, c in zip(titles, CHAPTERS)],
+                                    f"Total (out of {sum(possible.values()):g})", "Feedback"]
+    rows = moodle.set_index("Learner id")
+    assert rows.loc["O'Brien, \"Jr\"", f"Total (out of {sum(possible.values()):g})"] != ""
+    assert rows.loc["dave"].iloc[0] == "" and rows.loc["dave", "Feedback"].startswith("unreadable: ")
+    assert "learner.yaml names 'robert'" in rows.loc["bob", "Feedback"]
+
+
+def test_junit_is_valid_for_jenkins_with_time_failure_text_and_chapter_errors(graded):
+    out, _ = graded
+    schema = etree.XMLSchema(etree.parse(str(XSD)))
+    document = etree.parse(str(out / "junit.xml"))
+    schema.assertValid(document)
+    root = document.getroot()
+    suites = {s.get("name"): s for s in root.findall("testsuite")}
+    assert "dave" not in suites and len(suites) == len(ROSTER) - 1
+    assert all(float(s.get("time")) > 0 for s in suites.values())
+    assert int(root.get("tests")) == sum(len(s.findall("testcase")) for s in suites.values())
+    for suite in suites.values():
+        cases = suite.findall("testcase")
+        assert int(suite.get("tests")) == len(cases)
+        assert int(suite.get("failures")) == sum(c.find("failure") is not None for c in cases)
+        assert int(suite.get("errors")) == sum(c.find("error") is not None for c in cases)
+    bob = {c.get("name"): c for c in suites["bob"].findall("testcase")}
+    failure = bob["code:H_worked_example"].find("failure")
+    assert failure.get("type") == "fail" and "H[1,0]" in failure.text and failure.get("message") in failure.text
+    carol = {c.get("name"): c for c in suites["carol"].findall("testcase")}
+    chapter = carol["ch03:chapter"].find("error")
+    assert "SyntaxError" in chapter.text and chapter.get("type") == "chapter"
+    errors = [c.find("error") for n, c in carol.items() if n.startswith("code:") and c.get("classname") == "carol.ch03"]
+    assert errors and all(e is not None and e.get("type") == "error" for e in errors)
+    error = errors[0]
+    assert "see the chapter's message" in error.text and "The chapter's message:" in error.text
+    assert "SyntaxError" in error.text  # the message it points to is right there
+    assert suites["hostile"].find("system-out") is not None
+
+
+def test_every_json_file_is_valid_against_its_published_schema(graded):
+    out, _ = graded
+    report_schema = jsonschema.Draft202012Validator(lms.schema("batch-report"), registry=_registry())
+    results_schema = jsonschema.Draft202012Validator(lms.schema("gradescope-results"))
+    reports = list(out.glob("*/report.json"))
+    assert len(reports) == len(ROSTER) - 1
+    for path in reports:
+        report_schema.validate(json.loads(path.read_text(encoding="utf-8")))
+    for path in out.glob("*/results.json"):
+        results = json.loads(path.read_text(encoding="utf-8"))
+        results_schema.validate(results)
+        visibility = {t["extra_data"]["id"]: t["visibility"] for t in results["tests"]}
+        assert visibility[HIDDEN] == "after_published" and visibility["ch06/H_worked_example"] == "visible"
+
+
+def test_a_learner_yaml_naming_someone_else_is_flagged_wherever_the_grade_shows(graded):
+    out, done = graded
+    warning = "learner.yaml names 'robert', but this submission is graded as 'bob' (from the roster roster.csv, line"
+    report = json.loads((out / "bob" / "report.json").read_text(encoding="utf-8"))
+    assert report["batch"]["warnings"][0].startswith(warning)
+    assert warning in json.loads((out / "bob" / "results.json").read_text(encoding="utf-8"))["output"]
+    with open(out / "gradebook.csv", newline="", encoding="utf-8") as handle:
+        rows = {row["learner"]: row for row in csv.DictReader(handle)}
+    assert rows["bob"]["status"] == "graded" and rows["bob"]["message"].startswith(warning)
+    assert rows["alice"]["message"] == ""  # its learner.yaml agrees
+    summary = (out / "summary.html").read_text(encoding="utf-8")
+    assert "id='flagged'" in summary and "1 flagged" in summary and "robert" in summary
+    assert f"flagged bob: {warning}" in done.stderr and "1 flagged" in done.stdout
+    assert not json.loads((out / folder_name("alice") / "report.json").read_text(encoding="utf-8"))["batch"]["warnings"]
+
+
+def _registry():
+    from referencing import Registry, Resource
+
+    return Registry().with_resources((lms.schema(n)["$id"], Resource.from_contents(lms.schema(n)))
+                                     for n in lms.SCHEMAS)
