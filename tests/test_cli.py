@@ -166,3 +166,77 @@ def test_no_color_is_respected_even_on_a_terminal(repo_root):
         _, outputs[label] = run_on_terminal([sys.executable, "-m", "grader", "ch06", "--solutions"], repo_root, env)
     assert "\x1b[" in outputs["colour"]
     assert "\x1b[" not in outputs["plain"] and "ch06 total" in outputs["plain"]
+
+
+# ------------------------------------------------------------------------------ help, usage errors, colour
+
+def test_every_commands_help_shows_an_example(runner):
+    for args in [[], *([name] for name in main.commands)]:
+        result = runner.invoke(main, [*args, "--help"])
+        assert result.exit_code == 0, args
+        examples = result.output.split("Examples:", 1)
+        assert len(examples) == 2, f"`grade {' '.join(args)} --help` shows no example"
+        lines = [line.strip() for line in examples[1].splitlines() if line.strip()]
+        assert lines and all(line.startswith("grade") for line in lines), lines
+        if args:
+            assert all(line.startswith(f"grade {args[0]}") or args[0] == "run" for line in lines), lines
+
+
+@pytest.mark.parametrize("typo, meant", [("lst", "list"), ("relase", "release"), ("batc", "batch"),
+                                         ("gradescop", "gradescope")])
+def test_an_unknown_command_suggests_the_closest(runner, typo, meant):
+    result = runner.invoke(main, [typo])
+    assert result.exit_code == 2 and f"did you mean `grade {meant}`?" in result.output
+    assert "unknown chapter" not in result.output
+
+
+@pytest.mark.parametrize("jobs", ["-1", "0", "two"])
+def test_bad_jobs_is_a_usage_error(runner, tmp_path, jobs):
+    (tmp_path / "submissions" / "alice").mkdir(parents=True)
+    result = runner.invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(tmp_path / "out"), "--jobs",
+                                  jobs])
+    assert result.exit_code == 2 and "--jobs" in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_empty_submissions_folder_is_a_usage_error(runner, tmp_path):
+    folder = tmp_path / "submissions"
+    folder.mkdir()
+    result = runner.invoke(main, ["batch", str(folder), "--out", str(tmp_path / "out"), "--no-sandbox"])
+    assert result.exit_code == 2 and "holds no submission to grade" in result.output and "it is empty" in result.output
+    (folder / ".DS_Store").write_bytes(b"\0")
+    result = runner.invoke(main, ["batch", str(folder), "--out", str(tmp_path / "out"), "--no-sandbox"])
+    assert result.exit_code == 2 and "it holds only what is skipped: .DS_Store: not a folder" in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_counts_have_the_right_plural(runner, tmp_path, repo_root):
+    listed = runner.invoke(main, ["list"]).output
+    assert " 1 points" not in listed and "(1 points" not in listed
+    from tests.conftest import build_submission
+
+    build_submission(tmp_path / "submissions" / "alice")
+    result = runner.invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(tmp_path / "out"),
+                                  "--chapters", "ch03", "--no-html", "--jobs", "1"])
+    assert result.exit_code == 0, result.output
+    assert "1 submission: 1 graded" in result.output
+    assert "<p>1 learner graded;" in (tmp_path / "out" / "summary.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("env, terminal, coloured", [
+    ({"FORCE_COLOR": "1"}, False, True),  # force-color.org: any non-empty value, even into a pipe
+    ({"FORCE_COLOR": ""}, False, False),  # empty: as if unset
+    ({"NO_COLOR": ""}, True, True),  # no-color.org: an empty NO_COLOR does not count
+    ({"NO_COLOR": "1", "FORCE_COLOR": "1"}, True, False),  # NO_COLOR wins, as in Python itself
+])
+def test_no_color_and_force_color_as_their_specs_say(repo_root, env, terminal, coloured):
+    full = dict(os.environ)
+    for name in ("NO_COLOR", "FORCE_COLOR"):
+        full.pop(name, None)
+    full.update(env)
+    command = [sys.executable, "-m", "grader", "ch03", "--solutions", "--no-quiz"]
+    if terminal:
+        _, output = run_on_terminal(command, repo_root, full)
+    else:
+        output = subprocess.run(command, cwd=repo_root, env=full, capture_output=True, text=True, timeout=120).stdout
+    assert ("\x1b[" in output) is coloured and "ch03 total" in output

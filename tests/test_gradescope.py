@@ -124,6 +124,7 @@ def test_the_zip_has_gradescopes_layout(autograder):
     with zipfile.ZipFile(archive) as opened, zipfile.ZipFile(io.BytesIO(opened.read(wheel))) as inner:
         members = inner.namelist()
     assert "solutions/ch06_measurement.py" in members  # the instructor's grader: it grades officially
+    assert {f"grader/schemas/{n}.schema.json" for n in lms.SCHEMAS} <= set(members)  # shipped with the package
     assert settings["hidden"] == [HIDDEN] and settings["learner_field"] == "email"
     assert (root / "source" / "venv" / "bin" / "python").exists()
     assert "isolation: bubblewrap sandbox" in setup.stdout or "isolation: no sandbox" in setup.stdout

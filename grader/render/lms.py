@@ -55,6 +55,12 @@ def _explained(check: CheckResult, chapter: ChapterResult) -> str:
     return prefix.get(check.status, "") + check_message(check, chapter)
 
 
+def chapter_status(chapter: ChapterResult) -> str:
+    """What a chapter's messages are: "error" where they stopped its checks being graded (its file does not
+    import), "fail" where they are the learner's to fix and graded nonetheless (an answer file missing)."""
+    return "error" if any(c.status == Status.ERROR for c in chapter.checks) else "fail"
+
+
 def check_key(chapter: str, check: CheckResult) -> str:
     """The check's id as the course config names it: ch06/H_rows_orthogonal (quiz questions: ch06/quiz_...)."""
     return f"{chapter}/{check.id}"
@@ -93,8 +99,8 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
         for problem in chapter.problems:
             tests.append({"name": f"{chapter.chapter}: chapter message", "number": f"{number}.0",
                           "score": 0, "max_score": 0, "status": "failed", "output": problem, "output_format": "text",
-                          "tags": [chapter.chapter, "chapter"], "visibility": "visible",
-                          "extra_data": {"id": f"{chapter.chapter}/chapter", "status": "error"}})
+                          "tags": [chapter.chapter, "chapter", chapter_status(chapter)], "visibility": "visible",
+                          "extra_data": {"id": f"{chapter.chapter}/chapter", "status": chapter_status(chapter)}})
         for index, check in enumerate(chapter.checks, 1):
             test = {
                 "name": f"{chapter.chapter} {check.kind}: {check.description}",
@@ -160,7 +166,7 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
         info = BY_ID.get(chapter.chapter)
         filename = f"exercises/{info.module}.py" if info else ""
         for problem in chapter.problems:
-            tests.append({"name": f"{chapter.chapter}: chapter message", "status": "error", "score": 0,
+            tests.append({"name": f"{chapter.chapter}: chapter message", "status": chapter_status(chapter), "score": 0,
                           "max_score": 0, "message": problem, "filename": filename, "line_no": 0})
         for check in chapter.checks:
             if not check.status.counted:
@@ -211,10 +217,8 @@ def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = No
         for chapter in report.chapters:
             classname = f"{name}.{chapter.chapter}"
             if chapter.problems:
-                broken = any(c.status == Status.ERROR for c in chapter.checks)
-                text = "\n".join(chapter.problems)
-                cases.append((classname, f"{chapter.chapter}:chapter", "error" if broken else "failure", text,
-                              "chapter"))
+                tag = "error" if chapter_status(chapter) == "error" else "failure"
+                cases.append((classname, f"{chapter.chapter}:chapter", tag, "\n".join(chapter.problems), "chapter"))
             for check in chapter.checks:
                 tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
                        Status.RECORDED: "skipped"}.get(check.status)
