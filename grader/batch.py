@@ -122,7 +122,7 @@ def read_roster(roster: Path) -> dict[str, tuple[str, int]]:
         raise RosterError(f"{roster}: not UTF-8 text (byte {exc.start}); save it as CSV in UTF-8") from None
     except OSError as exc:
         raise RosterError(f"{roster}: {exc.strerror}") from None
-    header = text.splitlines()[0] if text.strip() else ""
+    header = re.sub(r'"[^"]*"', "", text.splitlines()[0]) if text.strip() else ""  # separators in quotes do not count
     rows = csv.reader(io.StringIO(text, newline=""), delimiter=max(",;\t", key=header.count))
     columns = [column.strip().lower() for column in next(rows, [])]
     if "submission" not in columns or "learner" not in columns:

@@ -108,6 +108,13 @@ def test_roster_as_spreadsheets_save_it(submissions, tmp_path):
     assert {e.learner for e in discover(submissions, roster)} == {"zoë", "ann+cs101@uni.edu", "bob", "dave"}
 
 
+def test_a_roster_separated_by_semicolons_with_commas_inside_quoted_cells(submissions, tmp_path):
+    roster = tmp_path / "roster.csv"
+    roster.write_bytes('submission;learner;"Name, First, Middle"\nalice;"Lee, Ann";"Lee, Ann, B."\n'
+                       .encode("utf-8-sig"))
+    assert {e.learner for e in discover(submissions, roster)} == {"Lee, Ann", "bob", "carol", "dave"}
+
+
 @pytest.mark.parametrize("content, says", [
     (b"folder,student\nalice,s1\n", "line 1: the header must name the columns submission and learner"),
     ("submission,learner\nalice,zo\u00eb\n".encode("latin-1"), "not UTF-8 text"),
