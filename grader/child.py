@@ -49,13 +49,19 @@ def _safe_str(exc: BaseException) -> str:
         return "<message could not be shown>"
 
 
+_MEMORY_LIMIT: list[int] = []  # the cap on memory written set by _apply_limits, if any
+
+
 def describe_exception(exc: BaseException, root: str) -> dict:
     text, line = _learner_frames(exc, root)
+    message = _safe_str(exc)
+    if isinstance(exc, MemoryError) and _MEMORY_LIMIT:
+        message = f"ran out of memory: the limit is {_MEMORY_LIMIT[0] / (1 << 30):g} GiB" + (f" ({message})" if message else "")
     return {
         "exception": type(exc).__name__,
         "bases": [c.__name__ for c in type(exc).__mro__][:8],
         "not_implemented": isinstance(exc, NotImplementedError),
-        "message": _safe_str(exc),
+        "message": message,
         "traceback": text,
         "line": line,
     }
@@ -105,7 +111,7 @@ def _apply_limits(limits: dict) -> None:
     if hasattr(signal, "SIGXFSZ"):
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # an oversized write fails instead of killing us
     table = {
-        "address_space": resource.RLIMIT_AS,
+        "data_bytes": getattr(resource, "RLIMIT_DATA", None),  # written, not reserved (jax reserves much)
         "cpu_seconds": resource.RLIMIT_CPU,
         "file_size": resource.RLIMIT_FSIZE,
         "open_files": resource.RLIMIT_NOFILE,
@@ -114,12 +120,14 @@ def _apply_limits(limits: dict) -> None:
     }
     for key, which in table.items():
         value = limits.get(key)
-        if value is None:
+        if value is None or which is None:
             continue
         try:
             resource.setrlimit(which, (value, value))
         except (ValueError, OSError):
-            pass
+            continue
+        if key == "data_bytes":
+            _MEMORY_LIMIT.append(value)
 
 
 def _pin_package(root: str, package: str) -> None:
@@ -222,9 +230,8 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
         from grader.confine import enter
 
         if enter(limits, [p for p in sys.path if os.path.isabs(p)]) and limits.get("memory_bytes"):
-            # memory used is capped for all processes together: no cap on address space reserved (jax and
-            # torch reserve far more than they use)
-            limits.pop("address_space", None)
+            # memory used is capped for all processes together (its watchdog names what happened)
+            limits.pop("data_bytes", None)
     out = os.fdopen(result_fd, "w", buffering=1, encoding="utf-8", newline="\n")
     _write_files(request["files"], request["root"])  # the learner's files come with the request
     os.chdir(request["root"])

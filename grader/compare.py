@@ -68,6 +68,9 @@ def fmt_array(values: np.ndarray) -> str:
                            formatter={"float_kind": fmt})
 
 
+SINGLE_PRECISION = 2e-6  # about 16 units in the last place of a float32: a few operations' round-off
+
+
 def tolerance_text(rtol: float, atol: float) -> str:
     return f"tolerance |got - expected| <= {atol:g} + {rtol:g}*|expected|"
 
@@ -99,9 +102,10 @@ def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: st
 
 
 def expect(returned: Returned, expected: object, *, label: str, rtol: float = 1e-6,
-           atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = ()) -> Verdict:
-    """Compare a learner's returned value with the expected number or array; a wrong value is named by
-    the first of `mistakes` (then of the generic slips) it matches."""
+           atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = (),
+           exact: bool = False) -> Verdict:
+    """Compare a learner's returned value with the expected number or array (see compare_arrays); a
+    wrong value is named by the first of `mistakes` (then of the generic slips) it matches."""
     expected = np.asarray(expected, dtype=np.float64)
     symbol = (entries or Entries("result")).symbol
     problem = value_problem(returned, expected.shape, label, symbol)
@@ -111,18 +115,24 @@ def expect(returned: Returned, expected: object, *, label: str, rtol: float = 1e
         return Verdict(False, problem, expected=expected,
                        details={"traceback": returned.traceback} if returned.traceback else {}, mistake=mistake)
     return compare_arrays(returned.as_array(), expected, label=label, rtol=rtol, atol=atol, entries=entries,
-                          mistakes=mistakes)
+                          mistakes=mistakes, exact=exact)
 
 
 def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: float = 1e-6,
                    atol: float = 1e-9, entries: Entries | None = None,
-                   expected_name: str = "expected", mistakes: tuple | list = ()) -> Verdict:
+                   expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False) -> Verdict:
     """Values of two float arrays of the same shape, with the worst entries named, and the mistake the
-    wrong value matches (grader.diagnose) said first."""
+    wrong value matches (grader.diagnose) said first. Any real dtype is a right answer (the contract):
+    unless `exact` (a check telling apart values closer than that, e.g. finite-difference conventions),
+    the tolerance is at least single-precision round-off relative to the result's scale, so that float32
+    (jax's and torch's default), there or anywhere upstream, is right."""
     got = np.asarray(got, dtype=np.float64)
     expected = np.asarray(expected, dtype=np.float64)
     if got.shape != expected.shape:
         return Verdict(False, f"{label}: shape {got.shape}, expected {expected.shape}.", expected, got)
+    if not exact:
+        scale = float(np.max(np.abs(expected[np.isfinite(expected)]), initial=0.0))
+        rtol, atol = max(rtol, SINGLE_PRECISION), max(atol, SINGLE_PRECISION * scale)
     entries = entries or Entries("result")
     bad_got = ~np.isfinite(got)
     if bad_got.any() and not np.array_equal(bad_got, ~np.isfinite(expected)):

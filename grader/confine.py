@@ -48,7 +48,7 @@ def _namespaces(libc) -> None:
     uid, gid = os.getuid(), os.getgid()
     _check(libc.unshare(CLONE_NEWUSER | CLONE_NEWNS | CLONE_NEWIPC | CLONE_NEWPID), "unshare")
     for name, text in (("setgroups", "deny"), ("uid_map", f"{uid} {uid} 1"), ("gid_map", f"{gid} {gid} 1")):
-        with open(f"/proc/self/{name}", "w") as handle:
+        with open(f"/proc/self/{name}", "w", encoding="ascii") as handle:
             handle.write(text)
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Generator
 
 from grader import checks as check_registry
@@ -212,7 +213,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
     submission = session.submission
     report = Report(submission_label or str(submission.root), seed=seed)
     for plan in plans:
-        module_file = f"{submission.package}/{plan.chapter.info.module}.py"
+        module_file = str(Path(submission.package) / f"{plan.chapter.info.module}.py")  # as the system writes it
         report.chapters.append(plan.judge(runs[plan.chapter.info.id], module_file))
     point_upstream(report, {plan.chapter.info.id: plan.chapter for plan in plans})
     report.learner_output = session.output

@@ -178,9 +178,10 @@ def _build_wheel(stage: Path, out: Path) -> Path:
     before = set(out.glob("*.whl"))
     command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--quiet", "--disable-pip-version-check",
                "-w", str(out), str(stage)]
-    result = subprocess.run(command, capture_output=True, text=True)
+    result = subprocess.run(command, capture_output=True, text=True, encoding="utf-8", errors="replace")
     if result.returncode != 0:
-        result = subprocess.run(command[:4] + ["--no-build-isolation"] + command[4:], capture_output=True, text=True)
+        result = subprocess.run(command[:4] + ["--no-build-isolation"] + command[4:], capture_output=True, text=True,
+                                encoding="utf-8", errors="replace")
     built = sorted(set(out.glob("*.whl")) - before)
     if result.returncode != 0 or len(built) != 1:
         raise ReleaseError(f"building the wheel failed:\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}")

@@ -69,7 +69,7 @@ class Limits:
     call_seconds: float = 5.0
     chapter_seconds: float = 20.0
     learner_seconds: float = 60.0  # everything of one learner together (all chapters' code; the quiz gets what is left)
-    address_space: int | None = 1 << 30
+    data_bytes: int | None = 1 << 30  # memory one learner process writes (RLIMIT_DATA): address space reserved is free
     cpu_seconds: int | None = 60
     file_size: int | None = 16 << 20
     open_files: int | None = 256
@@ -78,7 +78,7 @@ class Limits:
     tmp_bytes: int = 64 << 20  # in a sandbox: the learner's own /tmp
 
     def rlimits(self) -> dict:
-        return {"address_space": self.address_space, "cpu_seconds": self.cpu_seconds,
+        return {"data_bytes": self.data_bytes, "cpu_seconds": self.cpu_seconds,
                 "file_size": self.file_size, "open_files": self.open_files, "core": 0,
                 "processes": self.processes, "memory_bytes": self.memory_bytes, "tmp_bytes": self.tmp_bytes}
 
@@ -132,6 +132,11 @@ class _Child:
         code = self.handle.returncode
         if code is None:
             return "it was still running"
+        if code >= 0xC0000000:  # Windows: an NTSTATUS error code
+            what = {0xC0000005: "a crash in native code (access violation)", 0xC00000FD: "a stack overflow",
+                    0xC0000409: "an abort in native code (fail fast)", 0xC0000017: "it ran out of memory",
+                    0xC000001D: "an illegal instruction in native code"}.get(code, "a crash in native code")
+            return f"{what}, status {code:#010x}"
         if code < 0 or code > 128:  # killed by a signal (as the sandbox's init passes it on: 128 + signal)
             number = -code if code < 0 else code - 128
             try:

@@ -304,7 +304,8 @@ def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
     if sandbox is not None:
         command = sandbox(command)
     try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=seconds, stdin=subprocess.DEVNULL)
+        done = subprocess.run(command, capture_output=True, text=True, encoding="utf-8", errors="replace", timeout=seconds,
+                              stdin=subprocess.DEVNULL)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return f"the sandboxed interpreter did not start: {exc}"
     if done.returncode == 0 and done.stdout.strip() == "ready":

@@ -200,7 +200,8 @@ def encode_value(value: object, depth: int = 0) -> dict:
         converted = from_array_library(value)
         if converted is not None:
             if converted.ndim == 0 and converted.dtype.kind in "fiu":
-                return {"t": T_SCALAR, "type": _type_name(value), "data": float(converted)}
+                return {"t": T_SCALAR, "type": _type_name(value), "dtype": str(converted.dtype),
+                        "data": float(converted)}
             value, kind = converted, np.ndarray
         elif (getattr(kind, "__module__", "") or "").split(".")[0] in ARRAY_LIBRARIES:
             return {"t": T_OTHER, "type": f"{_type_name(value)} (convert it with np.asarray(...); a torch tensor "

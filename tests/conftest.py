@@ -36,7 +36,8 @@ def replace_function(module: str, function: str, new_source: str) -> str:
     pattern = re.compile(rf"^def {function}\(.*?(?=^\S)", re.S | re.M)
     if not pattern.search(text + "\n#end\n"):
         raise KeyError(f"{function} not found in {module}")
-    return pattern.sub(textwrap.dedent(new_source).strip() + "\n\n\n", text + "\n#end\n", count=1)
+    replacement = textwrap.dedent(new_source).strip() + "\n\n\n"
+    return pattern.sub(lambda _: replacement, text + "\n#end\n", count=1)
 
 
 def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, timeout: float = 120) -> tuple[int, str]:

@@ -21,9 +21,9 @@ WRONG_H = "    return np.array([[x / r, y / r], [y / r2, x / r2]])"
 
 
 class Watching:
-    def __init__(self, root: Path) -> None:
-        self.process = subprocess.Popen([sys.executable, "-m", "grader", "ch06", "--watch", "--no-quiz",
-                                         "--submission", str(root)], cwd=REPO, stdout=subprocess.PIPE,
+    def __init__(self, root: Path, command: list[str] | None = None) -> None:
+        command = command or [sys.executable, "-m", "grader", "ch06", "--watch", "--no-quiz", "--submission", str(root)]
+        self.process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, encoding="utf-8")
         self.lines: queue.Queue = queue.Queue()
         self.reader = threading.Thread(target=self._read, daemon=True)

@@ -11,7 +11,7 @@ import numpy as np
 
 from grader.checks.base import Skip, chapter_checks
 from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
-from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.compare import SINGLE_PRECISION, Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
 from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, call
@@ -109,7 +109,7 @@ def area_scale_is_det_of_your_jacobian(ctx):
             raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J: not judged, no "
                        "points lost.", costs_nothing=True)
         own_det = float(np.linalg.det(g["J"].as_array()))
-        if not np.isclose(own_det, scale, rtol=1e-9, atol=1e-12):
+        if not np.isclose(own_det, scale, rtol=SINGLE_PRECISION, atol=1e-12):  # a float32 J is a right J
             raise Skip(f"the determinant of your {_label('polar_to_cartesian_jacobian', r, t)} is {fmt(own_det)}, "
                        f"not {fmt(scale)}: fix J first (see its checks); not judged, no points lost.",
                        costs_nothing=True)

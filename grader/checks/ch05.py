@@ -29,7 +29,8 @@ import numpy as np
 
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
-from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
+from grader.compare import Entries, all_of, fail, fmt, fmt_array, passed, value_problem
+from grader.compare import expect as _expect
 from grader.diagnose import Mistake
 from grader.expected import reference
 from grader.wire import Array, Fn, call
@@ -38,6 +39,11 @@ CHECKS = chapter_checks("ch05")
 CHECKS.uses("max_jacobian_error", "jacobian_fd")
 CHECKS.uses("best_step", "central_difference")
 REF = reference("ch05")
+
+
+def expect(*args, **kwargs):
+    """grader.compare.expect, exact: step conventions differ by less than single-precision round-off."""
+    return _expect(*args, exact=True, **kwargs)
 
 SLOPE_STEPS = (0.1, 0.05, 0.025, 0.0125)
 SLOPE_TOLERANCE = 0.15

@@ -89,7 +89,7 @@ def gradient_fd_random_points(ctx):
     for g, want, slip, (name, p, form, h) in zip(got, expected, slips, cases):
         step = "" if h is None else (", h=1e-6" if isinstance(h, str) else f", {fmt(h)}")
         verdicts.append(expect(g, want, label=f"gradient_fd({name}, {_show(p)}{step})",
-                               rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(p.size), mistakes=[slip]))
+                               rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(p.size), mistakes=[slip], exact=True))
     return all_of(verdicts)
 
 
@@ -102,7 +102,7 @@ def gradient_fd_integer_input(ctx):
     slips = [_forward_slip(name, point, 1e-5) for name, point, _ in cases]
     calls = [call("gradient_fd", Fn(name), passed) for name, _, passed in cases]
     got = yield calls
-    return all_of([expect(g, want, label=c.label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)),
+    return all_of([expect(g, want, label=c.label, rtol=FD_RTOL, atol=FD_ATOL, entries=_grad_entries(len(want)), exact=True,
                           mistakes=[slip, Mistake("integer steps", "all zeros: an integer array cannot hold x + h; "
                                                                    "convert x to float first.", np.zeros(len(want)))])
                    for g, want, slip, c in zip(got, expected, slips, calls)])

@@ -1,0 +1,160 @@
+"""The lesson's third route: Jacobians by automatic differentiation are right answers. A submission
+whose Jacobians come from jax.jacfwd (float32, jax's default, and float64) gets full marks, in the
+sandbox and without it (memory written is capped, not address space reserved); a torch-like tensor
+(requires_grad, __array__, __dlpack__; torch's wheel is too large for CI) counts as a numpy array;
+what cannot be converted gets a message that says how. Real subprocesses, the real CLI."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO, build_submission, replace_function
+
+try:
+    import jax  # noqa: F401
+
+    HAVE_JAX = True
+except ImportError:
+    HAVE_JAX = False
+
+needs_jax = pytest.mark.skipif(not HAVE_JAX and not os.environ.get("CI"),
+                               reason="jax is not installed here (CI installs it with the test extras)")
+
+
+def _jax_module(module: str, function: str, body: str, x64: bool) -> str:
+    head = "import jax\nimport jax.numpy as jnp\n" + ('jax.config.update("jax_enable_x64", True)\n' if x64 else "")
+    return replace_function(module, function, body).replace("import numpy as np\n", "import numpy as np\n" + head, 1)
+
+
+def jax_submission(root: Path, x64: bool) -> Path:
+    """Every Jacobian of the lesson's maps by jax.jacfwd, returned as jax arrays."""
+    return build_submission(root, {
+        "ch03_jacobian": _jax_module("ch03_jacobian", "polar_to_cartesian_jacobian", """
+            def polar_to_cartesian_jacobian(r, theta):
+                polar = lambda v: jnp.stack([v[0] * jnp.cos(v[1]), v[0] * jnp.sin(v[1])])
+                return jax.jacfwd(polar)(jnp.array([r, theta], dtype=float))
+            """, x64),
+        "ch04_chain_rule": _jax_module("ch04_chain_rule", "g_jacobian", """
+            def g_jacobian(u):
+                g = lambda v: jnp.stack([v[0] ** 2 + v[1], v[0] * v[1]])
+                return jax.jacfwd(g)(jnp.asarray(u, dtype=float))
+            """, x64),
+        "ch06_measurement": _jax_module("ch06_measurement", "H_jacobian", """
+            def H_jacobian(x, y):
+                if x == 0 and y == 0:
+                    raise ValueError("H is undefined at r = 0")
+                range_bearing = lambda p: jnp.stack([jnp.hypot(p[0], p[1]), jnp.arctan2(p[1], p[0])])
+                return jax.jacfwd(range_bearing)(jnp.array([x, y], dtype=float))
+            """, x64),
+        "ch07_dynamics": _jax_module("ch07_dynamics", "F_jacobian", """
+            def F_jacobian(state, v, omega, dt):
+                motion = lambda s: jnp.stack([s[0] + v * jnp.cos(s[2]) * dt, s[1] + v * jnp.sin(s[2]) * dt,
+                                              s[2] + omega * dt])
+                return jax.jacfwd(motion)(jnp.asarray(state, dtype=float))
+            """, x64),
+    })
+
+
+def _grade(root: Path, *extra: str) -> dict:
+    done = subprocess.run([sys.executable, "-m", "grader", "ch03", "ch04", "ch06", "ch07", "ch08", "--no-quiz",
+                           "--format", "json", "--submission", str(root), *extra],
+                          cwd=REPO, capture_output=True, text=True, encoding="utf-8", timeout=300)
+    assert done.returncode in (0, 1), done.stderr[-3000:]
+    return json.loads(done.stdout)
+
+
+def _failures(report: dict) -> list[str]:
+    return [f"{c['chapter']}/{k['id']}: {k['message']}" for c in report["chapters"] for k in c["checks"]
+            if k["status"] not in ("pass", "skip")]
+
+
+@needs_jax
+@pytest.mark.parametrize("x64", [False, True], ids=["float32", "float64"])
+@pytest.mark.parametrize("sandbox", [True, False], ids=["sandbox", "no-sandbox"])
+def test_jax_jacobians_get_full_marks(tmp_path, x64, sandbox):
+    if not HAVE_JAX:
+        pytest.fail("CI must have jax (the test extras install it)")
+    report = _grade(jax_submission(tmp_path, x64), *([] if sandbox else ["--no-sandbox"]))
+    assert _failures(report) == []
+    assert report["score"] == report["max_score"] > 0
+
+
+TENSOR = '''
+class Tensor:
+    """Stands in for torch.Tensor: refuses numpy while it requires grad, as torch does."""
+    __module__ = "torch"
+
+    def __init__(self, data, requires_grad=False):
+        self.data = np.array(data, dtype=np.float32)
+        self.requires_grad = requires_grad
+
+    def detach(self):
+        return Tensor(self.data)
+
+    def cpu(self):
+        return self
+
+    def __array__(self, dtype=None, copy=None):
+        if self.requires_grad:
+            raise RuntimeError("Can't call numpy() on Tensor that requires grad. Use tensor.detach().numpy() instead.")
+        return self.data if dtype is None else self.data.astype(dtype)
+
+    def __dlpack__(self, stream=None):
+        return np.asarray(self).__dlpack__()
+
+    def __dlpack_device__(self):
+        return (1, 0)
+'''
+
+
+def test_a_torch_tensor_that_requires_grad_is_a_numpy_array(tmp_path):
+    module = replace_function("ch06_measurement", "measurement_covariance", """
+        def measurement_covariance(x, y, sigma):
+            H = H_jacobian(x, y)
+            return Tensor(float(sigma) ** 2 * (H @ H.T), requires_grad=True)
+        """) + TENSOR
+    ch03 = replace_function("ch03_jacobian", "area_scale", """
+        def area_scale(r, theta):
+            return Tensor(float(r), requires_grad=True)
+        """) + TENSOR
+    report = _grade(build_submission(tmp_path, {"ch06_measurement": module, "ch03_jacobian": ch03}))
+    assert _failures(report) == []
+
+
+def test_numpy_scalars_and_zero_d_arrays_are_numbers(tmp_path):
+    ch03 = replace_function("ch03_jacobian", "area_scale", """
+        def area_scale(r, theta):
+            return np.array(float(r), dtype=np.float32)
+        """)
+    report = _grade(build_submission(tmp_path, {"ch03_jacobian": ch03}))
+    assert _failures(report) == []
+
+
+def test_an_array_that_cannot_be_converted_says_how_to_convert_it(tmp_path):
+    module = replace_function("ch06_measurement", "H_jacobian", """
+        def H_jacobian(x, y):
+            return GpuTensor()
+        """) + TENSOR + '''
+class GpuTensor(Tensor):
+    """A tensor on a GPU: torch refuses to hand it to numpy."""
+    __module__ = "torch"
+
+    def __init__(self):
+        super().__init__(np.zeros((2, 2)))
+
+    def detach(self):
+        return self
+
+    def cpu(self):
+        raise RuntimeError("no CUDA device here")
+'''
+    report = _grade(build_submission(tmp_path, {"ch06_measurement": module}))
+    messages = [k["message"] for c in report["chapters"] if c["chapter"] == "ch06" for k in c["checks"]
+                if k["id"] == "H_worked_example"]
+    assert messages and "np.asarray" in messages[0] and ".detach().cpu().numpy()" in messages[0], messages
