@@ -57,7 +57,7 @@ class _Images(HTMLParser):
 @pytest.mark.parametrize("name", ["solutions", "stubs"])
 def test_report_is_self_contained_and_complete(reports, name):
     path, data = reports[name]
-    text = path.read_text()
+    text = path.read_text(encoding="utf-8")
     parser = _Images()
     parser.feed(text)
     assert parser.sections == [c.id for c in CHAPTERS]
@@ -72,7 +72,7 @@ def test_report_is_self_contained_and_complete(reports, name):
 
 
 def test_stub_report_shows_reference_plots_and_says_so(reports):
-    text = reports["stubs"][0].read_text()
+    text = reports["stubs"][0].read_text(encoding="utf-8")
     assert text.count("gave no usable value") >= len(CHAPTERS)
     assert "not implemented yet" in text
 
@@ -86,8 +86,10 @@ def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
     root = build_submission(tmp_path / "sub", {"ch06_measurement": source})
     out = tmp_path / "r.html"
     _grade(repo_root, ["ch06", "--submission", str(root)], out)
-    text = out.read_text()
-    assert '<td class="wrong">0.16</td>' in text
+    text = out.read_text(encoding="utf-8")
+    # marked by a cross and (for screen readers) a word as well as by colour
+    assert '<td class="wrong">0.16<span aria-hidden="true"> \u2717</span><span class="sr-only"> (differs)</span></td>' in text
+    assert "\u2717 marks each entry where got differs from expected." in text
     assert "H[1,0] = d bearing/d x: got 0.16, expected -0.16" in text
 
 

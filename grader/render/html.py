@@ -12,74 +12,118 @@ import base64
 import functools
 import io
 import os
+import re
 
 import numpy as np
 
 from grader.model import ChapterResult, CheckResult, Report
 
-LEARNER, REFERENCE = "#c2410c", "#2563eb"
+# Plot colours, each at least 5:1 on white (WCAG 2.1 1.4.11 asks 3:1 for graphics); series are also
+# told apart by marker or line style, never by colour alone.
+LEARNER, REFERENCE, GUIDE = "#c2410c", "#2563eb", "#6b7280"
+
+# Text colours with their contrast on white (the report's cards) and on the page's #f8fafc; WCAG 2.1 AA
+# asks 4.5:1 for text. Each verdict is a word with a mark as well as a colour.
+#   body #1f2937 14.7:1 / 14.0:1   muted #4b5563 7.6:1 / 7.2:1   link #1d4ed8 6.7:1 / 6.4:1
+#   pass #166534 7.1:1   fail #b91c1c 6.5:1   error #7e22ce 7.0:1   skip #854d0e 6.9:1   recorded #155e75 7.3:1
+#   a matrix entry that differs: #1f2937 on #fee2e2 12.0:1, outlined, marked with a cross and the word "differs"
+# Every rule is scoped under the report's root id (#S below), which outranks a notebook's own rules
+# (JupyterLab styles tables, pre and links of rendered HTML, in dark themes light on dark).
+STYLE = """
+#S{font:15px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;color:#1f2937;background:#fff;text-align:left}
+#S.page{max-width:1020px;margin:0 auto;padding:24px;background:#f8fafc}
+#S.fragment{padding:12px 16px;border:1px solid #d1d5db;border-radius:6px}
+#S *{box-sizing:border-box}
+#S h1,#S h2,#S h3,#S h4,#S h5{color:#111827;font-weight:700;line-height:1.25}
+#S .title{font-size:1.6em;margin:.2em 0}
+#S .chapter-title,#S .summary-title{font-size:1.35em;margin:1.6em 0 .4em;border-bottom:2px solid #d1d5db;padding-bottom:.2em}
+#S .kind-title{font-size:1.1em;margin:1em 0 .4em}
+#S a:link,#S a:visited{color:#1d4ed8;text-decoration:underline}
+#S p{margin:.5em 0;text-align:left}
+#S table{border-collapse:collapse;margin:.5em 0;color:#1f2937;background:#fff;table-layout:auto;font-size:1em}
+#S td,#S th{padding:4px 10px;border:0;border-bottom:1px solid #d1d5db;text-align:left;color:#1f2937;background:#fff;
+  vertical-align:top;line-height:1.45}
+#S caption{text-align:left;font-weight:700;color:#1f2937;padding:2px 0}
+#S .summary .num{text-align:right;font-variant-numeric:tabular-nums}
+#S .summary tfoot th,#S .summary tfoot td{font-weight:700;border-top:2px solid #4b5563}
+#S .check{background:#fff;color:#1f2937;border:1px solid #d1d5db;border-left:6px solid #4b5563;border-radius:6px;
+  padding:8px 12px;margin:8px 0}
+#S .check.pass{border-left-color:#166534}#S .check.fail{border-left-color:#b91c1c}
+#S .check.error{border-left-color:#7e22ce}#S .check.skip{border-left-color:#854d0e}#S .check.recorded{border-left-color:#155e75}
+#S .status{font-weight:700;text-transform:uppercase;font-size:.85em;margin-right:.6em}
+#S .pass .status{color:#166534}#S .fail .status{color:#b91c1c}#S .error .status{color:#7e22ce}
+#S .skip .status{color:#854d0e}#S .recorded .status{color:#155e75}
+#S .points{float:right;color:#4b5563;margin-left:1em}
+#S pre{white-space:pre-wrap;overflow-wrap:anywhere;background:#f3f4f6;color:#1f2937;border:0;padding:6px 8px;
+  border-radius:4px;font:.9em/1.4 ui-monospace,"DejaVu Sans Mono",monospace;margin:.4em 0}
+#S .pair{display:flex;gap:24px;flex-wrap:wrap;align-items:flex-start;margin:.4em 0}
+#S table.matrix td{border:1px solid #6b7280;font-family:ui-monospace,"DejaVu Sans Mono",monospace;text-align:right}
+#S table.matrix td.wrong{background:#fee2e2;color:#1f2937;font-weight:700;outline:2px solid #b91c1c;outline-offset:-2px}
+#S .legend{font-size:.9em;color:#4b5563;margin:.2em 0}
+#S figure{background:#fff;border:1px solid #d1d5db;border-radius:6px;padding:10px;margin:12px 0}
+#S figure img{max-width:100%;height:auto;display:block}
+#S figcaption{color:#374151;font-size:.9em;margin-top:.4em}
+#S figcaption .gave{display:block;margin-top:.3em;color:#1f2937}
+#S .problem{background:#fef2f2;color:#1f2937;border:1px solid #b91c1c;padding:8px 12px;border-radius:6px}
+#S .note{color:#4b5563}
+#S .sr-only{position:absolute;width:1px;height:1px;padding:0;margin:-1px;overflow:hidden;clip:rect(0,0,0,0);
+  white-space:nowrap;border:0}
+"""
+
+# The mark beside each verdict's word (hidden from screen readers, which read the word).
+MARKS = {"pass": "\u2713", "fail": "\u2717", "error": "!", "skip": "\u2013", "recorded": "\u2022"}
+
+BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="en">
+<h{{ h }} class="title" id="{{ pid }}title">Jacobians &amp; Linearization: grading report</h{{ h }}>
+<p class="note">Submission {{ report.submission }} &middot; seed {{ report.seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
+<section id="{{ pid }}summary" aria-labelledby="{{ pid }}summary-title"><h{{ h + 1 }} class="summary-title" id="{{ pid }}summary-title">Summary</h{{ h + 1 }}>
+<table class="summary"><caption>Points by chapter</caption>
+<thead><tr><th scope="col">chapter</th><th scope="col">title</th><th scope="col" class="num">code</th><th scope="col" class="num">quiz</th><th scope="col" class="num">total</th></tr></thead>
+<tbody>{% for ch in report.chapters %}<tr><th scope="row"><a href="#{{ pid }}{{ ch.chapter }}">{{ ch.chapter }}</a></th><td>{{ ch.title }}</td>
+<td class="num" data-code="{{ ch.chapter }}">{{ num(ch.score_of('code')) }} / {{ num(ch.max_score_of('code')) }}</td>
+<td class="num" data-quiz="{{ ch.chapter }}">{{ num(ch.score_of('quiz')) }} / {{ num(ch.max_score_of('quiz')) }}</td>
+<td class="num" data-total="{{ ch.chapter }}">{{ num(ch.score) }} / {{ num(ch.max_score) }}</td></tr>{% endfor %}</tbody>
+<tfoot><tr><th scope="row" colspan="4">Total</th><td class="num" id="{{ pid }}total">{{ num(report.score) }} / {{ num(report.max_score) }}</td></tr></tfoot></table>
+<p id="{{ pid }}verdict">{{ verdict }}</p>
+</section>
+{% for ch in report.chapters %}
+<section class="chapter" id="{{ pid }}{{ ch.chapter }}" aria-labelledby="{{ pid }}{{ ch.chapter }}-title"><h{{ h + 1 }} class="chapter-title" id="{{ pid }}{{ ch.chapter }}-title">{{ ch.chapter }} &middot; {{ ch.title }}</h{{ h + 1 }}>
+{% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
+{% if ch.hidden_checks %}<p class="note">{{ ch.hidden_checks }} hidden check(s) ({{ num(ch.hidden_points) }} points) run when you submit.</p>{% endif %}
+{% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
+<figcaption>{{ fig.caption }}{% if fig.gave %}<span class="gave">{{ fig.gave }}</span>{% endif %}</figcaption></figure>{% endfor %}
+{% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
+{% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
+{% for c in checks %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
+<span class="points">{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span></span>
+{% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
+{% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
+{% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
+</div>{% endfor %}{% endif %}{% endfor %}
+</section>{% endfor %}
+</{{ root }}>"""
 
 TEMPLATE = r"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src data:; style-src 'unsafe-inline'">
 <title>Jacobians &amp; Linearization: grading report</title>
-<style>
-body{font:15px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif;margin:0;color:#1f2937;background:#f8fafc}
-main{max-width:1020px;margin:0 auto;padding:24px}
-h1{font-size:1.6em;margin:.2em 0}h2{margin:1.6em 0 .4em;border-bottom:2px solid #e5e7eb;padding-bottom:.2em}
-table{border-collapse:collapse;margin:.5em 0}td,th{padding:4px 10px;border-bottom:1px solid #e5e7eb;text-align:left}
-.summary td.num,.summary th.num{text-align:right;font-variant-numeric:tabular-nums}
-.check{background:#fff;border:1px solid #e5e7eb;border-left:5px solid #9ca3af;border-radius:6px;padding:8px 12px;margin:8px 0}
-.pass{border-left-color:#16a34a}.fail{border-left-color:#dc2626}.error{border-left-color:#9333ea}.skip{border-left-color:#ca8a04}.recorded{border-left-color:#0e7490}
-.status{font-weight:700;text-transform:uppercase;font-size:.8em;margin-right:.6em}
-.pass .status{color:#16a34a}.fail .status{color:#dc2626}.error .status{color:#9333ea}.skip .status{color:#ca8a04}.recorded .status{color:#0e7490}
-.points{float:right;color:#6b7280}
-pre{white-space:pre-wrap;background:#f3f4f6;padding:6px 8px;border-radius:4px;font-size:.9em;margin:.4em 0}
-table.matrix td{border:1px solid #d1d5db;font-family:ui-monospace,monospace;text-align:right}
-table.matrix td.wrong{background:#fee2e2;font-weight:700}
-.pair{display:flex;gap:24px;flex-wrap:wrap;align-items:flex-start}.pair div{font-size:.85em;color:#6b7280}
-figure{background:#fff;border:1px solid #e5e7eb;border-radius:6px;padding:10px;margin:12px 0}
-figure img{max-width:100%;height:auto}figcaption{color:#374151;font-size:.9em}
-.problem{background:#fef2f2;border:1px solid #fecaca;padding:8px 12px;border-radius:6px}
-.note{color:#6b7280}
-</style></head>
-<body><main>
-<h1>Jacobians &amp; Linearization: grading report</h1>
-<p class="note">Submission {{ report.submission }} &middot; seed {{ report.seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
-<section id="summary"><h2>Summary</h2>
-<table class="summary"><tr><th>chapter</th><th>title</th><th class="num">code</th><th class="num">quiz</th><th class="num">total</th></tr>
-{% for ch in report.chapters %}<tr><td><a href="#{{ ch.chapter }}">{{ ch.chapter }}</a></td><td>{{ ch.title }}</td>
-<td class="num" data-code="{{ ch.chapter }}">{{ num(ch.score_of('code')) }} / {{ num(ch.max_score_of('code')) }}</td>
-<td class="num" data-quiz="{{ ch.chapter }}">{{ num(ch.score_of('quiz')) }} / {{ num(ch.max_score_of('quiz')) }}</td>
-<td class="num" data-total="{{ ch.chapter }}">{{ num(ch.score) }} / {{ num(ch.max_score) }}</td></tr>{% endfor %}
-<tr><th colspan="4">Total</th><th class="num" id="total">{{ num(report.score) }} / {{ num(report.max_score) }}</th></tr></table>
-<p id="verdict">{{ verdict }}</p>
-</section>
-{% for ch in report.chapters %}
-<section class="chapter" id="{{ ch.chapter }}"><h2>{{ ch.chapter }} &middot; {{ ch.title }}</h2>
-{% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
-{% if ch.hidden_checks %}<p class="note">{{ ch.hidden_checks }} hidden check(s) ({{ num(ch.hidden_points) }} points) run when you submit.</p>{% endif %}
-{% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
-<figcaption>{{ fig.caption }}</figcaption></figure>{% endfor %}
-{% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
-{% if checks %}<h3>{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h3>
-{% for c in checks %}<div class="check {{ c.status.value }}"><span class="status">{{ c.status.value }}</span>{{ c.description }}
-<span class="points">{{ num(c.points) }} / {{ num(c.max_points) }}</span>
-{% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
-{% if c.kind == "quiz" and c.got is not none %}<div class="note">your answer: {{ c.got }}</div>{% endif %}
-{% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
-</div>{% endfor %}{% endif %}{% endfor %}
-</section>{% endfor %}
-</main></body></html>
+<style>body{margin:0;background:#f8fafc}{{ style }}</style></head>
+<body>
+""" + BODY + """
+</body></html>
 """
+
+FRAGMENT = "<style>{{ style }}</style>\n" + BODY + "\n"
 
 
 def _num(value: float) -> str:
     return f"{value:g}"
 
 
-def _matrix_html(values, wrong: set) -> str:
+def _matrix_html(values, wrong: set, caption: str) -> str:
+    """A small matrix as a captioned table; each entry where got and expected differ is outlined and
+    marked with a cross and, for screen readers, the word "differs" (never by its colour alone)."""
     array = np.atleast_1d(np.asarray(values, dtype=float))
     if array.ndim == 1:
         array = array[None, :]
@@ -88,9 +132,13 @@ def _matrix_html(values, wrong: set) -> str:
         return ""
     rows = []
     for i, row in enumerate(array):
-        cells = "".join(f'<td class="{"wrong" if (i, j) in wrong else ""}">{v:.6g}</td>' for j, v in enumerate(row))
+        cells = "".join(f'<td class="wrong">{v:.6g}{WRONG_MARK}</td>' if (i, j) in wrong else f"<td>{v:.6g}</td>"
+                        for j, v in enumerate(row))
         rows.append(f"<tr>{cells}</tr>")
-    return f'<table class="matrix">{"".join(rows)}</table>'
+    return f'<table class="matrix"><caption>{caption}</caption>{"".join(rows)}</table>'
+
+
+WRONG_MARK = '<span aria-hidden="true"> \u2717</span><span class="sr-only"> (differs)</span>'
 
 
 def _values(check: CheckResult) -> str:
@@ -101,17 +149,19 @@ def _values(check: CheckResult) -> str:
         if check.expected is None or check.got is None:
             return Markup("")
         wrong = {tuple(i) for i in check.details.get("wrong", [])}
-        got, expected = _matrix_html(check.got, wrong), _matrix_html(check.expected, wrong)
+        got, expected = _matrix_html(check.got, wrong, "got"), _matrix_html(check.expected, wrong, "expected")
         if not got or not expected:
             return Markup("")
-        return Markup(f'<div class="pair"><div>expected{expected}</div><div>got{got}</div></div>')
+        legend = '<p class="legend">\u2717 marks each entry where got differs from expected.</p>' if wrong else ""
+        return Markup(f'<div class="pair">{expected}{got}</div>{legend}')
     except (TypeError, ValueError):
         return Markup("")
 
 
 class _Figure:
-    def __init__(self, uri: str, alt: str, caption: str, width: int = 640, height: int = 300) -> None:
+    def __init__(self, uri: str, alt: str, caption: str, width: int = 640, height: int = 300, gave: str = "") -> None:
         self.uri, self.alt, self.caption, self.width, self.height = uri, alt, caption, width, height
+        self.gave = gave  # what the learner's own functions gave, in numbers (also in alt)
 
 
 def _svg_uri(fig) -> str:
@@ -139,7 +189,7 @@ def _draw_ch00(ax, d):
     ok = all(v is not None for v in d["learner"])
     if ok:
         ax.plot(sig, d["learner"], "s-", color=LEARNER, label="your mean_shift")
-    ax.plot(sig, sig**2 / (2 * d["r"]), ":", color="gray", label="sigma^2 / 2r")
+    ax.plot(sig, sig**2 / (2 * d["r"]), ":", color=GUIDE, label="sigma^2 / 2r")
     ax.set(xlabel="sigma", ylabel="mean range - range of mean", title="The cloud's mean range moves outward")
     ax.legend(fontsize=8)
     return ok, "Mean shift of the range at (3, 4) as the position noise grows; " + _whose(ok, "mean_shift")
@@ -150,7 +200,7 @@ def _draw_ch01(fig, d):
     x = np.array(d["x"])
     ax1.plot(x, d["f"], color="black", label="sqrt(x)")
     ok_line = d["line"] is not None
-    ax1.plot(x, d["line"] if ok_line else d["line_ref"], color=LEARNER if ok_line else REFERENCE,
+    ax1.plot(x, d["line"] if ok_line else d["line_ref"], "--", color=LEARNER if ok_line else REFERENCE,
              label="your tangent line" if ok_line else "reference tangent line")
     ax1.plot([d["a"]], [2.0], "ko")
     ax1.set(xlabel="x", title="Tangent line at a = 4")
@@ -158,7 +208,7 @@ def _draw_ch01(fig, d):
     ok_err = d["error"] is not None
     ax2.loglog(delta, d["error"] if ok_err else d["error_ref"], "o-", color=LEARNER if ok_err else REFERENCE,
                label="your linearization_error" if ok_err else "reference error")
-    ax2.loglog(delta, delta**2 / 64, ":", color="gray", label="delta^2 / 64 guide")
+    ax2.loglog(delta, delta**2 / 64, ":", color=GUIDE, label="delta^2 / 64 guide")
     ax2.set(xlabel="delta", title="Error grows like delta^2")
     for ax in (ax1, ax2):
         ax.legend(fontsize=8)
@@ -170,7 +220,7 @@ def _draw_ch01(fig, d):
 def _draw_ch02(ax, d):
     grid = np.linspace(-3, 3, 200)
     X, Y = np.meshgrid(grid, grid)
-    ax.contour(X, Y, X**2 + 0.5 * X * Y + Y**2, levels=8, colors="#9ca3af", linewidths=0.8)
+    ax.contour(X, Y, X**2 + 0.5 * X * Y + Y**2, levels=8, colors=GUIDE, linewidths=0.8)
     ok = all(v is not None for v in d["learner"])
     vectors = np.array(d["learner"] if ok else d["reference"], dtype=float)
     points = np.array(d["points"])
@@ -217,10 +267,10 @@ def _draw_ch05(ax, d):
     tiny = 1e-17
     ax.loglog(h, np.maximum(d["forward"] if ok else d["forward_ref"], tiny), "o-",
               color=LEARNER if ok else REFERENCE, label="forward")
-    ax.loglog(h, np.maximum(d["central"] if ok else d["central_ref"], tiny), "s-",
-              color="#7c3aed" if ok else "#60a5fa", label="central")
-    ax.loglog(h, 0.5 * h, ":", color="gray", label="slope 1")
-    ax.loglog(h, 0.1 * h**2, "--", color="gray", label="slope 2")
+    ax.loglog(h, np.maximum(d["central"] if ok else d["central_ref"], tiny), "s--",
+              color="#7c3aed" if ok else REFERENCE, label="central")
+    ax.loglog(h, 0.5 * h, ":", color=GUIDE, label="slope 1")
+    ax.loglog(h, 0.1 * h**2, "-.", color=GUIDE, label="slope 2")
     ax.set(xlabel="h", ylabel="|error|", ylim=(1e-17, 1), title="Finite-difference error of d sin/dx at 1")
     ax.legend(fontsize=8)
     return ok, "Log-log error against h: truncation falls with slope 1 (forward) and 2 (central) until " \
@@ -241,8 +291,8 @@ def _draw_ch06(ax, d):
 
 def _draw_ch07(ax, d):
     ok = d["P_new"] is not None
-    _ellipse(ax, (0, 0), d["P"], color="gray", label="P before")
-    _ellipse(ax, d["mean_new"], d["P_new"] if ok else d["P_new_ref"], color=LEARNER if ok else REFERENCE,
+    _ellipse(ax, (0, 0), d["P"], linestyle=":", color=GUIDE, label="P before")
+    _ellipse(ax, d["mean_new"], d["P_new"] if ok else d["P_new_ref"], linestyle="-", color=LEARNER if ok else REFERENCE,
              label="F P F^T after" + ("" if ok else " (reference)"))
     ax.set(aspect="equal", xlabel="x", ylabel="y", title="Covariance ellipse tilts after one step")
     ax.legend(fontsize=8)
@@ -255,9 +305,12 @@ def _draw_ch08(fig, d):
     for ax, name, title in zip(axes, ("far", "close"), ("far: (3, 4)", "close: (0.3, 0.2)")):
         case = d[name]
         z = np.array(case["z"])
-        ax.plot(z[:, 0], z[:, 1], ".", ms=2, color="#9ca3af" if case["z_is_reference"] else LEARNER)
+        ax.plot(z[:, 0], z[:, 1], ".", ms=2, color=GUIDE if case["z_is_reference"] else LEARNER,
+                label="reference samples" if case["z_is_reference"] else "your measure_samples")
         cov_ok = case["cov"] is not None
-        _ellipse(ax, case["center"], case["cov"] if cov_ok else case["cov_ref"], color=REFERENCE if not cov_ok else "black")
+        _ellipse(ax, case["center"], case["cov"] if cov_ok else case["cov_ref"], color=REFERENCE if not cov_ok else "black",
+                 label="your 2-sigma ellipse" if cov_ok else "reference 2-sigma ellipse")
+        ax.legend(fontsize=7, markerscale=4)
         ok = ok and cov_ok and not case["z_is_reference"]
         ax.set(xlabel="range", ylabel="bearing", title=title)
     return ok, "Monte Carlo measurement clouds with the 2-sigma linearized ellipse, far from and close to the dish; " \
@@ -270,11 +323,13 @@ def _draw_ch09(ax, d):
     grid = np.linspace(-2, 2, 200)
     X, Y = np.meshgrid(grid, grid)
     Q = 0.5 * (H[0, 0] * X**2 + 2 * H[0, 1] * X * Y + H[1, 1] * Y**2)
-    ax.contour(X, Y, Q, levels=12, cmap="coolwarm")
+    # one dark colour: matplotlib draws the negative levels dashed, so the sign is told by line style
+    ax.contour(X, Y, Q, levels=12, colors="#374151", linewidths=0.9)
     kind = str(d["kind"] or d["kind_ref"])[:60]
     # the learner's text, drawn as plain text: a '$' would start matplotlib's math parser
     ax.set(aspect="equal", title=f"Quadratic model from the Hessian: {kind}".replace("$", r"\$"))
-    return ok, "Contours of the quadratic model 0.5 v^T H v with H at (1, 2) from " + \
+    return ok, "Contours of the quadratic model 0.5 v^T H v (solid where positive, dashed where negative) with " \
+        "H at (1, 2) from " + \
         ("your hessian_fd" if ok else "the reference (your hessian_fd gave no usable value)") + \
         f"; your classify_critical_point says: {d['kind'] or 'nothing usable'}"
 
@@ -282,6 +337,116 @@ def _draw_ch09(ax, d):
 _DRAW = {"ch00": _draw_ch00, "ch01": _draw_ch01, "ch02": _draw_ch02, "ch03": _draw_ch03, "ch04": _draw_ch04,
          "ch05": _draw_ch05, "ch06": _draw_ch06, "ch07": _draw_ch07, "ch08": _draw_ch08, "ch09": _draw_ch09}
 _TWO_PANELS = {"ch01", "ch08"}
+
+
+# What each plot's learner functions gave, in numbers: the plot's text alternative (WCAG 1.1.1) says
+# it in its alt text and caption, with the reference beside it where the plot draws one.
+def _g(value) -> str:
+    """A number, or a nested list of numbers, in 4 significant digits; None as 'nothing usable'."""
+    if value is None:
+        return "nothing usable"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_g(v) for v in value) + "]"
+    try:
+        return f"{float(value):.4g}"
+    except (TypeError, ValueError):
+        return "nothing usable"
+
+
+def _at(values, index: int):
+    return None if values is None else values[index]
+
+
+def _samples(n: int) -> list[int]:
+    """First, middle and last index of a curve of n points."""
+    return sorted({0, n // 2, n - 1})
+
+
+def _curve(name: str, xname: str, xs, got, ref) -> str:
+    picks = _samples(len(xs))
+    said = "; ".join(f"{_g(_at(got, i))} at {xname} = {_g(xs[i])}" for i in picks)
+    return f"your {name} gave {said} (reference: {', '.join(_g(ref[i]) for i in picks)})"
+
+
+def _gave_ch00(d) -> str:
+    learner = d["learner"] if any(v is not None for v in d["learner"]) else None
+    return _curve("mean_shift", "sigma", d["sigma"], learner, d["reference"])
+
+
+def _gave_ch01(d) -> str:
+    return (_curve("tangent_line", "x", d["x"], d["line"], d["line_ref"]) + "; " +
+            _curve("linearization_error", "delta", d["delta"], d["error"], d["error_ref"]))
+
+
+def _gave_ch02(d) -> str:
+    picks = range(0, len(d["points"]), 8)  # one point on each ring
+    said = "; ".join(f"{_g(d['learner'][i])} at {_g(d['points'][i])}" for i in picks)
+    return f"your bowl_gradient gave {said} (reference: {', '.join(_g(d['reference'][i]) for i in picks)})"
+
+
+def _gave_ch03(d) -> str:
+    return (f"your polar_to_cartesian_jacobian({_g(d['r'])}, {_g(d['theta'])}) gave {_g(d['learner'])} "
+            f"(reference: {_g(d['reference'])})")
+
+
+def _gave_ch04(d) -> str:
+    r, theta = d["point"]
+    return f"your pipeline_jacobian({_g(r)}, {_g(theta)}) gave {_g(d['learner'])} (reference: {_g(d['reference'])})"
+
+
+def _gave_ch05(d) -> str:
+    return (_curve("forward_difference's error", "h", d["h"], d["forward"], d["forward_ref"]) + "; " +
+            _curve("central_difference's error", "h", d["h"], d["central"], d["central_ref"]))
+
+
+def _gave_ch06(d) -> str:
+    return _curve("measurement_covariance's bearing standard deviation", "range", d["r"], d["learner"], d["reference"])
+
+
+def _gave_ch07(d) -> str:
+    return (f"your propagate_covariance gave {_g(d['P_new'])} (reference: {_g(d['P_new_ref'])}); "
+            f"your F_jacobian gave {_g(d['F'])}")
+
+
+def _gave_ch08(d) -> str:
+    parts = []
+    for name in ("far", "close"):
+        case = d[name]
+        if case["z_is_reference"]:
+            cloud = "your measure_samples gave nothing usable (the reference cloud is drawn)"
+        else:
+            z = np.asarray(case["z"], dtype=float)
+            cloud = (f"your measure_samples gave {len(z)} points, mean range {_g(z[:, 0].mean())}, "
+                     f"mean bearing {_g(z[:, 1].mean())}")
+        parts.append(f"{name} {_g(case['point'])}: {cloud}; your linearized_measurement_cov gave "
+                     f"{_g(case['cov'])} (reference: {_g(case['cov_ref'])})")
+    return "; ".join(parts)
+
+
+def _gave_ch09(d) -> str:
+    kind = str(d["kind"])[:80] if d["kind"] is not None else "nothing usable"
+    return (f"your hessian_fd gave {_g(d['H'])} (reference: {_g(d['H_ref'])}); "
+            f"your classify_critical_point gave {kind} (reference: {d['kind_ref']})")
+
+
+def _gave_any(d) -> str:
+    """A plot with no describer of its own: its 'learner' numbers, if it has them."""
+    if isinstance(d, dict) and "learner" in d:
+        return f"your function gave {_g(d['learner'])}"
+    return ""
+
+
+_GAVE = {"ch00": _gave_ch00, "ch01": _gave_ch01, "ch02": _gave_ch02, "ch03": _gave_ch03, "ch04": _gave_ch04,
+         "ch05": _gave_ch05, "ch06": _gave_ch06, "ch07": _gave_ch07, "ch08": _gave_ch08, "ch09": _gave_ch09}
+
+
+def gave(chapter: str, data: dict) -> str:
+    """What the learner's own functions gave for one plot, in numbers ('' if that cannot be said)."""
+    try:
+        said = _GAVE.get(chapter, _gave_any)(data)
+    except (KeyError, IndexError, TypeError, ValueError):
+        return ""
+    return f"In numbers: {said}." if said else ""
 
 
 def _plain_log_labels(fig) -> None:
@@ -306,49 +471,92 @@ def preload() -> None:
     import matplotlib.pyplot  # noqa: F401
 
 
-def figures(chapter: ChapterResult) -> list[_Figure]:
-    """The chapter's plots as data-URI images; a plot that cannot be drawn becomes a caption only."""
-    draw = _DRAW.get(chapter.chapter)
-    if draw is None or not chapter.plots:
-        return []
+def draw(chapter_id: str, data: dict):
+    """One plot of a chapter as a matplotlib figure, with its caption: (figure, caption). The caller
+    closes the figure (matplotlib.pyplot.close)."""
     preload()
     import matplotlib.pyplot as plt
 
+    fig = plt.figure(figsize=(9, 3.4) if chapter_id in _TWO_PANELS else (6, 3.6))
+    try:
+        target = fig if chapter_id in _TWO_PANELS else fig.add_subplot()
+        _, caption = _DRAW[chapter_id](target, data)
+        _plain_log_labels(fig)
+        fig.subplots_adjust(left=0.1, right=0.97, bottom=0.15, top=0.9, wspace=0.28)
+    except BaseException:
+        plt.close(fig)
+        raise
+    return fig, caption
+
+
+def figures(chapter: ChapterResult) -> list[_Figure]:
+    """The chapter's plots as data-URI images, each with a text alternative that says in numbers what
+    the learner's functions gave; a plot that cannot be drawn becomes a caption only."""
+    if chapter.chapter not in _DRAW or not chapter.plots:
+        return []
+    import matplotlib.pyplot as plt
+
     out = []
-    for name, data in chapter.plots.items():
-        fig = plt.figure(figsize=(9, 3.4) if chapter.chapter in _TWO_PANELS else (6, 3.6))
+    for data in chapter.plots.values():
+        numbers = gave(chapter.chapter, data)
         try:
-            target = fig if chapter.chapter in _TWO_PANELS else fig.add_subplot()
-            ok, caption = draw(target, data)
-            _plain_log_labels(fig)
-            fig.subplots_adjust(left=0.1, right=0.97, bottom=0.15, top=0.9, wspace=0.28)
-            alt = f"{chapter.chapter} plot: {caption}"
-            out.append(_Figure(_svg_uri(fig), alt, caption, 900 if chapter.chapter in _TWO_PANELS else 600, 340))
+            fig, caption = draw(chapter.chapter, data)
         except Exception as exc:  # a plot never breaks the report
-            out.append(_Figure("", "", f"This plot could not be drawn ({type(exc).__name__}: {exc})."))
+            out.append(_Figure("", "", f"This plot could not be drawn ({type(exc).__name__}: {exc}).", gave=numbers))
+            continue
+        try:
+            alt = f"{chapter.chapter} plot: {caption}. {numbers}".strip()
+            out.append(_Figure(_svg_uri(fig), alt, caption, 900 if chapter.chapter in _TWO_PANELS else 600, 340,
+                               numbers))
+        except Exception as exc:
+            out.append(_Figure("", "", f"This plot could not be drawn ({type(exc).__name__}: {exc}).", gave=numbers))
         finally:
             plt.close(fig)
     return out
 
 
-@functools.lru_cache(maxsize=1)
-def _template():
-    """The page template, compiled once per process (compiling costs more than rendering)."""
+@functools.lru_cache(maxsize=2)
+def _template(source: str = TEMPLATE):
+    """A template (the page's by default), compiled once per process (compiling costs more than rendering)."""
     import jinja2
 
     environment = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    return environment.from_string(TEMPLATE)
+    return environment.from_string(source)
+
+
+def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int) -> str:
+    from markupsafe import Markup
+
+    from grader import safe_text
+    from grader.render.text import verdict_line
+
+    report = safe_text.clean_report(report, safe_text.for_html)
+    style = Markup(STYLE.replace("#S", f"#{pid}report"))
+    return _template(source).render(report=report, figures=_all_figures(report), num=_num, values=_values,
+                                    verdict=verdict_line(report), marks=MARKS, style=style, pid=pid, root=root,
+                                    kind=kind, h=heading)
 
 
 def render(report: Report) -> str:
     """The report as one self-contained HTML page. Learner text is escaped by the template and has
     no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes."""
-    from grader import safe_text
-    from grader.render.text import verdict_line
+    return _render(TEMPLATE, report, "", "main", "page", 1)
 
-    report = safe_text.clean_report(report, safe_text.for_html)
-    return _template().render(report=report, figures=_all_figures(report), num=_num, values=_values,
-                              verdict=verdict_line(report))
+
+def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2) -> str:
+    """The report as an HTML fragment for a notebook's output (no <html>, <head> or <body>): one <div>
+    with its own <style>, every rule scoped to that div's id, and every id starting with `id_prefix`
+    (a fresh one if None, so several reports can share a page). Headings start at `heading_level`,
+    below the notebook's own title. Escaped and self-contained like the page."""
+    if id_prefix is None:
+        import uuid
+
+        id_prefix = f"grade-{uuid.uuid4().hex[:10]}-"
+    if not re.fullmatch(r"[A-Za-z][A-Za-z0-9_-]*", id_prefix):
+        raise ValueError(f"id_prefix must be letters, digits, '-' or '_', starting with a letter: {id_prefix!r}")
+    if not 1 <= heading_level <= 4:
+        raise ValueError(f"heading_level must be 1 to 4 (the report uses three levels): {heading_level}")
+    return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level)
 
 
 def _all_figures(report: Report) -> dict[str, list[_Figure]]:
