@@ -289,8 +289,7 @@ def list_command(show_checks: bool) -> None:
         hidden = hidden_ids(the_course, (info.id,))
         here = [c for c in chapter.checks if f"{info.id}/{c.id}" not in hidden]
         total = sum(c.points for c in here)
-        extra = (f" + {plural(sum(c.points for c in chapter.checks) - total, 'point')} in hidden checks"
-                 if hidden else "")
+        extra = f" + {sum(c.points for c in chapter.checks) - total:g} in hidden checks" if hidden else ""
         click.echo(f"{info.id}  {info.title}  ({plural(total, 'point')}{extra})  exercises/{info.module}.py")
         functions: dict[str, float] = {}
         for check in here:
