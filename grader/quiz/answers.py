@@ -121,6 +121,15 @@ def _entries_of_node(node: yaml.Node, offset: int, source: str, shown: str, out:
         out.unreadable.pop(key, None)
 
 
+def _why_not_yaml(line: str, key: str) -> str:
+    """Why the entry starting at `line` is not valid YAML, in the learner's terms."""
+    value = line.split(":", 1)[1].strip()
+    if value == "-" or value.startswith(("- ", "-\t")):  # `id: - 0.5`: a list where no list may start
+        quoted = value.replace("\\", "\\\\").replace('"', '\\"')
+        return f"YAML reads an answer that starts with '- ' as a list: put it in quotes, e.g. {key}: \"{quoted}\""
+    return "this answer is not valid YAML (quote it: key: \"...\")"
+
+
 def read(path: Path, shown: str) -> AnswerFile:
     """The answers in `path`; `shown` is how messages name the file."""
     out = AnswerFile({}, [])
@@ -153,8 +162,7 @@ def read(path: Path, shown: str) -> AnswerFile:
             node = yaml.compose(block, Loader=LOADER)
         except (yaml.YAMLError, RecursionError):
             key = _ENTRY.match(lines[begin]).group(1)
-            out.unreadable[key] = (f"{shown}, line {begin + 1}, question {key}: this answer is not valid YAML "
-                                   "(quote it: key: \"...\")")
+            out.unreadable[key] = f"{shown}, line {begin + 1}, question {key}: {_why_not_yaml(lines[begin], key)}"
             out.answers.pop(key, None)
             continue
         if node is not None:

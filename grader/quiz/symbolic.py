@@ -1,11 +1,17 @@
 """Answers as expressions, read without eval of raw input.
 
-Every answer is first parsed by Python's `ast` (after `^` -> `**`) and checked against a
-whitelist of the syntax tree: numbers, the question's symbols, `pi` and `e`, + - * / ** and unary
-signs, and calls with plain arguments to a fixed set of functions. Length is capped, and so are
-exponents: a power's exponent is a number of size at most MAX_EXPONENT (`x^2`, `r^-2`,
-`(x^2+y^2)^(1/2)`), except for a power of `e`; powers of powers are refused. Nothing else reaches
-sympy or the evaluator below.
+Every answer is first read as people type it (`normalize`): the Unicode minus sign and en dash,
+`×` and `·`, `÷`, `π`, `θ`, `√` and superscripts (`x²`, `r⁻²`) become their ASCII meaning, any
+other non-ASCII character is refused, and implicit products are made explicit (`6x - 9`, `2xy`,
+`2(x+1)`, `(x+1)(x-1)`, `r cos(theta)`), an identifier being split only into the question's own
+symbols; `1/2x` and `x^2y` are refused as ambiguous (`1/2 x` and `x^2 y`, with the space, read as
+(1/2)*x and x^2*y). Then it is parsed by Python's `ast` (after
+`^` -> `**`) and checked against a whitelist of the syntax tree: numbers, the question's symbols
+(and its derived symbols, such as `r` for sqrt(x^2 + y^2)), `pi` and `e`, + - * / ** and unary
+signs, and calls with plain arguments to a fixed set of functions. Length is capped (on the text
+as typed), and so are exponents: a power's exponent is a number of size at most MAX_EXPONENT
+(`x^2`, `r^-2`, `(x^2+y^2)^(1/2)`), except for a power of `e`; powers of powers are refused.
+Nothing else reaches sympy or the evaluator below.
 
 Equivalence of two expressions: both are evaluated with plain floats (math module, no sympy) at
 random points of the question's domain. Agreement at NUMERIC_POINTS points (at least
@@ -14,16 +20,21 @@ equal (then simplify(a - b) cannot be 0 either). Only when too few points are de
 decide: parse_expr with exactly the allowed names, and simplify(a - b) == 0 within
 SIMPLIFY_SECONDS, in a separate process that is killed when the time is up (Simplifier).
 "Undecided" (a timeout, sympy's error) is never "equal". So sympy is imported only for those rare
-answers, never in the grading process itself, and `grade` stays fast.
+answers, never in the grading process itself, and `grade` stays fast. Diagnoses (is the answer
+this known wrong one?) are decided by the numbers alone (`decide=False`), never by sympy.
+A derived symbol (`derived={"r": "sqrt(x^2 + y^2)"}`) takes, at each point, the value of its
+definition there; for sympy it is replaced by its definition.
 """
 
 from __future__ import annotations
 
 import ast
 import json
+import keyword
 import math
 import os
 import random
+import re
 import selectors
 import signal
 import subprocess
@@ -130,8 +141,7 @@ def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
             continue
         if isinstance(node, ast.Name):
             if node.id not in allowed_names and node.id not in FUNCTIONS:
-                allowed = ", ".join(symbols) or "none"
-                raise AnswerError(f"unknown name {node.id!r} (symbols allowed here: {allowed})")
+                raise AnswerError(_unknown_name(node.id, ", ".join(symbols) or "none", allowed_names))
             continue
         if isinstance(node, ast.Call):
             if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
@@ -151,21 +161,187 @@ def _check_tree(tree: ast.AST, symbols: tuple[str, ...], lists: bool) -> None:
             raise AnswerError(f"{node.id} is a function: write {node.id}(...)")
 
 
-def check_text(text: object, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
-    """Whitelist-check an answer's syntax tree (with `lists`, brackets of numbers too); the tree,
-    or AnswerError. Needs neither sympy nor any evaluation."""
+# What people type for plain ASCII: the minus sign and the en dash, times and dots, division, a
+# no-break space, pi, theta and the root sign (superscripts: _SUPERSCRIPTS). Nothing else non-ASCII.
+_TYPED = {"\u2212": "-", "\u2013": "-", "\u00d7": "*", "\u00b7": "*", "\u22c5": "*", "\u2219": "*",
+          "\u00f7": "/", "\u00a0": " ", "\u03c0": "pi", "\u03b8": "theta"}
+_SUPERSCRIPTS = dict(zip("\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b\u207a", "0123456789-+"))
+_ROOT = re.compile("\u221a\\s*(\\d+(?:\\.\\d*)?|[A-Za-z_]\\w*+(?!\\s*\\())", re.A)
+_TOKEN = re.compile(r"(\s*)(?:(\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)|([A-Za-z_]\w*)"
+                    "|([\u2070\u00b9\u00b2\u00b3\u2074-\u2079\u207a\u207b]+)|(\\*\\*|.))", re.S | re.A)
+_NAME_AND_DIGITS = re.compile(r"([A-Za-z]+)(\d+)", re.A)
+
+
+def _ascii(text: str) -> str:
+    """`text` with what people type for plain ASCII replaced (superscripts stay for _tokens);
+    AnswerError for any other non-ASCII character."""
+    text = _ROOT.sub(r"sqrt(\1)", text).replace("\u221a", "sqrt")
+    text = "".join(_TYPED.get(ch, ch) for ch in text)
+    bad = next((ch for ch in text if not ch.isascii() and ch not in _SUPERSCRIPTS), None)
+    if bad is not None:
+        raise AnswerError(f"the character {bad!r} (U+{ord(bad):04X}) is not plain ASCII; type it with the keyboard "
+                          "(e.g. x for the letter x, sqrt(...) for a root, ^ for a power)")
+    return text
+
+
+def _split(word: str, names: set[str], call: bool) -> list[str] | None:
+    """`word` as a product of allowed names (`xy` -> x, y; `vdt` -> v, dt), the last one possibly a
+    function when `call` (`rcos(` -> r, cos); None unless there is exactly one way."""
+    if not word.isalpha():
+        return None
+    ways: list[list[str]] = []
+
+    def walk(rest: str, parts: list[str]) -> None:
+        if len(ways) > 1:
+            return
+        if not rest:
+            ways.append(parts)
+            return
+        for size in range(1, len(rest) + 1):
+            head = rest[:size]
+            if head in names or (call and size == len(rest) and head in FUNCTIONS and parts):
+                walk(rest[size:], parts + [head])
+
+    walk(word, [])
+    return ways[0] if len(ways) == 1 and len(ways[0]) > 1 else None
+
+
+def _factor_start(tokens: list[list[str]], i: int) -> int:
+    """The index of the first token of the factor that ends at token i (a number, name, call,
+    bracket or power by superscript)."""
+    kind = tokens[i][1]
+    if kind == "sup" and i > 0:
+        return _factor_start(tokens, i - 1)
+    if tokens[i][2] == ")":
+        depth = 0
+        for j in range(i, -1, -1):
+            depth += {")": 1, "(": -1}.get(tokens[j][2], 0) if tokens[j][1] == "op" else 0
+            if depth == 0:
+                return j - 1 if j > 0 and tokens[j - 1][1] == "name" else j
+    return i
+
+
+def _implicit(left: list[str], right: list[str], names: set[str]) -> bool:
+    """Whether two neighbouring tokens multiply: `2 x`, `2(`, `x y`, `x(`, `)(`, `)x`, `x² y` (no
+    keyword on either side, no function name on the left)."""
+    if right[1] == "name":
+        if keyword.iskeyword(right[2]):
+            return False
+    elif right[2] != "(" or right[1] != "op":
+        return False
+    if left[1] in ("num", "sup") or (left[1] == "op" and left[2] == ")"):
+        return True
+    if left[1] != "name" or keyword.iskeyword(left[2]) or left[2] in FUNCTIONS:
+        return False
+    # a symbol times anything; an unknown name only times a name (`x2 y`: the whitelist names x2),
+    # never before a bracket, which keeps `__import__('os')` a call the whitelist refuses as one
+    return left[2] in names or right[1] == "name"
+
+
+def normalize(text: object, symbols: tuple[str, ...] = ()) -> str:
+    """An answer as typed, in Python's syntax: Unicode read as ASCII, superscripts as powers,
+    implicit products made explicit, `^` as `**`. AnswerError for what cannot be read so, with
+    how to write it. Checks nothing else: check_text does."""
     if not isinstance(text, str):
         text = str(text)
     if len(text) > MAX_LENGTH:
         raise AnswerError(f"the answer is {len(text)} characters long; at most {MAX_LENGTH} are read")
-    if not text.isascii():
-        bad = next(ch for ch in text if not ch.isascii())
-        raise AnswerError(f"the character {bad!r} (U+{ord(bad):04X}) is not plain ASCII; type it with the keyboard "
-                          "(e.g. - for a minus sign, x for the letter x, sqrt(...) for a root)")
-    if not text.strip():
+    text = _ascii(text)
+    names = set(symbols) | set(CONSTANTS)
+    tokens: list[list[str]] = []
+    matches = list(_TOKEN.finditer(text))
+    for index, match in enumerate(matches):
+        space, num, name, sup, op = match.groups()
+        if sup is not None:
+            tokens.append([space, "sup", "**(" + "".join(_SUPERSCRIPTS[ch] for ch in sup) + ")"])
+            continue
+        if name is not None and name not in names and name not in FUNCTIONS and not keyword.iskeyword(name):
+            after = matches[index + 1].group(5) if index + 1 < len(matches) else None
+            parts = _split(name, names, call=after == "(")
+            if parts:
+                tokens.append([space, "name", parts[0]])
+                tokens.extend(["", "name", part] for part in parts[1:])
+                continue
+        kind = "num" if num is not None else "name" if name is not None else "op"
+        tokens.append([space, kind, num or name or op or ""])
+    tokens = _bare_arguments(tokens, names)
+    out = []
+    for i, token in enumerate(tokens):
+        if i and _implicit(tokens[i - 1], token, names):
+            start = _factor_start(tokens, i - 1)
+            before = tokens[start - 1] if start > 0 else None
+            bare = start == i - 1 and tokens[i - 1][1] in ("num", "name")
+            spaced = bool(token[0])  # `x^2 y`, `1/2 x`: the space says where the factor ends
+            if before is not None and before[1] == "op" and not spaced and \
+                    (before[2] == "/" or before[2] in ("^", "**") and bare):
+                raise AnswerError(_ambiguous(tokens, start, i))
+            out.append("*")
+        out.append(token[0] + token[2])
+    return "".join(out).replace("^", "**").strip()
+
+
+def _bare_arguments(tokens: list[list[str]], names: set[str]) -> list[list[str]]:
+    """`cos y` and `sin 2` as cos(y) and sin(2): a function name followed by one symbol or number
+    and then by nothing or an operator; AnswerError for `sin x^2` (sin(x^2) or sin(x)^2?) and
+    `sin 2x` (sin(2x) or sin(2)x?)."""
+    out: list[list[str]] = []
+    i = 0
+    while i < len(tokens):
+        token = tokens[i]
+        argument = tokens[i + 1] if i + 1 < len(tokens) else None
+        if token[1] == "name" and token[2] in FUNCTIONS and token[2] not in names and argument is not None and \
+                (argument[1] == "num" or argument[1] == "name" and argument[2] in names):
+            after = tokens[i + 2] if i + 2 < len(tokens) else None
+            if after is not None and (after[1] != "op" or after[2] in ("^", "**", "(")):
+                end = i + (4 if after[2] in ("^", "**") else 3)
+                shown = "".join(t[0] + t[2] for t in tokens[i:end]).replace("**", "^").strip()
+                raise AnswerError(f"put the argument of {token[2]} in brackets: `{shown}` can be read more "
+                                  f"than one way")
+            out += [token, ["", "op", "("], argument, ["", "op", ")"]]
+            i += 2
+            continue
+        out.append(token)
+        i += 1
+    return out
+
+
+def _ambiguous(tokens: list[list[str]], start: int, i: int) -> str:
+    """Why `1/2x` (or `x^2y`) cannot be read: the implicit product at token i follows the factor
+    that starts at `start`, right after a / or ^; the two readings, written out."""
+    def text(part: list[list[str]]) -> str:
+        return "".join(t[0] + t[2] for t in part).replace("**", "^").strip()
+
+    operator = "/" if tokens[start - 1][2] == "/" else "^"
+    before = text(tokens[_factor_start(tokens, start - 2):start - 1]) if start >= 2 else ""
+    factor = text(tokens[start:i])
+    right = tokens[i][2] if tokens[i][1] == "name" else "(...)"
+    if operator == "/":
+        readings = f"{before}/({factor}*{right}) or ({before}/{factor})*{right}"
+    else:
+        readings = f"{before}^{factor}*{right} or {before}^({factor}*{right})"
+    return f"`{before}{operator}{factor}{right}` is ambiguous: write {readings}"
+
+
+def _unknown_name(name: str, allowed: str, names: set[str]) -> str:
+    message = f"unknown name {name!r} (symbols allowed here: {allowed})"
+    digits = _NAME_AND_DIGITS.fullmatch(name)
+    if digits and digits.group(1) in names:
+        base, power = digits.groups()
+        return f"{message}; write {base}^{power} for a power or {power}*{base} for a product"
+    for function in FUNCTIONS:
+        if name.startswith(function) and name[len(function):] in names:
+            return f"{message}; write {function}({name[len(function):]})"
+    return message
+
+
+def check_text(text: object, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
+    """Whitelist-check an answer's syntax tree (with `lists`, brackets of numbers too), after
+    `normalize`; the tree, or AnswerError. Needs neither sympy nor any evaluation."""
+    text = normalize(text, symbols)
+    if not text:
         raise AnswerError("the answer is empty")
     try:
-        tree = ast.parse(text.replace("^", "**").strip(), mode="eval")
+        tree = ast.parse(text, mode="eval")
     except SyntaxError as exc:
         raise AnswerError(f"cannot read it as a formula ({exc.msg})") from None
     except (ValueError, RecursionError, MemoryError):  # e.g. a NUL byte, absurd nesting
@@ -231,10 +407,12 @@ def number(text: object) -> float:
         raise AnswerError(f"it has no finite real value ({exc})") from None
 
 
-def parse(text: str, symbols: tuple[str, ...] = ()):
+def parse(text: str, symbols: tuple[str, ...] = (), derived: dict[str, str] | None = None):
     """The answer as a sympy expression, after the whitelist check: parse_expr with a dictionary of
-    exactly the allowed symbols, functions and constants, and no other name (no auto-symbols)."""
-    check_text(text, symbols)
+    exactly the allowed symbols, functions and constants, and no other name (no auto-symbols); a
+    derived symbol stands for its definition (itself parsed in `symbols`)."""
+    derived = derived or {}
+    check_text(text, symbols + tuple(derived))
     import sympy
     from sympy.parsing.sympy_parser import auto_number, parse_expr
 
@@ -242,10 +420,11 @@ def parse(text: str, symbols: tuple[str, ...] = ()):
              "atan2": sympy.atan2, "exp": sympy.exp, "log": sympy.log, "Abs": sympy.Abs, "abs": sympy.Abs,
              "pi": sympy.pi, "e": sympy.E}
     names.update({name: sympy.Symbol(name, real=True) for name in symbols})
+    names.update({name: parse(definition, symbols) for name, definition in derived.items()})
     global_names = {"Integer": sympy.Integer, "Float": sympy.Float, "Rational": sympy.Rational,
                     "__builtins__": {}}
     try:
-        return parse_expr(text.replace("^", "**"), local_dict=names, global_dict=global_names,
+        return parse_expr(normalize(text, symbols + tuple(derived)), local_dict=names, global_dict=global_names,
                           transformations=(auto_number,), evaluate=True)
     except Exception as exc:  # noqa: BLE001  sympy's own errors on a whitelisted tree: report, never crash
         raise AnswerError(f"cannot read it as a formula ({type(exc).__name__})") from None
@@ -315,14 +494,16 @@ class Simplifier:
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line.strip() or b"?"
 
-    def is_zero(self, answer: str, key: str, symbols: tuple[str, ...]) -> bool | None:
+    def is_zero(self, answer: str, key: str, symbols: tuple[str, ...],
+                derived: dict[str, str] | None = None) -> bool | None:
         """Whether simplify(answer - key) == 0; None when sympy could not decide it in time (or failed)."""
         if self.stopped:
             return None
         if self.process is None and not self._start():
             self._stop()
             return None
-        job = json.dumps({"answer": answer, "key": key, "symbols": list(symbols)}).encode() + b"\n"
+        job = json.dumps({"answer": answer, "key": key, "symbols": list(symbols),
+                          "derived": derived or {}}).encode() + b"\n"
         try:
             self.process.stdin.write(job)
         except OSError:
@@ -380,33 +561,32 @@ def _worker() -> None:
     for line in iter(sys.stdin.buffer.readline, b""):
         try:
             job = json.loads(line)
-            symbols = tuple(job["symbols"])
-            same = bool(sympy.simplify(parse(job["answer"], symbols) - parse(job["key"], symbols)) == 0)
+            symbols, derived = tuple(job["symbols"]), job.get("derived") or {}
+            same = bool(sympy.simplify(parse(job["answer"], symbols, derived) - parse(job["key"], symbols, derived)) == 0)
             out.write(b"true\n" if same else b"false\n")
         except Exception:  # noqa: BLE001  sympy's failure to decide is never "equal"
             out.write(b"error\n")
         out.flush()
 
 
-def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...], deadline: float | None = None) -> bool | None:
+def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...], deadline: float | None = None,
+                      derived: dict[str, str] | None = None) -> bool | None:
     """simplify(answer - key) == 0 in a Simplifier of its own; None if undecided in time."""
     with Simplifier(deadline) as simplifier:
-        return simplifier.is_zero(answer, key, symbols)
+        return simplifier.is_zero(answer, key, symbols, derived)
 
 
-def equivalent(answer: str, key: str, symbols: tuple[str, ...],
-               domain: dict[str, tuple[float, float]] | None = None, seed: int = 0,
-               simplifier: Simplifier | None = None) -> bool | None:
-    """Whether two expression texts are the same function of `symbols` (see the module docstring):
-    True or False, or None when sympy had to decide and could not in time (never "equal").
-    `domain` maps a symbol to its (low, high) range; others are drawn from +-DEFAULT_DOMAIN.
-    `simplifier` is the Simplifier to ask if sympy must decide (else one of its own).
-    AnswerError if `answer` cannot be read."""
-    answer_tree = check_text(answer, symbols)
-    key_tree = check_text(key, symbols)
+def _pairs(answer: str, key: str, symbols: tuple[str, ...], domain: dict[str, tuple[float, float]] | None,
+           seed: int, derived: dict[str, str] | None):
+    """(answer, key) values at up to NUMERIC_POINTS * 4 random points of the domain where both are
+    defined (and every derived symbol is). AnswerError if `answer` cannot be read."""
+    derived = derived or {}
+    names = symbols + tuple(derived)
+    answer_tree = check_text(answer, names)
+    key_tree = check_text(key, names)
+    definitions = {name: check_text(text, symbols) for name, text in derived.items()}
     domain = domain or {}
     draw = random.Random(seed)
-    agree = 0
     for _ in range(NUMERIC_POINTS * 4):
         point = {}
         for name in symbols:
@@ -415,16 +595,55 @@ def equivalent(answer: str, key: str, symbols: tuple[str, ...],
             else:
                 point[name] = draw.choice((-1, 1)) * draw.uniform(*DEFAULT_DOMAIN)
         try:
-            a, k = evaluate(answer_tree, point), evaluate(key_tree, point)
+            for name, tree in definitions.items():
+                point[name] = evaluate(tree, point)
+            yield evaluate(answer_tree, point), evaluate(key_tree, point)
         except Undefined:
             continue
-        if abs(a - k) > RELATIVE_TOLERANCE * max(1.0, abs(a), abs(k)):
+
+
+def _close(a: float, b: float) -> bool:
+    return abs(a - b) <= RELATIVE_TOLERANCE * max(1.0, abs(a), abs(b))
+
+
+def equivalent(answer: str, key: str, symbols: tuple[str, ...],
+               domain: dict[str, tuple[float, float]] | None = None, seed: int = 0,
+               simplifier: Simplifier | None = None, derived: dict[str, str] | None = None,
+               decide: bool = True) -> bool | None:
+    """Whether two expression texts are the same function of `symbols` (see the module docstring):
+    True or False, or None when sympy had to decide and could not in time (never "equal").
+    `domain` maps a symbol to its (low, high) range; others are drawn from +-DEFAULT_DOMAIN.
+    `derived` maps a derived symbol to its definition in `symbols`.
+    `simplifier` is the Simplifier to ask if sympy must decide (else one of its own); with
+    `decide=False` sympy is never asked, and what the numbers cannot decide is None.
+    AnswerError if `answer` cannot be read."""
+    agree = 0
+    for a, k in _pairs(answer, key, symbols, domain, seed, derived):
+        if not _close(a, k):
             return False  # a point where both are defined and differ: not the same function
         agree += 1
         if agree >= NUMERIC_POINTS:
             return True
     if agree >= MIN_POINTS:
         return True
+    if not decide:
+        return None
     if simplifier is not None:
-        return simplifier.is_zero(answer, key, symbols)
-    return _simplify_is_zero(answer, key, symbols)
+        return simplifier.is_zero(answer, key, symbols, derived)
+    return _simplify_is_zero(answer, key, symbols, derived=derived)
+
+
+def ratio(answer: str, key: str, symbols: tuple[str, ...], domain: dict[str, tuple[float, float]] | None = None,
+          seed: int = 0, derived: dict[str, str] | None = None) -> float | None:
+    """The constant c with answer = c * key at every point the numbers try (at least MIN_POINTS
+    where the key is not 0), or None; decided by the numbers alone."""
+    found, agree = None, 0
+    for a, k in _pairs(answer, key, symbols, domain, seed, derived):
+        if abs(k) < 1e-9:
+            continue
+        if found is None:
+            found = a / k
+        elif not _close(a, found * k):
+            return None
+        agree += 1
+    return found if agree >= MIN_POINTS else None

@@ -1,0 +1,168 @@
+"""The answer reader accepts what people type, or says exactly how to write it: implicit products
+(`6x - 9`, `2xy`, `2(x+1)`, `r cos(theta)`, `cos y`), the Unicode minus sign, `×` and `·`,
+superscripts (`x²`, `r⁻²`), `π`, `θ`, `√`, and derived symbols (`r` for sqrt(x^2 + y^2)); `1/2x`
+and the like are refused as ambiguous with the two readings written out, and an unquoted `- y/...`
+that YAML cannot read is answered with how to quote it. Judged through real answer
+files (and the real CLI), with the whitelist and its limits intact."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+
+from grader.model import Status
+from grader.quiz import grade_quiz
+from grader.quiz.symbolic import AnswerError, check_text, normalize, parse
+from test_quiz import REPO, run_grade
+
+
+def _grade(tmp_path, chapter, lines, learner="alice"):
+    folder = tmp_path / "answers"
+    folder.mkdir(exist_ok=True)
+    (folder / f"{chapter}.yaml").write_text(lines, encoding="utf-8")
+    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers")
+    return {r.function: r for r in results}, problems
+
+
+# (chapter, question, the right answer as people type it)
+TYPED_RIGHT = [
+    ("ch01", "tangent_of_square", "6x - 9"),
+    ("ch01", "tangent_of_square", "6(x - 3) + 9"),
+    ("ch01", "tangent_of_square", "9 + 6·(x − 3)"),
+    ("ch01", "tangent_of_square", "6×x − 9"),
+    ("ch02", "partial_x", "2xy"),
+    ("ch02", "partial_x", "2x y"),
+    ("ch02", "partial_x", "2yx"),
+    ("ch02", "partial_x", "2·x·y"),
+    ("ch03", "dy_dtheta", "r cos(θ)"),
+    ("ch03", "dy_dtheta", "rcos(theta)"),
+    ("ch03", "dy_dtheta", "r cos θ"),
+    ("ch04", "derivative_sin_square", "2x cos(x²)"),
+    ("ch04", "derivative_sin_square", "2x·cos(x^2)"),
+    ("ch07", "dx_dtheta", "-v sin(theta) dt"),
+    ("ch07", "dx_dtheta", "−v·dt·sin(θ)"),
+    ("ch07", "dx_dtheta", "-vdt sin(theta)"),
+    ("ch09", "mixed_partial", "6xy²"),
+    ("ch09", "mixed_partial", "6 x y^2"),
+    ("ch09", "mixed_partial", "(2x)(3y²)"),
+    ("ch08", "wrapped_innovation", "6.2 − 2π"),
+    ("ch08", "unbiased", "−(−2)"),
+    ("ch04", "pipeline", "[[2.866, −11.856], [3.464, −8]]"),
+    ("ch04", "pipeline", "[[2 + √3/2, 2 − 8√3], [2√3, −8]]"),
+]
+
+
+@pytest.mark.parametrize("chapter, question, text", TYPED_RIGHT)
+def test_right_answers_as_people_type_them_pass(tmp_path, chapter, question, text):
+    results, problems = _grade(tmp_path, chapter, f"{question}: {text}\n")
+    assert not problems
+    assert results[question].status == Status.PASS, results[question].message
+    assert results[question].got == text
+
+
+def test_a_derived_symbol_stands_for_its_definition():
+    import sympy
+
+    from grader.quiz.symbolic import equivalent
+
+    derived = {"r": "sqrt(x^2 + y^2)"}
+    assert equivalent("-y/r^2", "-y/(x^2 + y^2)", ("x", "y"), derived=derived, decide=False)
+    assert not equivalent("-y/r", "-y/(x^2 + y^2)", ("x", "y"), derived=derived, decide=False)
+    assert sympy.simplify(parse("-y/r^2", ("x", "y"), derived) - parse("-y/(x^2 + y^2)", ("x", "y"))) == 0
+    with pytest.raises(AnswerError, match="unknown name 'r'"):
+        check_text("-y/r^2", ("x", "y"))
+
+
+# (what is typed, what the message says); each costs only its own question
+REFUSED = [
+    ("1/2x", "`1/2x` is ambiguous: write 1/(2*x) or (1/2)*x"),
+    ("y/2x", "`y/2x` is ambiguous: write y/(2*x) or (y/2)*x"),
+    ("x^2y", "`x^2y` is ambiguous: write x^2*y or x^(2*y)"),
+    ("sin x^2", "put the argument of sin in brackets: `sin x^2` can be read more than one way"),
+    ("sin 2x", "put the argument of sin in brackets: `sin 2x` can be read more than one way"),
+    ("x2 y", "unknown name 'x2' (symbols allowed here: x, y); write x^2 for a power or 2*x for a product"),
+    ("2 sinx", "unknown name 'sinx' (symbols allowed here: x, y); write sin(x)"),
+    ("2xz", "unknown name 'xz' (symbols allowed here: x, y)"),
+    ("\uff58 + 1", "not plain ASCII"),  # fullwidth x
+    ("-\u0443 + x", "not plain ASCII"),  # Cyrillic u, a look-alike of y
+    ("x\u200b + 1", "not plain ASCII"),  # zero-width space
+    ("x²³", "exponents above 10"),
+    ("(x²)³", "power of a power"),
+    ("2" + "\u00b2" * 250, "at most 200"),
+]
+
+
+@pytest.mark.parametrize("text, says", REFUSED)
+def test_what_cannot_be_read_says_how_to_write_it(tmp_path, text, says):
+    started = time.perf_counter()
+    results, problems = _grade(tmp_path, "ch02", f"gradient_at_point: a\npartial_x: \"{text}\"\n")
+    assert time.perf_counter() - started < 1.0
+    result = results["partial_x"]
+    assert result.status == Status.FAIL and result.points == 0
+    assert result.message.startswith("exercises/answers/ch02.yaml, line 2, question partial_x: ")
+    assert says in result.message, result.message
+    assert results["gradient_at_point"].status != Status.ERROR and not problems
+
+
+def test_implicit_products_never_make_a_call_or_a_name_the_whitelist_refuses():
+    # the reader only adds '*' between what is already allowed, and splits a name only into allowed symbols
+    for hostile, says in [("__import__ ('os')", "only these functions"), ("x (1) (2)", None), ("exec (1)", "only these"),
+                          ("xy.__class__", "Attribute"), ("2 lambda: 1", "cannot read"), ("x if y else 1", "IfExp")]:
+        if says is None:
+            assert normalize(hostile, ("x", "y")) == "x* (1)* (2)"
+            continue
+        with pytest.raises(AnswerError) as info:
+            check_text(hostile, ("x", "y"))
+        assert says in str(info.value), (hostile, str(info.value))
+
+
+def test_an_unquoted_leading_minus_on_the_line_of_its_id_says_to_quote_it(tmp_path):
+    same_line = "bearing_variance: 0.25\ndbearing_dx: - y/(x^2 + y^2)\n"
+    results, problems = _grade(tmp_path, "ch06", same_line)
+    assert results["dbearing_dx"].message == (
+        "exercises/answers/ch06.yaml, line 2, question dbearing_dx: YAML reads an answer that starts with '- ' as a "
+        "list: put it in quotes, e.g. dbearing_dx: \"- y/(x^2 + y^2)\"")
+    assert results["bearing_variance"].status == Status.FAIL and results["bearing_variance"].got == "0.25"
+    quoted = "dbearing_dx: \"- y/(x^2 + y^2)\"\n"
+    results, _ = _grade(tmp_path, "ch06", quoted)
+    assert results["dbearing_dx"].status == Status.PASS
+
+
+def test_a_block_list_is_still_a_vector(tmp_path):
+    from test_quiz import _right, bank
+
+    question = next(q for q in bank.questions("ch02") if q.id == "bowl_gradient")
+    gx, gy = _right("ch02", question)
+    results, _ = _grade(tmp_path, "ch02", f"bowl_gradient:\n  - {gx}\n  - {gy}\n")
+    assert results["bowl_gradient"].status == Status.PASS
+
+
+def test_typed_answers_need_no_sympy(tmp_path):
+    """The fast path (normalize, whitelist, float evaluation) reads and judges every typed answer above
+    without importing sympy."""
+    code = ("import json, sys; from pathlib import Path; from grader.quiz import grade_quiz; folder = Path(sys.argv[1]); "
+            "statuses = []\n"
+            "for chapter, question, text in json.loads(sys.argv[2]):\n"
+            "    (folder / f'{chapter}.yaml').write_text(f'{question}: {text}\\n', encoding='utf-8')\n"
+            "    statuses += [r.status.value for r in grade_quiz(chapter, folder, 'alice', 'x')[0] if r.got]\n"
+            "print(statuses.count('pass'), len(statuses), 'sympy' in sys.modules)")
+    cases = TYPED_RIGHT
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path), json.dumps(cases)], capture_output=True,
+                          text=True, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)), timeout=60)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == [str(len(cases)), str(len(cases)), "False"]
+
+
+def test_cli_grades_an_implicit_product_and_a_unicode_answer(tmp_path):
+    answers = tmp_path / "exercises" / "answers"
+    answers.mkdir(parents=True)
+    (answers / "ch02.yaml").write_text("partial_x: 2xy\n", encoding="utf-8")
+    (answers / "ch09.yaml").write_text("mixed_partial: 6xy²\n", encoding="utf-8")
+    proc = run_grade("quiz", "ch02", "ch09", "--submission", tmp_path, "--learner", "alice", "--format", "json")
+    checks = {c["function"]: c for ch in json.loads(proc.stdout)["chapters"] for c in ch["checks"]}
+    assert checks["partial_x"]["status"] == "pass" and checks["mixed_partial"]["status"] == "pass", proc.stdout
