@@ -457,7 +457,10 @@ def gradescope_command(out: str, course_file: str | None, chapter_list: str, lea
 
 
 @main.command("classroom")
-@chapter_and_submission_options
+@click.argument("chapters", nargs=-1, metavar="CHAPTER...")
+@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder holding exercises/ (default: the project around the current directory).")
+@click.option("--solutions", "use_solutions", is_flag=True, help="Grade the reference solutions instead.")
 @click.option("--learner", default=None, help="Learner id for per-learner quiz numbers.")
 @click.option("--output", "output_file", type=click.Path(dir_okay=False, writable=True), default=None,
               help="Write the results JSON to this file instead of standard output.")
@@ -467,8 +470,7 @@ def gradescope_command(out: str, course_file: str | None, chapter_list: str, lea
               help="auto: bubblewrap where it starts here, else grade without it and say so; required: exit 2 "
                    "without it.")
 def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
-                      output_format: str, learner: str | None, output_file: str | None, github_output: str | None,
-                      sandbox: str) -> None:
+                      learner: str | None, output_file: str | None, github_output: str | None, sandbox: str) -> None:
     """Grade CHAPTER... for GitHub Classroom: every judged check with its own points, in the format its
     autograding reporter reads (the text report goes to standard error). Exits 0 whenever the results
     are written, whatever they say: the reporter gives the points."""

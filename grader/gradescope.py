@@ -215,9 +215,10 @@ def _sandbox_state(mode: str) -> tuple[bool, str, str]:
         reason = probe(Sandbox()) or ""
         if not reason:
             return True, isolation_line(True), ""
-    line = (f"isolation: no sandbox: bubblewrap cannot run on this image ({reason}); learner code runs as "
-            f"{'root' if os.geteuid() == 0 else 'the autograder user'} in this submission's own container, with "
-            "resource limits and a process-tree kill only")
+    line = (f"isolation: no sandbox: bubblewrap cannot run on this image ({' '.join(reason.split())[:300]}); "
+            f"learner code runs as {'root' if os.geteuid() == 0 else 'the autograder user'} in this submission's own "
+            "container, with resource limits and a process-tree kill only, and could read what the autograder "
+            "holds (the references and the course config)")
     return False, line, reason
 
 

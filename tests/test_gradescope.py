@@ -241,3 +241,16 @@ def test_a_course_without_a_seed_builds_no_autograder(tmp_path):
     done = subprocess.run([sys.executable, "-m", "grader", "gradescope", str(tmp_path / "a.zip"), "--course",
                            str(tmp_path / "course.yaml")], cwd=REPO, capture_output=True, text=True, timeout=120)
     assert done.returncode == 1 and "the course has no seed" in done.stderr and not (tmp_path / "a.zip").exists()
+
+
+def test_a_failed_setup_still_writes_results_that_say_not_graded(autograder, tmp_path):
+    """run_autograder on an image where setup.sh failed (no venv): results.json all the same."""
+    _, root, _ = autograder
+    bare = tmp_path / "autograder"
+    (bare / "source").mkdir(parents=True)
+    shutil.copy2(root / "run_autograder", bare / "run_autograder")
+    run = subprocess.run([str(bare / "run_autograder")], cwd=bare, capture_output=True, text=True, timeout=60)
+    assert run.returncode == 1 and "setup.sh failed" in run.stderr
+    results = json.loads((bare / "results" / "results.json").read_text(encoding="utf-8"))
+    _validate(results)
+    assert results["score"] == 0 and results["output"].startswith("NOT GRADED")
