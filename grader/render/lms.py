@@ -182,8 +182,8 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
     pending = report.pending_score
     said = [f"{report.score:g}/{report.max_score:g} points judged here"]
     if pending:
-        said.append(f"{plural(pending, 'more point')} (recorded quiz answers, hidden checks) are graded when you "
-                    "submit")
+        said.append(f"{plural(pending, 'more point')} (recorded quiz answers, hidden checks) "
+                    f"{'is' if pending == 1 else 'are'} graded when you submit")
     if message:
         said.append(message)
     return {"version": 1, "status": status, "max_score": report.max_score, "message": "; ".join(said),
