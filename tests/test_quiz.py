@@ -94,23 +94,48 @@ def test_every_distractor_is_rejected_with_its_own_feedback(chapter, question):
         assert key.feedback[option] in verdict.feedback
 
 
+LEARNERS = ["alice", "bob", *(f"learner{i}" for i in range(10))]
+
+
+def wrong_answer_text(question, key, wrong, learner, chapter):
+    """(the answer text a learner making this known mistake writes, their numbers, the right value);
+    None where the mistake makes no difference for this learner."""
+    from grader.quiz.judge import right_numbers
+    from grader.quiz.mistakes import learner_names, wrong_value
+
+    values = question.values_for(learner, chapter)
+    right = key.value_for(chapter, values)
+    if question.kind == "symbolic":
+        return str(wrong["answer"]), values, right
+    want = right_numbers(right, key, values)
+    candidate = wrong_value(wrong, want, learner_names(key, values))
+    if candidate is None or np.allclose(candidate, want, rtol=key.rtol, atol=key.atol):
+        return None
+    return json.dumps(np.round(candidate, 6).tolist()), values, right
+
+
 @pytest.mark.parametrize("chapter, question", [(c, q) for c, q in QUESTIONS if bank.keys(c)[q.id].wrong],
                          ids=lambda v: getattr(v, "id", v))
-def test_every_known_wrong_answer_gets_its_targeted_feedback(chapter, question):
+def test_every_known_wrong_answer_is_named_with_its_targeted_feedback(chapter, question):
+    """For the learners whose numbers tell it apart, each `wrong:` entry is named by its own name with its
+    own feedback first; for the others only an earlier entry of the same value may take its place."""
     key = bank.keys(chapter)[question.id]
-    right = _right(chapter, question)
-    for wrong in key.wrong:
-        if "transform" in wrong:
-            from grader.quiz.judge import _transformed
-
-            candidate = _transformed(np.asarray(right, dtype=float), wrong["transform"])
-            if candidate is None:
+    for index, wrong in enumerate(key.wrong):
+        named = 0
+        for learner in LEARNERS if question.params else LEARNERS[:1]:
+            case = wrong_answer_text(question, key, wrong, learner, chapter)
+            if case is None:
                 continue
-            answer = candidate.tolist()
-        else:
-            answer = wrong["answer"]
-        verdict = judge(question, key, answer, right, seed=3)
-        assert not verdict.right and verdict.feedback == wrong["feedback"], (question.id, answer)
+            answer, values, right = case
+            verdict = judge(question, key, answer, right, seed=bank.variant_seed("points", chapter, question.id),
+                            values=values)
+            assert not verdict.right and verdict.fraction == 0, (question.id, wrong["name"], learner)
+            if verdict.mistake == wrong["name"]:
+                assert verdict.feedback.splitlines()[0] == wrong["feedback"]
+                named += 1
+            else:
+                assert verdict.mistake in [w["name"] for w in key.wrong[:index]], (wrong["name"], learner, verdict)
+        assert named, f"{question.id}: {wrong['name']} is never named"
 
 
 def test_multi_select_partial_credit_and_nothing_for_selecting_everything(tmp_path):

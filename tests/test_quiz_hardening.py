@@ -133,8 +133,9 @@ def test_symbolic_keys_and_known_wrong_answers_agree_with_sympy(chapter, questio
     key = bank.keys(chapter)[question.id]
     right = parse(str(key.answer), question.symbols)
     for wrong in key.wrong:
-        assert sympy.simplify(parse(str(wrong["answer"]), question.symbols) - right) != 0
-        assert not equivalent(str(wrong["answer"]), str(key.answer), question.symbols, question.domain)
+        assert sympy.simplify(parse(str(wrong["answer"]), question.symbols, question.derived) - right) != 0
+        assert not equivalent(str(wrong["answer"]), str(key.answer), question.symbols, question.domain,
+                              derived=question.derived)
     assert equivalent(str(key.answer), str(right), question.symbols, question.domain)
 
 
@@ -219,10 +220,10 @@ def test_got_is_the_answer_as_written_and_expected_only_when_right(tmp_path):
     question = _question("ch06", "H_at_point")
     right = bank.keys("ch06")["H_at_point"].value_for("ch06", question.values_for("alice", "ch06"))
     written = json.dumps(right.round(6).tolist())
-    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {written}\ndbearing_dx: -y/r\n")
+    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {written}\ndbearing_dx: -y/rho\n")
     assert results["H_at_point"].got == written and results["H_at_point"].expected is not None
-    assert results["dbearing_dx"].got == "-y/r" and results["dbearing_dx"].expected is None
-    assert "unknown name 'r'" in results["dbearing_dx"].message
+    assert results["dbearing_dx"].got == "-y/rho" and results["dbearing_dx"].expected is None
+    assert "unknown name 'rho'" in results["dbearing_dx"].message
 
 
 # ------------------------------------------------------------------------ per-learner numbers

@@ -1,7 +1,8 @@
 """Format hints never show an answer: every example in a hint (in backticks) is read as the
 learner's file would read it and judged with the quiz's own judging (numeric tolerance, matrix
-shape, symbolic equivalence) against the key and the known wrong answers, for several learners'
-numbers; letter answers have no example at all, since every letter is right for some learner."""
+shape, symbolic equivalence) against the key, the known wrong answers and the diagnosed slips of
+the key (grader.quiz.mistakes), for several learners' numbers; letter answers have no example at
+all, since every letter is right for some learner."""
 
 from __future__ import annotations
 
@@ -27,16 +28,18 @@ def _as_read(example: str) -> object:
 
 
 def _accepted(chapter: str, question: bank.Question, value: object) -> str | None:
-    """Which learner's key or known wrong answer `value` matches, or None."""
+    """Which learner's key, known wrong answer or diagnosed slip of the key (a transpose, a sign, ...)
+    `value` matches, or None."""
     key = bank.keys(chapter)[question.id]
-    known_wrong = {wrong["feedback"] for wrong in key.wrong}
     for learner in LEARNERS if question.params else LEARNERS[:1]:
-        right = key.value_for(chapter, question.values_for(learner, chapter))
-        verdict = judge(question, key, value, right, seed=bank.variant_seed(learner, chapter, question.id))
+        values = question.values_for(learner, chapter)
+        right = key.value_for(chapter, values)
+        verdict = judge(question, key, value, right, seed=bank.variant_seed(learner, chapter, question.id),
+                        values=values)
         if verdict.right:
             return f"the key of {learner}"
-        if verdict.feedback in known_wrong:
-            return f"a known wrong answer for {learner} ({verdict.feedback})"
+        if verdict.mistake:
+            return f"a known wrong answer for {learner} ({verdict.mistake}: {verdict.feedback})"
     return None
 
 

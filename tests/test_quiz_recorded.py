@@ -75,7 +75,10 @@ def test_well_formed_answers_are_recorded_with_their_points_pending(tmp_path, ha
     ("bearing_variance", "0.5 0.25", "cannot read it as a formula"),
     ("bearing_variance", "[1, 2]", "expected one number, got a list"),
     ("bearing_variance", "1/0", "division by zero"),
-    ("dbearing_dx", "-y/r^2", "unknown name 'r' (symbols allowed here: x, y)"),
+    ("dbearing_dx", "-y/z^2", "unknown name 'z' (symbols allowed here: x, y, r)"),
+    ("dbearing_dx", "1/2x", "`1/2x` is ambiguous: write 1/(2*x) or (1/2)*x"),
+    ("dbearing_dx", "\n  - y/(x^2 + y^2)", "YAML reads an answer that starts with '- ' as a list: put it in "
+                                         "quotes, e.g. dbearing_dx: \"- y/(x^2 + y^2)\""),
     ("dbearing_dx", "\"__import__('os')\"", "only these functions may be called"),
     ("dbearing_dx", "x^y", "an exponent must be a number"),
 ])

@@ -91,7 +91,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     Whatever an answer holds, it costs only its own question: an answer that cannot be read or
     judged fails with file, line and why; one not judged by `deadline` (time.monotonic()) is SKIP
     with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED."""
-    from grader.quiz.judge import fmt_value, judge, read_answer, shown_key
+    from grader.quiz.judge import fmt_value, judge, read_answer, right_answer, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
     keys = bank.keys(chapter, quiz_dir) or {}
@@ -128,14 +128,15 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             except bank.KeyUnavailable:
                 key = None
             if key is None:  # read and format-checked only: quick, whatever the time
-                read_answer(question, answer.value, lettering)
+                read_answer(question, answer.value, lettering, answer.text)
                 result.status, result.message = Status.RECORDED, RECORDED_MESSAGE
                 continue
             if _time_is_up(deadline):
                 result.status, result.message = Status.SKIP, OUT_OF_TIME
                 continue
             verdict = judge(question, key, answer.value, right_value,
-                            bank.variant_seed("points", chapter, question.id), lettering, deadline)
+                            bank.variant_seed("points", chapter, question.id), lettering, deadline,
+                            values=values, text=answer.text)
         except AnswerError as exc:
             result.message = f"{where}: {exc}"
             continue
@@ -152,8 +153,10 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
         result.points = question.points * verdict.fraction
         result.status = Status.PASS if verdict.right else Status.FAIL
         result.message = verdict.feedback
+        result.mistake = verdict.mistake
         if verdict.right:  # the key appears in the output only once the learner has it
-            result.expected = fmt_value(shown_key(question, right_value, lettering))
+            result.expected = fmt_value(shown_key(question, right_answer(question, key, right_value, values),
+                                                  lettering))
     return results, problems
 
 

@@ -65,6 +65,8 @@ class Question:
     shape: tuple[int, ...] = ()
     answer_format: str = ""
     domain: dict[str, tuple[float, float]] = field(default_factory=dict)  # symbolic: symbol -> range
+    derived: dict[str, str] = field(default_factory=dict)  # symbolic: a symbol answers may use -> its definition
+    entries: dict = field(default_factory=dict)  # vector/matrix: symbol, rows, cols, derivative (grader.compare.Entries)
 
     def values_for(self, learner: str, chapter: str) -> dict[str, float]:
         """This learner's numbers for a parametrised question (empty for a fixed one): each
@@ -91,15 +93,23 @@ class Question:
         return dict(zip(string.ascii_lowercase, order))
 
 
+TRANSFORMS = ("transpose", "negate", "degrees", "reciprocal", "sqrt", "square")
+WRONG_FORMS = ("answer", "transform", "factor")
+
+
 @dataclass
 class Key:
     answer: object = None
     rtol: float = 1e-3
     atol: float = 1e-6
     feedback: dict[str, str] = field(default_factory=dict)  # option -> why it is wrong
-    wrong: list[dict] = field(default_factory=list)  # known wrong answers: {answer | transform, feedback}
+    # known wrong answers: {name, feedback, and one of: answer (numbers, or expressions in the question's
+    # params and `derived`; symbolic: an expression), transform (TRANSFORMS), factor (times the key)}
+    wrong: list[dict] = field(default_factory=list)
     compute: dict | None = None  # {function: a reference of the chapter, args: [param names], item: index}
     explanation: str = ""
+    angle: bool = False  # the answer is an angle in radians: one in degrees is named
+    derived: dict[str, str] = field(default_factory=dict)  # names the wrong answers' expressions may use
 
     def value_for(self, chapter: str, values: dict[str, float]) -> object:
         """The right answer: stored, or computed for `values` by the chapter's reference function
@@ -158,6 +168,8 @@ def _questions(chapter: str, quiz_dir: Path) -> list[Question]:
             symbols=tuple(raw.get("symbols", ())), params=dict(raw.get("params") or {}),
             shape=tuple(raw.get("shape", ())), answer_format=str(raw.get("format", "")),
             domain={str(k): (float(v[0]), float(v[1])) for k, v in (raw.get("domain") or {}).items()},
+            derived={str(k): str(v) for k, v in (raw.get("derived") or {}).items()},
+            entries=dict(raw.get("entries") or {}),
         ))
     return out
 
@@ -190,9 +202,29 @@ def _keys(chapter: str, quiz_dir: Path) -> dict[str, Key] | None:
     return {str(qid): Key(
         answer=raw.get("answer"), rtol=float(raw.get("rtol", 1e-3)), atol=float(raw.get("atol", 1e-6)),
         feedback={str(k): str(v) for k, v in (raw.get("feedback") or {}).items()},
-        wrong=list(raw.get("wrong") or []), compute=raw.get("compute"),
-        explanation=str(raw.get("explanation", "")).strip(),
+        wrong=_wrong_entries(chapter, str(qid), raw.get("wrong")), compute=raw.get("compute"),
+        explanation=str(raw.get("explanation", "")).strip(), angle=bool(raw.get("angle", False)),
+        derived={str(k): str(v) for k, v in (raw.get("derived") or {}).items()},
     ) for qid, raw in data.items()}
+
+
+def _wrong_entries(chapter: str, qid: str, raw: object) -> list[dict]:
+    """A key's known wrong answers, each checked: a dict with a `name` (the stable name of the
+    mistake, CheckResult.mistake), its `feedback`, and exactly one of WRONG_FORMS."""
+    entries = list(raw or [])
+    for number, entry in enumerate(entries, 1):
+        where = f"keys of {chapter}, question {qid}, wrong answer {number}"
+        if not isinstance(entry, dict) or not isinstance(entry.get("name"), str) or not entry["name"].strip():
+            raise BankError(f"{where}: needs a `name` (the mistake's stable name)")
+        if not isinstance(entry.get("feedback"), str) or not entry["feedback"].strip():
+            raise BankError(f"{where} ({entry['name']}): needs its `feedback`")
+        forms = [form for form in WRONG_FORMS if form in entry]
+        if len(forms) != 1:
+            raise BankError(f"{where} ({entry['name']}): needs exactly one of {', '.join(WRONG_FORMS)}")
+        if forms == ["transform"] and entry["transform"] not in TRANSFORMS:
+            raise BankError(f"{where} ({entry['name']}): unknown transform {entry['transform']!r}; "
+                            f"one of {', '.join(TRANSFORMS)}")
+    return entries
 
 
 def public_keys(chapter: str, quiz_dir: Path | None = None) -> dict:

@@ -12,7 +12,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from grader.compare import tolerance_text
 from grader.quiz.bank import Key, Question
+from grader.quiz.mistakes import expression_mistake, learner_names, numbers, numbers_mistake
 from grader.quiz.symbolic import (
     MAX_LENGTH,
     SIMPLIFY_SECONDS,
@@ -36,6 +38,7 @@ class Judgement:
     right: bool = False
     undecided: bool = False  # sympy had to decide and could not in time (then fraction is 0)
     out_of_time: bool = False  # ... because the learner's deadline came first
+    mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.quiz.mistakes)
 
 
 def _letters(value: object, lettering: dict[str, str]) -> list[str]:
@@ -89,28 +92,31 @@ def _array(value: object, shape: tuple[int, ...]) -> np.ndarray:
     return array
 
 
-def _transformed(key: np.ndarray, transform: str) -> np.ndarray | None:
-    if transform == "transpose":
-        return key.T if key.ndim == 2 and key.shape[0] == key.shape[1] and not np.allclose(key, key.T) else None
-    if transform == "negate":
-        return -key
-    if transform == "degrees":
-        return np.degrees(key)
-    if transform == "reciprocal":
-        return 1.0 / key
-    raise ValueError(f"unknown transform {transform}")
-
-
 def identity_lettering(question: Question) -> dict[str, str]:
     """The bank's own letters: each shown letter is its canonical letter."""
     return {letter: letter for letter in question.options}
 
 
-def read_answer(question: Question, value: object, lettering: dict[str, str] | None = None) -> object:
+def _one_value(question: Question, value: object, text: str, what: str) -> None:
+    """AnswerError unless `value` is one value: a list here is mostly YAML's reading of `- y/...`."""
+    if isinstance(value, dict):
+        raise AnswerError(f"expected {what}, got a mapping")
+    if not isinstance(value, list):
+        return
+    written = " ".join(text.split())
+    if written.startswith("-") and len(value) == 1:
+        raise AnswerError(f"YAML reads an answer that starts with '- ' as a list: put it in quotes, "
+                          f"e.g. {question.id}: \"{written}\"")
+    raise AnswerError(f"expected {what}, got a list")
+
+
+def read_answer(question: Question, value: object, lettering: dict[str, str] | None = None,
+                text: str = "") -> object:
     """The answer in the question's terms, needing neither its key nor sympy: the canonical letters
     (choice: one; multi: a set) of the options the learner picked by their shown letters, a float
     array of the question's shape (numeric, vector, matrix), or the whitelisted expression text in
-    the question's symbols. AnswerError says why an answer cannot be read."""
+    the question's symbols (and derived symbols). `text` is the answer as written in the file.
+    AnswerError says why an answer cannot be read."""
     kind = question.kind
     if kind in ("choice", "multi"):
         lettering = lettering or identity_lettering(question)
@@ -121,27 +127,39 @@ def read_answer(question: Question, value: object, lettering: dict[str, str] | N
             raise AnswerError("choose exactly one option")
         return lettering[letters[0]]
     if kind == "numeric":
-        if isinstance(value, (list, dict)):
-            raise AnswerError("expected one number, got a list")
+        _one_value(question, value, text, "one number")
         return np.array(number(value))
     if kind in ("vector", "matrix"):
         return _array(value, question.shape)
     if kind == "symbolic":
-        if isinstance(value, (list, dict)):
-            raise AnswerError("expected one expression, got a list")
-        check_text(str(value), question.symbols)
+        _one_value(question, value, text, "one expression")
+        check_text(str(value), question.symbols + tuple(question.derived))
         return str(value)
     raise AnswerError(f"unknown question kind {kind}")
 
 
+def right_numbers(right_value: object, key: Key, values: dict[str, float] | None = None) -> np.ndarray:
+    """The right answer of a numeric, vector or matrix question as floats (a stored key may hold
+    expressions such as sqrt(3)/2 or ones in the question's numbers)."""
+    return numbers(right_value, learner_names(key, values or {}))
+
+
+def right_answer(question: Question, key: Key, right_value: object, values: dict[str, float] | None = None) -> object:
+    """The right answer in the question's terms: floats for a numeric, vector or matrix question."""
+    return right_numbers(right_value, key, values) if question.kind in ("numeric", "vector", "matrix") else right_value
+
+
 def judge(question: Question, key: Key, value: object, right_value: object, seed: int,
-          lettering: dict[str, str] | None = None, deadline: float | None = None) -> Judgement:
+          lettering: dict[str, str] | None = None, deadline: float | None = None,
+          values: dict[str, float] | None = None, text: str = "") -> Judgement:
     """The verdict on `value` (letters as shown through `lettering`, default the bank's own) against
-    `right_value`; feedback of a wrong option names it by its shown letter. AnswerError when the
-    answer cannot be read. A symbolic answer that sympy must decide is decided in a separate process
-    within SIMPLIFY_SECONDS and before `deadline` (time.monotonic()), else `undecided`."""
+    `right_value`; feedback of a wrong option names it by its shown letter, a wrong value or
+    expression that matches a known mistake (grader.quiz.mistakes; `values`: the learner's numbers)
+    gets that mistake's name and sentence. AnswerError when the answer cannot be read. A symbolic
+    answer that sympy must decide is decided in a separate process within SIMPLIFY_SECONDS and before
+    `deadline` (time.monotonic()), else `undecided`."""
     lettering = lettering or identity_lettering(question)
-    got = read_answer(question, value, lettering)
+    got = read_answer(question, value, lettering, text)
     kind = question.kind
     if kind == "choice":
         if got == str(right_value).lower():
@@ -160,28 +178,28 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
             notes.append(f"{len(missed)} true statement(s) not selected")
         return Judgement(fraction, "; ".join(notes) or key.explanation, got == right)
     if kind in ("numeric", "vector", "matrix"):
-        want = np.asarray(right_value, dtype=float)
+        want = right_numbers(right_value, key, values)
         if got.shape != want.shape:
             raise AnswerError(f"expected {want.size} number(s), got {got.size}")
         close = bool(np.all(np.abs(got - want) <= key.atol + key.rtol * np.abs(want)))
         if close:
             return Judgement(1.0, key.explanation, True)
-        for wrong in key.wrong:
-            candidate = (_transformed(want, wrong["transform"]) if "transform" in wrong
-                         else np.asarray(wrong["answer"], dtype=float))
-            if candidate is not None and candidate.shape == got.shape and \
-                    np.all(np.abs(got - candidate) <= key.atol + key.rtol * np.abs(candidate)):
-                return Judgement(0.0, wrong["feedback"])
-        return Judgement(0.0, "not within the tolerance of the right value")
+        outside = (f"not within the tolerance of the right value ({tolerance_text(key.rtol, key.atol)}"
+                   f"{' in every entry' if want.ndim else ''})")
+        mistake = numbers_mistake(question, key, got, want, values or {})
+        if mistake is not None:
+            return Judgement(0.0, f"{mistake.help}\n{outside}", mistake=mistake.name)
+        return Judgement(0.0, outside)
     with Simplifier(deadline) as simplifier:  # a process only if sympy must decide
-        same = equivalent(got, str(right_value), question.symbols, question.domain, seed, simplifier)
+        same = equivalent(got, str(right_value), question.symbols, question.domain, seed, simplifier,
+                          derived=question.derived)
         if same:
             return Judgement(1.0, key.explanation, True)
         if same is None:
             return Judgement(0.0, UNDECIDED, undecided=True, out_of_time=simplifier.out_of_time)
-        for wrong in key.wrong:
-            if equivalent(got, str(wrong["answer"]), question.symbols, question.domain, seed, simplifier):
-                return Judgement(0.0, wrong["feedback"])
+    mistake = expression_mistake(question, key, got, str(right_value), seed)
+    if mistake is not None:
+        return Judgement(0.0, mistake.help, mistake=mistake.name)
     return Judgement(0.0, "not equivalent to the right expression")
 
 

@@ -82,13 +82,15 @@ def reference_answers(chapter: str, learner: str = REFERENCE_LEARNER) -> str:
 
     import numpy as np
 
-    from grader.quiz.judge import shown_key
+    from grader.quiz.judge import right_answer, shown_key
 
     keys = bank.keys(chapter)
     lines = [f"# Reference answers for {chapter}, learner id '{learner}' (see learner.yaml).",
              "# Made by grader.quiz.templates.reference_answers from the keys."]
     for question in bank.questions(chapter):
-        value = keys[question.id].value_for(chapter, question.values_for(learner, chapter))
+        values = question.values_for(learner, chapter)
+        key = keys[question.id]
+        value = right_answer(question, key, key.value_for(chapter, values), values)
         value = shown_key(question, value, question.lettering(learner, chapter))
         value = np.round(np.asarray(value, dtype=float), 8).tolist() if not isinstance(value, (str, list)) else value
         lines.append(f"{question.id}: {json.dumps(value)}")
