@@ -1,6 +1,7 @@
-"""The misconception corpus: one-bug submissions and wrong quiz answers, each with the mistake the
-grader should name, graded for real; prints the share named correctly and any diagnosis offered on a
-right answer (there must be none). Target: at least 80% named.
+"""The misconception corpus: one-bug submissions (CODE) and wrong quiz answers (QUIZ), each with the
+mistake the grader should name, graded for real (quiz keys of per-learner questions computed by the
+installed references); prints the share named correctly and any diagnosis offered on a right answer
+(there must be none). Target: at least 80% named.
 
     python benchmarks/misconceptions.py [--verbose]
 """
@@ -299,6 +300,117 @@ CODE = {
 }
 
 
+# (chapter, question id, the answer as a learner writes it after `id: ` in exercises/answers/chNN.yaml,
+# the learner id whose numbers it was worked out for (None: the question has no per-learner numbers),
+# the mistake name it should get). alice's numbers: superposition_gap px 2.5, qy 4.2; range_value
+# (-3.2, 1.5); tangent_value a 7.9, x 6.2; bowl_gradient (-2, 1.1); polar_jacobian r 4.7, theta 0.5;
+# area_scale r 0.6; g_jacobian u (-0.5, -2.5); forward_value x 1.6; H_at_point (-3.1, 3.3);
+# bearing_variance r 2.3; F_at_state theta 0.5, v 1.7; linearized_cov (0.5, 2.8); gradient_value (-1.5, -1.6).
+QUIZ = [
+    ("ch00", "superposition_gap", "1.81", "alice", "every sign"),
+    ("ch00", "superposition_gap", "0", "alice", "linear"),
+    ("ch00", "superposition_gap", "4.89", "alice", "missing the sum"),
+    ("ch00", "range_value", "12.49", "alice", "squared range"),
+    ("ch00", "range_value", "4.7", "alice", "sum of coordinates"),
+    ("ch00", "drange_dx", "y/r", None, "d/dy"),
+    ("ch00", "drange_dx", "x/(x² + y²)", None, "r^2 for r"),
+    ("ch00", "drange_dx", "x/(2sqrt(x^2 + y^2))", None, "constant factor"),
+    ("ch00", "drange_dx", "1/(2r)", None, "missing inner derivative"),
+    ("ch01", "tangent_value", "2.490", "alice", "function value"),
+    ("ch01", "tangent_value", "2.469", "alice", "slope at x"),
+    ("ch01", "tangent_value", "2.206", "alice", "missing 0.5"),
+    ("ch01", "taylor_estimate", "0.037", None, "missing 0.5"),
+    ("ch01", "taylor_estimate", "1/108", None, "delta not squared"),
+    ("ch01", "tangent_of_square", "6x", None, "not through (a, f(a))"),
+    ("ch01", "tangent_of_square", "6(x - 3)", None, "missing f(a)"),
+    ("ch01", "tangent_of_square", "9 + 6x", None, "x for x - a"),
+    ("ch02", "bowl_gradient", "-2.9, 0.2", "alice", "missing 0.5"),
+    ("ch02", "bowl_gradient", "1.2, -3.45", "alice", "entries swapped"),
+    ("ch02", "bowl_gradient", "[3.45, -1.2]", "alice", "every sign"),
+    ("ch02", "tangent_plane", "3.52", None, "true value"),
+    ("ch02", "tangent_plane", "3", None, "missing gradient term"),
+    ("ch02", "partial_x", "2xy + cos y", None, "constant term differentiated"),
+    ("ch02", "partial_x", "x² + cos(y)", None, "d/dy"),
+    ("ch03", "polar_jacobian", "[[0.88, 0.48], [-2.25, 4.12]]", "alice", "transpose"),
+    ("ch03", "polar_jacobian", "[[0.88, -0.48], [0.48, 0.88]]", "alice", "missing r"),
+    ("ch03", "polar_jacobian", "[[1, -0.04], [0.01, 4.7]]", "alice", "degrees"),
+    ("ch03", "polar_jacobian", "[[0.88, 2.25], [0.48, 4.12]]", "alice", "entry sign"),
+    ("ch03", "area_scale", "1", "alice", "missing r"),
+    ("ch03", "area_scale", "0.36", "alice", "r^2 for r"),
+    ("ch03", "dy_dtheta", "cos(θ)", None, "missing r"),
+    ("ch03", "dy_dtheta", "-r sin(theta)", None, "d x/d theta"),
+    ("ch04", "g_jacobian", "[[-1, -2.5], [1, -0.5]]", "alice", "transpose"),
+    ("ch04", "g_jacobian", "[[-0.5, 1], [-2.5, -0.5]]", "alice", "missing 2"),
+    ("ch04", "g_jacobian", "[[-2.5, -0.5], [-1, 1]]", "alice", "rows swapped"),
+    ("ch04", "pipeline", "[[-10, -6.428], [10.392, 4.866]]", None, "order"),
+    ("ch04", "pipeline", "[[4.866, -25.713], [3.988, 4.372]]", None, "at_x"),
+    ("ch04", "derivative_sin_square", "cos(x²)", None, "missing inner derivative"),
+    ("ch04", "derivative_sin_square", "2x cos x", None, "outer derivative at x"),
+    ("ch05", "forward_value", "5.68", "alice", "exact derivative"),
+    ("ch05", "forward_value", "5.69", "alice", "central difference"),
+    ("ch05", "central_shrink", "10", None, "order h"),
+    ("ch05", "central_shrink", "0.01", None, "reciprocal"),
+    ("ch05", "forward_error", "0.0084", None, "missing 0.5"),
+    ("ch05", "forward_error", "0.0027", None, "f' for f''"),
+    ("ch06", "H_at_point", "[[-0.68, -0.16], [0.73, -0.15]]", "alice", "transpose"),
+    ("ch06", "H_at_point", "[[-0.68, 0.73], [0.16, 0.15]]", "alice", "row sign"),
+    ("ch06", "H_at_point", "[[-0.68, 0.73], [-0.73, -0.68]]", "alice", "bearing over r"),
+    ("ch06", "H_at_point", "[[0.68, -0.73], [0.16, 0.15]]", "alice", "every sign"),
+    ("ch06", "dbearing_dx", "x/r²", None, "d/dy"),
+    ("ch06", "dbearing_dx", "−y/r", None, "bearing over r"),
+    ("ch06", "dbearing_dx", "y/(x^2 + y^2)", None, "every sign"),
+    ("ch06", "bearing_variance", "1/2.3", "alice", "r for r^2"),
+    ("ch06", "bearing_variance", "5.29", "alice", "reciprocal"),
+    ("ch07", "F_at_state", "[[1, 0, -0.815], [0, 1, 1.492], [0, 0, 1]]", "alice", "missing dt"),
+    ("ch07", "F_at_state", "[[1, 0, 0], [0, 1, 0], [-0.082, 0.149, 1]]", "alice", "transpose"),
+    ("ch07", "F_at_state", "[[1, 0, 0.082], [0, 1, 0.149], [0, 0, 1]]", "alice", "entry sign"),
+    ("ch07", "F_at_state", "[[1, 0, -0.149], [0, 1, 0.082], [0, 0, 1]]", "alice", "sin and cos swapped"),
+    ("ch07", "propagated_entry", "-0.004", None, "F^T P F"),
+    ("ch07", "propagated_entry", "0", None, "diagonal P"),
+    ("ch07", "propagated_entry", "-0.01", None, "missing dt"),
+    ("ch07", "dx_dtheta", "-v sin(theta)", None, "missing dt"),
+    ("ch07", "dx_dtheta", "v·sin(θ)·dt", None, "every sign"),
+    ("ch08", "linearized_cov", "[[0.8, 0], [0, 0.099]]", "alice", "sigma not squared"),
+    ("ch08", "linearized_cov", "[[1, 0], [0, 0.124]]", "alice", "missing sigma^2"),
+    ("ch08", "unbiased", "1", None, "n, not n - 1"),
+    ("ch08", "wrapped_innovation", "6.2", None, "not wrapped"),
+    ("ch08", "wrapped_innovation", "-4.77", None, "degrees"),
+    ("ch08", "wrapped_innovation", "0.0832", None, "every sign"),
+    ("ch09", "gradient_value", "-1.5, -4.6", "alice", "entries swapped"),
+    ("ch09", "gradient_value", "-3, -1.5", "alice", "missing cross term"),
+    ("ch09", "mixed_partial", "2xy³", None, "d/dx only"),
+    ("ch09", "mixed_partial", "3x²y²", None, "d/dy only"),
+]
+QUIZ_LEARNERS = ["reference", "alice", "bob", *(f"learner{i}" for i in range(12))]  # right answers: no diagnosis
+
+
+def grade_quiz_answer(folder: Path, chapter: str, question: str, text: str, learner: str | None):
+    """The quiz result of one answer, written as a learner would (`question: text`) in a fresh answer file."""
+    from grader.quiz import DEFAULT_LEARNER, grade_quiz
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / f"{chapter}.yaml").write_text(f"{question}: {text}\n", encoding="utf-8")
+    results, _ = grade_quiz(chapter, folder, learner or DEFAULT_LEARNER, "exercises/answers")
+    return next(r for r in results if r.function == question)
+
+
+def quiz_diagnoses_on_right_answers(folder: Path) -> list[tuple[str, str, str, str]]:
+    """(learner, chapter, question, mistake) for every right answer (the reference answers of
+    QUIZ_LEARNERS) that got a diagnosis: there must be none."""
+    from grader.chapters import CHAPTERS
+    from grader.quiz import grade_quiz
+    from grader.quiz.templates import reference_answers
+
+    offered = []
+    folder.mkdir(parents=True, exist_ok=True)
+    for learner in QUIZ_LEARNERS:
+        for info in CHAPTERS:
+            (folder / f"{info.id}.yaml").write_text(reference_answers(info.id, learner), encoding="utf-8")
+            results, _ = grade_quiz(info.id, folder, learner, "exercises/answers")
+            offered += [(learner, info.id, r.function, r.mistake) for r in results if r.mistake]
+    return offered
+
+
 def grade_one(root: Path, chapter: str):
     from grader.grading import grade
     from grader.runner import Session
@@ -334,6 +446,20 @@ def main() -> None:
     print(f"\ncode: {named} of {len(CODE)} one-bug submissions named correctly ({share:.0%}; target >= 80%)")
     print(f"diagnoses offered on right answers: {len(offered)}" + (f" {offered}" if offered else ""))
     del BY_ID
+    quiz_named = 0
+    with tempfile.TemporaryDirectory() as folder:
+        for i, (chapter, question, text, learner, wanted) in enumerate(QUIZ):
+            result = grade_quiz_answer(Path(folder) / f"answer{i}", chapter, question, text, learner)
+            ok = result.mistake == wanted and result.status.value == "fail"
+            quiz_named += ok
+            if args.verbose or not ok:
+                print(f"{'named' if ok else 'MISSED':6} {chapter} {question:22} {text!r:40} wanted {wanted!r:28} "
+                      f"got {result.mistake!r}")
+        quiz_offered = quiz_diagnoses_on_right_answers(Path(folder))
+    quiz_share = quiz_named / len(QUIZ)
+    print(f"\nquiz: {quiz_named} of {len(QUIZ)} wrong answers named correctly ({quiz_share:.0%}; target >= 80%)")
+    print(f"quiz diagnoses offered on right answers ({len(QUIZ_LEARNERS)} learners' reference answers): "
+          f"{len(quiz_offered)}" + (f" {quiz_offered}" if quiz_offered else ""))
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import right_numbers
 from grader.quiz.templates import reference_answers
-from test_quiz import run_grade
+from test_quiz import REPO, run_grade
 
 
 def _question(chapter, qid):
@@ -204,3 +205,25 @@ def test_the_quiz_path_imports_no_sympy_for_diagnoses(tmp_path):
                           timeout=60)
     assert done.stdout.strip() == "['bearing over r', 'constant factor'] False", done.stderr[-2000:]
 
+
+# ------------------------------------------------------------- the misconception corpus (benchmarks)
+
+sys.path.insert(0, str(REPO / "benchmarks"))
+from misconceptions import QUIZ, grade_quiz_answer  # noqa: E402
+
+
+def test_the_corpus_is_realistic_in_size_and_spread():
+    assert len(QUIZ) >= 20
+    assert {chapter for chapter, *_ in QUIZ} == {c.id for c in CHAPTERS}
+    kinds = {_question(chapter, qid).kind for chapter, qid, *_ in QUIZ}
+    assert kinds == {"numeric", "vector", "matrix", "symbolic"}
+    for chapter, qid, _, learner, _ in QUIZ:
+        assert (learner is not None) == bool(_question(chapter, qid).params), (chapter, qid)
+
+
+@pytest.mark.parametrize("chapter, question, text, learner, wanted", QUIZ,
+                         ids=[f"{q}-{t}" for _, q, t, _, _ in QUIZ])
+def test_a_wrong_answer_of_the_corpus_gets_its_mistake_named(tmp_path, chapter, question, text, learner, wanted):
+    result = grade_quiz_answer(tmp_path / "answers", chapter, question, text, learner)
+    assert (result.status, result.points, result.mistake) == (Status.FAIL, 0, wanted), result.message
+    assert result.expected is None and result.message.strip()
