@@ -55,6 +55,19 @@ def _is_chapter(name: str) -> bool:
 @click.version_option(package_name="jacobians-grader")
 def main() -> None:
     """Grade the lesson "Jacobians & Linearization": `grade ch06`, `grade all`, `grade list`."""
+    _encode_what_the_console_can()
+
+
+def _encode_what_the_console_can() -> None:
+    """A console or redirect in a code page without ✓, σ or a learner's own characters (Windows) shows '?'
+    for them instead of ending in UnicodeEncodeError; the text renderer also picks plain marks there."""
+    for stream in (sys.stdout, sys.stderr):
+        encoding = (getattr(stream, "encoding", None) or "").lower().replace("-", "").replace("_", "")
+        if encoding not in ("utf8", "utf8sig") and hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="replace")
+            except (ValueError, OSError):  # a stream already written to in another way
+                pass
 
 
 def chapters_from(names: tuple[str, ...]) -> list[ChapterInfo]:
