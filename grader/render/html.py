@@ -76,7 +76,7 @@ MARKS = {"pass": "\u2713", "fail": "\u2717", "error": "!", "skip": "\u2013", "re
 BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="en">
 <h{{ h }} class="title" id="{{ pid }}title">Jacobians &amp; Linearization: grading report</h{{ h }}>
 <p class="note">Submission {{ report.submission }} &middot; seed {{ report.seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
-<section id="{{ pid }}summary" aria-labelledby="{{ pid }}summary-title"><h{{ h + 1 }} class="summary-title" id="{{ pid }}summary-title">Summary</h{{ h + 1 }}>
+<section id="{{ pid }}summary"{{ landmark("summary") }}><h{{ h + 1 }} class="summary-title" id="{{ pid }}summary-title">Summary</h{{ h + 1 }}>
 <table class="summary"><caption>Points by chapter</caption>
 <thead><tr><th scope="col">chapter</th><th scope="col">title</th><th scope="col" class="num">code</th><th scope="col" class="num">quiz</th><th scope="col" class="num">total</th></tr></thead>
 <tbody>{% for ch in report.chapters %}<tr><th scope="row"><a href="#{{ pid }}{{ ch.chapter }}">{{ ch.chapter }}</a></th><td>{{ ch.title }}</td>
@@ -87,7 +87,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 <p id="{{ pid }}verdict">{{ verdict }}</p>
 </section>
 {% for ch in report.chapters %}
-<section class="chapter" id="{{ pid }}{{ ch.chapter }}" aria-labelledby="{{ pid }}{{ ch.chapter }}-title"><h{{ h + 1 }} class="chapter-title" id="{{ pid }}{{ ch.chapter }}-title">{{ ch.chapter }} &middot; {{ ch.title }}</h{{ h + 1 }}>
+<section class="chapter" id="{{ pid }}{{ ch.chapter }}"{{ landmark(ch.chapter) }}><h{{ h + 1 }} class="chapter-title" id="{{ pid }}{{ ch.chapter }}-title">{{ ch.chapter }} &middot; {{ ch.title }}</h{{ h + 1 }}>
 {% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
 {% if ch.hidden_checks %}<p class="note">{{ ch.hidden_checks }} hidden check(s) ({{ num(ch.hidden_points) }} points) run when you submit.</p>{% endif %}
 {% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
@@ -532,9 +532,15 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
 
     report = safe_text.clean_report(report, safe_text.for_html)
     style = Markup(STYLE.replace("#S", f"#{pid}report"))
+
+    def landmark(section: str) -> Markup:
+        """A page's sections are landmarks named by their headings; a fragment's are not, as two
+        reports in one notebook would repeat the names (axe: landmark-unique)."""
+        return Markup(f' aria-labelledby="{pid}{section}-title"') if kind == "page" else Markup("")
+
     return _template(source).render(report=report, figures=_all_figures(report), num=_num, values=_values,
                                     verdict=verdict_line(report), marks=MARKS, style=style, pid=pid, root=root,
-                                    kind=kind, h=heading)
+                                    kind=kind, h=heading, landmark=landmark)
 
 
 def render(report: Report) -> str:
