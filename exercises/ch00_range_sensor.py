@@ -41,7 +41,7 @@ def mean_shift(mean, sigma, n, seed):
     mean + sigma * rng.standard_normal((n, 2)), take the range of each, average, and subtract
     range(mean).
     Arguments: mean a 2-vector, sigma > 0 a float, n an int, seed an int.
-    Returns: a float (about sigma^2 / (2 r): the cloud's mean range moves outward).
+    Returns: a float (positive: the cloud's mean range moves outward).
     Example: mean_shift((3, 4), 1.0, 100000, seed) -> about 0.10
     """
     raise NotImplementedError

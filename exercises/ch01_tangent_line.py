@@ -40,6 +40,6 @@ def taylor_error_estimate(fsecond, a, delta):
     Formula: 0.5 * |f''(a)| * delta^2.
     Arguments: fsecond the second derivative (a function of one number); a a float; delta a float.
     Returns: a float.
-    Example: f = sqrt, f''(x) = -x^(-3/2) / 4, a = 4, delta = 1 -> 1/64 = 0.015625
+    Example: f = sqrt (the grader passes its second derivative as fsecond), a = 4, delta = 1 -> 0.015625
     """
     raise NotImplementedError

@@ -2,8 +2,10 @@
 
 A sensor at the origin measures z = (range, bearing) = (sqrt(x^2 + y^2), atan2(y, x)) of a drone at
 (x, y). Its Jacobian H = dz/d(x, y) linearizes the sensor: a small position error dp becomes the
-measurement error H dp, and a position covariance sigma^2 I becomes H (sigma^2 I) H^T. The bearing
-row scales with 1/r: the closer the drone, the more sensitive the bearing.
+measurement error H dp, and a position covariance sigma^2 I becomes H (sigma^2 I) H^T.
+
+The 3-D functions come from the lesson's range-bearing-elevation sensor (chapter 6, "when to reach
+for it"): the same idea one dimension up, which the lesson does not work out for you.
 
 Run `grade ch06` to check your work.
 """
@@ -26,8 +28,8 @@ def range_bearing(x, y):
 def H_jacobian(x, y):
     """The Jacobian of range_bearing with respect to (x, y).
 
-    Formula: H = [[dr/dx, dr/dy], [dbearing/dx, dbearing/dy]]
-               = [[x/r, y/r], [-y/r^2, x/r^2]].
+    Rows are the outputs (range, bearing), columns the inputs (x, y). Differentiate by hand (or by
+    autograd in float64); the grader checks the result exactly, close to the dish too.
     Arguments: x, y real numbers.
     Returns: a numpy array of shape (2, 2).
     Raises: ValueError at r = 0, where the bearing is undefined.
@@ -39,10 +41,36 @@ def H_jacobian(x, y):
 def measurement_covariance(x, y, sigma):
     """The linearized measurement covariance of a position with covariance sigma^2 I.
 
-    Formula: H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2).
+    Formula: H (sigma^2 I) H^T, with H = H_jacobian(x, y).
     Arguments: x, y real numbers; sigma > 0 the position standard deviation.
     Returns: a numpy array of shape (2, 2).
     Raises: ValueError at r = 0.
     Example: measurement_covariance(3, 4, 1.0) -> diag(1, 0.04)
+    """
+    raise NotImplementedError
+
+
+def range_bearing_elevation(x, y, z):
+    """The range, bearing and elevation of the point (x, y, z), seen from a 3-D sensor at the origin.
+
+    Formula: (sqrt(x^2 + y^2 + z^2), atan2(y, x), atan2(z, sqrt(x^2 + y^2))); the elevation is the
+    angle above the x-y plane; radians.
+    Arguments: x, y, z real numbers.
+    Returns: a numpy array of shape (3,).
+    Example: range_bearing_elevation(3, 4, 0) -> array([5., 0.9273, 0.])
+    """
+    raise NotImplementedError
+
+
+def H3_jacobian(x, y, z):
+    """The Jacobian of range_bearing_elevation with respect to (x, y, z).
+
+    Rows are the outputs (range, bearing, elevation), columns the inputs (x, y, z). Derive every
+    entry by hand; the grader compares it with finite differences of your range_bearing_elevation
+    and checks that it is exact. Graded where x^2 + y^2 >= 0.1.
+    Arguments: x, y, z real numbers.
+    Returns: a numpy array of shape (3, 3).
+    Raises: ValueError where x = y = 0 (on the z-axis the bearing is undefined), and nowhere else.
+    Example: H3_jacobian(1, 0, 1) -> [[0.7071, 0, 0.7071], [0, 1, 0], [-0.5, 0, 0.5]]
     """
     raise NotImplementedError

@@ -36,3 +36,26 @@ def contour_direction(x, y) -> np.ndarray:
     if norm == 0:
         raise ValueError("the contour direction is undefined where the gradient is zero (0, 0)")
     return np.array([-gy, gx]) / norm
+
+
+def _obstacle_offset(x, y, obstacle) -> tuple[float, float, float]:
+    """(x - ox, y - oy, their squared length); ValueError at the obstacle."""
+    ox, oy = np.asarray(obstacle, dtype=float)
+    dx, dy = float(x) - ox, float(y) - oy
+    d2 = dx * dx + dy * dy
+    if d2 == 0:
+        raise ValueError("the planner's cost is undefined at the obstacle")
+    return dx, dy, d2
+
+
+def planner_cost(x, y, obstacle) -> float:
+    """y^2 + 1 / |(x, y) - obstacle|^2: the lane centre on y = 0 and an obstacle to keep away from."""
+    _, _, d2 = _obstacle_offset(x, y, obstacle)
+    return float(y) ** 2 + 1.0 / d2
+
+
+def planner_cost_gradient(x, y, obstacle) -> np.ndarray:
+    """Gradient of planner_cost with respect to (x, y)."""
+    dx, dy, d2 = _obstacle_offset(x, y, obstacle)
+    push = -2.0 / (d2 * d2)
+    return np.array([push * dx, 2.0 * float(y) + push * dy])

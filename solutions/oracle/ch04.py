@@ -36,4 +36,40 @@ def pipeline_mistakes(r, theta) -> dict:
     return {"order": inner @ outer, "at_x": g_jacobian([r, theta]) @ inner}
 
 
-__all__ = ["compose_candidates", "pipeline_forward", "pipeline_mistakes", "polar_to_cartesian"]
+__all__ = ["compose_candidates", "lidar_jacobian_mistakes", "lidar_mistakes", "lidar_pose_mistakes", "pipeline_forward",
+           "pipeline_mistakes", "polar_to_cartesian"]
+
+
+def lidar_mistakes(r, theta, pose) -> dict:
+    """lidar_to_world without the rotation, rotated by -phi, or without the translation."""
+    from solutions.ch04_chain_rule import _rotation
+
+    px, py, phi = np.asarray(pose, dtype=float)
+    local = polar_to_cartesian(r, theta)
+    return {"missing rotation": local + np.array([px, py]),
+            "rotation transposed": _rotation(-phi) @ local + np.array([px, py]),
+            "missing translation": _rotation(phi) @ local}
+
+
+def lidar_jacobian_mistakes(r, theta, pose) -> dict:
+    """What the usual slips give for the Jacobian of lidar_to_world with respect to (r, theta)."""
+    from solutions.ch03_jacobian import polar_to_cartesian_jacobian
+    from solutions.ch04_chain_rule import _rotation
+
+    phi = float(np.asarray(pose, dtype=float)[2])
+    inner = polar_to_cartesian_jacobian(r, theta)
+    return {"order": inner @ _rotation(phi), "missing rotation": inner, "rotation transposed": _rotation(-phi) @ inner}
+
+
+def lidar_pose_mistakes(r, theta, pose) -> dict:
+    """What the usual slips give for the Jacobian of lidar_to_world with respect to the pose (px, py, phi)."""
+    from solutions.ch04_chain_rule import lidar_pose_jacobian, lidar_to_world
+
+    right = lidar_pose_jacobian(r, theta, pose)
+    world = lidar_to_world(r, theta, pose)
+    missing_derivative, world_point, missing_identity = right.copy(), right.copy(), right.copy()
+    missing_derivative[:, 2] = 0.0
+    world_point[:, 2] = [-world[1], world[0]]
+    missing_identity[:, :2] = 0.0
+    return {"missing rotation derivative": missing_derivative, "world point": world_point,
+            "missing identity": missing_identity}
