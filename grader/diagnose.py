@@ -26,6 +26,12 @@ class Mistake:
     value: object = None  # what a learner making this mistake returns (None: not known for this case)
 
 
+def known(values: dict, helps: dict) -> list[Mistake]:
+    """The mistakes named in `helps` (name -> what to change), each with the value the reference gave for it
+    in `values` (name -> value; a name it gave no value for is left out)."""
+    return [Mistake(name, help, values[name]) for name, help in helps.items() if name in values]
+
+
 def _row_name(entries, i: int) -> str:
     return f"row {i}" + (f" ({entries.rows[i]})" if i < len(entries.rows) else "")
 

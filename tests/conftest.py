@@ -13,6 +13,15 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+# the contract's "Beyond the worked examples": per chapter, the maps the lesson does not work out
+BEYOND_THE_WORKED_EXAMPLES = {
+    "ch02": ("planner_cost", "planner_cost_gradient"),
+    "ch03": ("spherical_to_cartesian", "spherical_to_cartesian_jacobian", "volume_scale"),
+    "ch04": ("lidar_to_world", "lidar_to_world_jacobian", "lidar_pose_jacobian"),
+    "ch06": ("range_bearing_elevation", "H3_jacobian"),
+    "ch07": ("bicycle_model", "bicycle_control_jacobian", "control_noise_covariance"),
+}
+
 
 def build_submission(root: Path, replacements: dict[str, str] | None = None) -> Path:
     """A submission at root/exercises: the reference solutions, with whole modules replaced.
@@ -61,6 +70,13 @@ def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, time
     proc.wait(timeout=timeout)
     os.close(master)
     return proc.returncode, b"".join(chunks).decode(errors="replace")
+
+
+def code_points(chapter_id: str) -> str:
+    """A chapter's code points as the gradebook and the text report write them ("27")."""
+    from grader import checks
+
+    return f"{checks.load(chapter_id).max_score:g}"
 
 
 def checks_by_id(chapter) -> dict:

@@ -19,7 +19,7 @@ from click.testing import CliRunner
 
 from grader.batch import StagingError, discover, stage
 from grader.cli import main
-from tests.conftest import build_submission, replace_function, run_on_terminal
+from tests.conftest import build_submission, code_points, replace_function, run_on_terminal
 
 CHAPTERS = "ch03,ch06"
 
@@ -68,8 +68,8 @@ def test_batch_outputs_every_format(submissions, tmp_path):
     assert set(by_learner) == {"alice", "bob", "carol", "dave"}
     assert list(rows[0]) == ["learner", "ch03_code", "ch03_quiz", "ch06_code", "ch06_quiz", "total", "max_total",
                              "status", "message"]
-    assert by_learner["alice"]["ch06_code"] == by_learner["bob"]["ch06_code"] == "15"
-    assert float(by_learner["carol"]["ch06_code"]) < 15 and by_learner["carol"]["ch03_code"] == "10"
+    assert by_learner["alice"]["ch06_code"] == by_learner["bob"]["ch06_code"] == code_points("ch06")
+    assert float(by_learner["carol"]["ch06_code"]) < float(code_points("ch06")) and by_learner["carol"]["ch03_code"] == code_points("ch03")
     assert by_learner["dave"]["status"] == "unreadable" and by_learner["dave"]["total"] == ""
     assert "not a valid zip file" in by_learner["dave"]["message"] and by_learner["alice"]["message"] == ""
     report = json.loads((out / "carol" / "report.json").read_text())
@@ -256,7 +256,7 @@ def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
     assert time.monotonic() - started < 15, done.stdout + done.stderr  # without the budget: over 20 s
     assert done.returncode == 0, done.stdout + done.stderr
     rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
-    assert rows["steady"]["ch06_code"] == "15" and rows["slow"]["ch03_code"] == "10"
+    assert rows["steady"]["ch06_code"] == code_points("ch06") and rows["slow"]["ch03_code"] == code_points("ch03")
     report = json.loads((tmp_path / "out" / "slow" / "report.json").read_text())
     messages = [c["message"] for c in report["chapters"][1]["checks"] if c["function"] == "H_jacobian"]
     assert any("3 s" in m and "ran out" in m for m in messages), messages

@@ -27,6 +27,18 @@ EXERCISES = {
     "H_jacobian": lambda v: ch06_measurement.H_jacobian(*v[:2]),
     "motion_model": lambda v: ch07_dynamics.motion_model(v[:3], 1.3, 0.4, 0.2),
     "F_jacobian": lambda v: ch07_dynamics.F_jacobian(v[:3], 1.3, 0.4, 0.2),
+    "planner_cost": lambda v: ch02_gradient.planner_cost(*v[:2], (2.9, -0.4)),
+    "planner_cost_gradient": lambda v: ch02_gradient.planner_cost_gradient(*v[:2], (2.9, -0.4)),
+    "spherical_to_cartesian": lambda v: ch03_jacobian.spherical_to_cartesian(*v[:3]),
+    "spherical_to_cartesian_jacobian": lambda v: ch03_jacobian.spherical_to_cartesian_jacobian(*v[:3]),
+    "volume_scale": lambda v: ch03_jacobian.volume_scale(*v[:3]),
+    "lidar_to_world": lambda v: ch04_chain_rule.lidar_to_world(*v[:2], (0.5, -1.0, 0.7)),
+    "lidar_to_world_jacobian": lambda v: ch04_chain_rule.lidar_to_world_jacobian(*v[:2], (0.5, -1.0, 0.7)),
+    "lidar_pose_jacobian": lambda v: ch04_chain_rule.lidar_pose_jacobian(1.2, 0.3, v[:3]),
+    "range_bearing_elevation": lambda v: ch06_measurement.range_bearing_elevation(*v[:3]),
+    "H3_jacobian": lambda v: ch06_measurement.H3_jacobian(*v[:3]),
+    "bicycle_model": lambda v: ch07_dynamics.bicycle_model(v[:3], 1.3, 0.4, 2.5, 0.2),
+    "bicycle_control_jacobian": lambda v: ch07_dynamics.bicycle_control_jacobian(v[:3], 1.3, 0.4, 2.5, 0.2),
 }
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, build_submission
+from tests.conftest import REPO, build_submission, code_points
 
 REAL_BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
 pytestmark = pytest.mark.skipif(REAL_BWRAP is None and not os.environ.get("CI"),
@@ -82,7 +82,7 @@ def test_a_sandbox_that_does_not_start_stops_the_batch_before_any_learner(submis
     assert fake.calls == 1
     assert done.stderr.count("no sandbox (turned off with --no-sandbox)") == 2
     assert "turned off with --no-sandbox" in (out / "summary.html").read_text(encoding="utf-8")
-    assert _rows(out)["alice"]["ch06_code"] == "15"
+    assert _rows(out)["alice"]["ch06_code"] == code_points("ch06")
 
 
 def test_a_child_that_fails_to_start_once_is_started_again_and_the_learner_graded(submissions, tmp_path):
@@ -92,7 +92,7 @@ def test_a_child_that_fails_to_start_once_is_started_again_and_the_learner_grade
     assert done.returncode == 0, done.stdout + done.stderr
     assert fake.calls == 3
     row = _rows(out)["alice"]
-    assert row["status"] == "graded" and row["ch06_code"] == "15" and row["message"] == ""
+    assert row["status"] == "graded" and row["ch06_code"] == code_points("ch06") and row["message"] == ""
 
 
 def test_a_child_that_never_starts_is_an_error_never_a_zero_and_the_next_run_grades_it(submissions, tmp_path):
@@ -114,5 +114,5 @@ def test_a_child_that_never_starts_is_an_error_never_a_zero_and_the_next_run_gra
     done = _batch(submissions, out)
     assert done.returncode == 0 and "graded 1" in done.stdout, done.stdout + done.stderr
     row = _rows(out)["alice"]
-    assert row["status"] == "graded" and row["ch06_code"] == "15" and row["message"] == ""
+    assert row["status"] == "graded" and row["ch06_code"] == code_points("ch06") and row["message"] == ""
     assert (out / "alice" / "results.json").exists()

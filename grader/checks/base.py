@@ -55,6 +55,7 @@ class Check:
     description: str
     points: float
     body: CheckBody
+    exact_derivative: bool = False  # asks for a derivative exact to rounding (a course may switch these off)
 
 
 @dataclass
@@ -72,16 +73,21 @@ class ChapterChecks:
         self.builds_on[function] = tuple(helpers)
 
     def check(self, function: str, points: float = 1, description: str | None = None,
-              id: str | None = None) -> Callable[[CheckBody], CheckBody]:
+              id: str | None = None, exact_derivative: bool = False) -> Callable[[CheckBody], CheckBody]:
         """Register a check of learner function `function` worth `points`."""
         def register(body: CheckBody) -> CheckBody:
             text = description or (body.__doc__ or body.__name__).strip().splitlines()[0]
             check_id = id or body.__name__
             if any(c.id == check_id for c in self.checks):
                 raise ValueError(f"duplicate check id {check_id} in {self.info.id}")
-            self.checks.append(Check(check_id, function, text, float(points), body))
+            self.checks.append(Check(check_id, function, text, float(points), body, exact_derivative))
             return body
         return register
+
+    @property
+    def exact_derivative_ids(self) -> frozenset[str]:
+        """The "chNN/check_id" of this chapter's exact-derivative checks."""
+        return frozenset(f"{self.info.id}/{c.id}" for c in self.checks if c.exact_derivative)
 
     @property
     def max_score(self) -> float:

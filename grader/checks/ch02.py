@@ -12,14 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, vector_form
-from grader.diagnose import Mistake
+from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, planar_point,
+                                       vector_form)
+from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, fmt_array, value_problem
+from grader.diagnose import Mistake, known
 from grader.expected import reference
-from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt_array, value_problem
 from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch02")
 CHECKS.uses("contour_direction", "bowl_gradient")
+CHECKS.uses("planner_cost_gradient", "planner_cost")
 REF = reference("ch02")
 
 GRAD_F = Entries("grad f", rows=("d f/d x", "d f/d y"), cols=("x", "y"))
@@ -68,9 +70,17 @@ add_derivative_checks(CHECKS, Derivative(
 ))
 
 
+def _exact_points(rng: np.random.Generator) -> list[tuple[float, float]]:
+    """Random points, half of them far out (|p| in [20, 60]), where rounding swamps a small-step difference."""
+    return [tuple(float(v) for v in planar_point(rng, *((20.0, 60.0) if k % 2 else (0.8, 4.5)))) for k in range(6)]
+
+
+add_exact_check(CHECKS, "example_gradient", GRAD_F, _exact_points, REF.example_gradient, "far from the origin")
+
+
 @CHECKS.check("tangent_plane", points=1)
 def tangent_plane_worked_example(ctx):
-    """tangent_plane at a=(1, 2), x=(1.1, 2.1) for f with f(a) = 3 and grad f(a) = (4, 1), as x^2 + x y has: 3.50"""
+    """tangent_plane at the lesson's a=(1, 2), x=(1.1, 2.1) for f with f(a) = 3 and grad f(a) = (4, 1), as x^2 + x y has"""
     got = yield call("tangent_plane", Fn("plane_twin_vec"), Fn("plane_twin_grad_vec"), (1, 2), (1.1, 2.1))
     return expect(got, 3.5, label="tangent_plane(f, grad, a=(1, 2), x=(1.1, 2.1)) where f(1, 2) = 3 and "
                                   "grad(1, 2) = (4, 1)", rtol=1e-9)
@@ -111,6 +121,9 @@ def bowl_gradient_random_points(ctx):
                    for g, want, c in zip(got, expected, calls)])
 
 
+add_exact_check(CHECKS, "bowl_gradient", GRAD_G, _exact_points, REF.bowl_gradient, "far from the origin")
+
+
 @CHECKS.check("contour_direction", points=2)
 def contour_direction_is_unit_and_perpendicular(ctx):
     """contour_direction is a unit vector with contour_direction . bowl_gradient = 0 (either orientation)"""
@@ -138,3 +151,100 @@ def contour_direction_raises_at_origin(ctx):
     """contour_direction(0, 0) raises ValueError (the gradient vanishes, so there is no contour direction)"""
     got = yield call("contour_direction", 0.0, 0.0)
     return expect_raises(got, "ValueError", label="contour_direction(0, 0)", why="grad g = 0 at the origin")
+
+
+# ------------------------------------------------------------------------------ the planner's cost surface
+
+COST = Entries("c")
+GRAD_C = Entries("grad c", rows=("d c/d x", "d c/d y"), cols=("x", "y"))
+OBSTACLE_MIN = 0.5  # the contract: graded points are at least this far from the obstacle
+FORMS = ("tuple", "list", "array")
+
+PLANNER_SLIPS = {
+    "d^2 for d^4": "the obstacle term's derivative is divided by d^2: 1/d^2 is 1/u with u = d^2, and the chain "
+                   "rule gives -1/u^2 times du/d(x, y), so the denominator is d^4.",
+    "obstacle term sign": "the obstacle term's derivative has the wrong sign: 1/d^2 falls as the point moves away "
+                          "from the obstacle (d/du of 1/u is negative).",
+    "missing 2": "the obstacle term misses the inner derivative's factor 2: du/dx of u = (x - ox)^2 + (y - oy)^2 "
+                 "is 2 (x - ox).",
+    "missing lane term": "the lane term y^2 is missing from d c/d y.",
+}
+COST_SLIPS = {"1/d for 1/d^2": "the obstacle term is 1/d: the cost uses the squared distance, 1/d^2.",
+              "missing lane term": "the lane term y^2 is missing."}
+
+
+def _planner_case(rng: np.random.Generator, near: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(point, obstacle): the point at distance d in [0.5, 3] (near: [0.5, 0.6]) from the obstacle, d at least
+    0.15 from 1 (where d^2 and d^4 agree), off the obstacle's axes, and every gradient entry at least 0.05."""
+    while True:
+        obstacle = rng.uniform(-3, 3, 2)
+        d = rng.uniform(OBSTACLE_MIN, 0.6) if near else rng.uniform(OBSTACLE_MIN, 3.0)
+        t = angle(rng)
+        point = obstacle + d * np.array([np.cos(t), np.sin(t)])
+        lane, push = 2 * point[1], 2 * d * np.array([np.cos(t), np.sin(t)]) / d**4
+        if abs(d - 1) >= 0.15 and abs(point[1]) >= 0.1 and abs(push[0]) >= 0.05 and abs(lane - push[1]) >= 0.05:
+            return point, obstacle
+
+
+def _planner_cases(rng: np.random.Generator, n: int = 6) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    return [(*_planner_case(rng), form) for form in (FORMS * n)[:n]]
+
+
+@CHECKS.check("planner_cost", points=1)
+def planner_cost_worked_example(ctx):
+    """planner_cost(0, 1, obstacle=(2, 1)) is 1.25"""
+    want, slips = REF.planner_cost(0, 1, (2, 1)), REF.planner_cost_mistakes(0, 1, (2, 1))
+    got = yield call("planner_cost", 0, 1, (2, 1))
+    return expect(got, want, label="planner_cost(0, 1, (2, 1))", rtol=1e-9, mistakes=known(slips, COST_SLIPS))
+
+
+@CHECKS.check("planner_cost", points=2)
+def planner_cost_random_points(ctx):
+    """planner_cost at random points and obstacles (at least 0.5 apart; the obstacle as a tuple, list or array, also of integers)"""
+    cases = _planner_cases(ctx.rng) + [(np.array([1.0, -2.0]), np.array([3.0, 1.0]), "int array")]
+    expected = [REF.planner_cost(*p, o) for p, o, _ in cases]
+    slips = [known(REF.planner_cost_mistakes(*p, o), COST_SLIPS) for p, o, _ in cases]
+    got = yield [call("planner_cost", float(p[0]), float(p[1]), vector_form(o, form)) for p, o, form in cases]
+    return all_of([expect(g, want, rtol=1e-9, atol=1e-12, entries=COST, mistakes=s,
+                          label=f"planner_cost({fmt(p[0])}, {fmt(p[1])}, {fmt_array(o)} as a {form})")
+                   for g, want, s, (p, o, form) in zip(got, expected, slips, cases)])
+
+
+@CHECKS.check("planner_cost", points=1)
+def planner_cost_raises_at_the_obstacle(ctx):
+    """planner_cost at the obstacle itself raises ValueError (the cost is undefined there)"""
+    got = yield call("planner_cost", 1.5, -0.5, (1.5, -0.5))
+    return expect_raises(got, "ValueError", label="planner_cost(1.5, -0.5, (1.5, -0.5))",
+                         why="1/d^2 is undefined at d = 0")
+
+
+@CHECKS.check("planner_cost_gradient", points=1)
+def planner_cost_gradient_worked_example(ctx):
+    """planner_cost_gradient(0, 1, obstacle=(2, 1)) is (0.25, 2)"""
+    want, slips = REF.planner_cost_gradient(0, 1, (2, 1)), REF.planner_gradient_mistakes(0, 1, (2, 1))
+    got = yield call("planner_cost_gradient", 0, 1, (2, 1))
+    return expect(got, want, label="planner_cost_gradient(0, 1, (2, 1))", entries=GRAD_C, rtol=1e-9,
+                  mistakes=known(slips, PLANNER_SLIPS))
+
+
+PLANNER = Derivative(
+    forward="planner_cost", jacobian="planner_cost_gradient", entries=GRAD_C,
+    args=lambda p, extra: (float(p[0]), float(p[1]), vector_form(extra[0], extra[1])),
+    reference_forward=lambda p, extra: REF.planner_cost(p[0], p[1], extra[0]),
+    reference_jacobian=lambda p, extra: REF.planner_cost_gradient(p[0], p[1], extra[0]),
+    cases=lambda rng: [(p, (o, form)) for p, o, form in _planner_cases(rng)],
+    mistakes=lambda p, extra: known(REF.planner_gradient_mistakes(p[0], p[1], extra[0]), PLANNER_SLIPS),
+)
+add_derivative_checks(CHECKS, PLANNER)
+add_exact_check(CHECKS, "planner_cost_gradient", GRAD_C,
+                lambda rng: [(float(p[0]), float(p[1]), tuple(float(v) for v in o))
+                             for p, o in [_planner_case(rng, near=k < 3) for k in range(6)]],
+                REF.planner_cost_gradient, "within 0.6 of the obstacle")
+
+
+@CHECKS.check("planner_cost_gradient", points=1)
+def planner_cost_gradient_raises_at_the_obstacle(ctx):
+    """planner_cost_gradient at the obstacle itself raises ValueError"""
+    got = yield call("planner_cost_gradient", -2.0, 0.5, [-2.0, 0.5])
+    return expect_raises(got, "ValueError", label="planner_cost_gradient(-2, 0.5, [-2, 0.5])",
+                         why="the cost is undefined at the obstacle")

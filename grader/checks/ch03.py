@@ -10,14 +10,16 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import Skip, chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, angle, polar_point
+from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, elevation,
+                                       polar_point, wound)
 from grader.compare import SINGLE_PRECISION, Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
-from grader.diagnose import Mistake
+from grader.diagnose import Mistake, known
 from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch03")
 CHECKS.uses("area_scale", "polar_to_cartesian_jacobian")
+CHECKS.uses("volume_scale", "spherical_to_cartesian_jacobian")
 REF = reference("ch03")
 
 P = Entries("p", rows=("x", "y"))
@@ -28,8 +30,8 @@ def _points(rng: np.random.Generator, n: int = 6) -> list:
     return [polar_point(rng) for _ in range(n)]
 
 
-def _label(function: str, r: float, theta: float) -> str:
-    return f"{function}({fmt(r)}, {fmt(theta)})"
+def _label(function: str, *args: float) -> str:
+    return f"{function}({', '.join(fmt(v) for v in args)})"
 
 
 @CHECKS.check("polar_to_cartesian", points=1)
@@ -69,6 +71,10 @@ add_derivative_checks(CHECKS, Derivative(
     reference_jacobian=lambda p, extra: REF.polar_to_cartesian_jacobian(*p),
     cases=lambda rng: [(p, ()) for p in _points(rng)],
 ))
+add_exact_check(CHECKS, "polar_to_cartesian_jacobian", J,
+                lambda rng: [(float(rng.uniform(0.01, 0.05)), angle(rng)) for _ in range(3)] +
+                            [(float(rng.uniform(0.5, 5.0)), wound(angle(rng), rng)) for _ in range(3)],
+                REF.polar_to_cartesian_jacobian, "near r = 0 (r 0.01 to 0.05) and many turns round")
 
 
 @CHECKS.check("area_scale", points=1)
@@ -80,7 +86,7 @@ def area_scale_worked_example(ctx):
 
 @CHECKS.check("area_scale", points=1)
 def area_scale_is_r(ctx):
-    """area_scale = det J = r at random points (signed: a negative r gives a negative det)"""
+    """area_scale is the signed determinant of J at random points (a negative r gives a negative determinant)"""
     rng = ctx.rng
     calls = [call("area_scale", float(r), float(t)) for r, t in _points(rng) + [(-rng.uniform(0.5, 3.0), angle(rng))]]
     expected = [REF.area_scale(*c.args) for c in calls]
@@ -94,25 +100,142 @@ def area_scale_is_r(ctx):
 @CHECKS.check("area_scale", points=1)
 def area_scale_is_det_of_your_jacobian(ctx):
     """area_scale equals the determinant of your own polar_to_cartesian_jacobian"""
-    points = _points(ctx.rng, 4)
-    scales = [REF.area_scale(float(r), float(t)) for r, t in points]
-    got = yield [{"det": call("area_scale", float(r), float(t)), "J": call("polar_to_cartesian_jacobian", float(r), float(t))}
-                 for r, t in points]
+    points = [(float(r), float(t)) for r, t in _points(ctx.rng, 4)]
+    return (yield from _det_of_your_jacobian("area_scale", "polar_to_cartesian_jacobian", points,
+                                             [REF.area_scale(*p) for p in points]))
+
+
+def _det_of_your_jacobian(scale: str, jacobian: str, points: list[tuple], scales: list[float]):
+    """The check that learner function `scale` is the determinant of the learner's own `jacobian` at `points`
+    (the reference's determinants `scales` tell a wrong J, which is not judged here, from a wrong scale)."""
+    got = yield [{"det": call(scale, *p), "J": call(jacobian, *p)} for p in points]
+    n = len(points[0])
     verdicts = []
-    for g, (r, t), scale in zip(got, points, scales):
-        label = _label("area_scale", r, t)
+    for g, p, want in zip(got, points, scales):
+        label = _label(scale, *p)
         problem = value_problem(g["det"], (), label)
         if problem:
             return fail(problem)
-        problem = value_problem(g["J"], (2, 2), _label("polar_to_cartesian_jacobian", r, t))
+        own_label = _label(jacobian, *p)
+        problem = value_problem(g["J"], (n, n), own_label)
         if problem:
-            raise Skip(f"{problem} So area_scale cannot be compared with the determinant of your J: not judged, no "
+            raise Skip(f"{problem} So {scale} cannot be compared with the determinant of your J: not judged, no "
                        "points lost.", costs_nothing=True)
         own_det = float(np.linalg.det(g["J"].as_array()))
-        if not np.isclose(own_det, scale, rtol=SINGLE_PRECISION, atol=1e-12):  # a float32 J is a right J
-            raise Skip(f"the determinant of your {_label('polar_to_cartesian_jacobian', r, t)} is {fmt(own_det)}, "
-                       f"not {fmt(scale)}: fix J first (see its checks); not judged, no points lost.",
-                       costs_nothing=True)
+        if not np.isclose(own_det, want, rtol=SINGLE_PRECISION, atol=1e-12):  # a float32 J is a right J
+            raise Skip(f"the determinant of your {own_label} is {fmt(own_det)}, not {fmt(want)}: fix J first (see "
+                       "its checks); not judged, no points lost.", costs_nothing=True)
         verdicts.append(compare_arrays(g["det"].as_array(), own_det, label=label, rtol=1e-9, atol=1e-12,
                                        expected_name="det of your J"))
     return all_of(verdicts)
+
+
+# ------------------------------------------------------------------------------ spherical coordinates (3-D)
+
+S = Entries("p", rows=("x", "y", "z"))
+JS = Entries("J", rows=("x", "y", "z"), cols=("r", "azimuth", "elevation"), derivative=True)
+ELEVATION_MAX = 1.4  # the contract: graded elevations stay within this of the horizon (cos(elevation) > 0.17)
+
+SPHERICAL_SLIPS = {
+    "colatitude": "the elevation is measured from the z-axis: it is the angle above the x-y plane, so z = r "
+                  "sin(elevation) and the horizontal distance is r cos(elevation).",
+    "degrees": "the angles are read as degrees: they are in radians.",
+    "angles swapped": "azimuth and elevation are swapped: the arguments are (r, azimuth, elevation).",
+}
+SPHERICAL_JACOBIAN_SLIPS = {
+    "missing r": "the azimuth and elevation columns miss the factor r: turning by an angle moves the point along "
+                 "an arc whose length grows with r.",
+    "missing cos(elevation)": "the azimuth column misses the factor cos(elevation): the azimuth turns the point "
+                              "on a circle of radius r cos(elevation), not r.",
+    "colatitude": "that is the Jacobian with the elevation measured from the z-axis: the elevation is the angle "
+                  "above the x-y plane.",
+}
+VOLUME_SLIPS = {
+    "r for r^2": "the determinant has one factor r: both angle columns of J carry r.",
+    "missing cos(elevation)": "the determinant misses the factor the elevation brings: take the determinant of "
+                              "the whole J.",
+    "colatitude": "that is the determinant with the elevation measured from the z-axis: the elevation is the angle "
+                  "above the x-y plane.",
+}
+
+
+def _spherical_point(rng: np.random.Generator, near: bool = False) -> np.ndarray:
+    """(r, azimuth, elevation): r in [0.3, 5] and every angle away from the axes (near: r in [0.3, 0.5] and
+    |elevation| in [1.2, 1.37], close to the poles where the Jacobian is singular); J never symmetric."""
+    while True:
+        r = rng.uniform(0.3, 0.5) if near else rng.uniform(0.3, 5.0)
+        point = np.array([r, angle(rng), elevation(rng, 1.2 if near else 0.2)])
+        jacobian = REF.spherical_to_cartesian_jacobian(*point)
+        if np.max(np.abs(jacobian - jacobian.T)) >= 0.01:
+            return point
+
+
+@CHECKS.check("spherical_to_cartesian", points=1)
+def spherical_worked_example(ctx):
+    """spherical_to_cartesian(2, 0, 0) is (2, 0, 0)"""
+    want = REF.spherical_to_cartesian(2, 0, 0)
+    got = yield call("spherical_to_cartesian", 2, 0, 0)
+    return expect(got, want, label="spherical_to_cartesian(2, 0, 0)", entries=S, rtol=1e-9)
+
+
+@CHECKS.check("spherical_to_cartesian", points=2)
+def spherical_random_points(ctx):
+    """spherical_to_cartesian at random points above and below the horizon, in every direction (angles in radians)"""
+    points = [_spherical_point(ctx.rng) for _ in range(6)]
+    expected = [REF.spherical_to_cartesian(*p) for p in points]
+    slips = [known(REF.spherical_mistakes(*p), SPHERICAL_SLIPS) for p in points]
+    got = yield [call("spherical_to_cartesian", *(float(v) for v in p)) for p in points]
+    return all_of([expect(g, want, label=_label("spherical_to_cartesian", *p), entries=S, rtol=1e-9,
+                          atol=1e-12, mistakes=s) for g, want, s, p in zip(got, expected, slips, points)])
+
+
+@CHECKS.check("spherical_to_cartesian_jacobian", points=2)
+def spherical_jacobian_worked_example(ctx):
+    """spherical_to_cartesian_jacobian(2, 0, 0) is diag(1, 2, 2)"""
+    want, slips = REF.spherical_to_cartesian_jacobian(2, 0, 0), REF.spherical_jacobian_mistakes(2, 0, 0)
+    got = yield call("spherical_to_cartesian_jacobian", 2, 0, 0)
+    return expect(got, want, label="spherical_to_cartesian_jacobian(2, 0, 0)", entries=JS, rtol=1e-9,
+                  mistakes=known(slips, SPHERICAL_JACOBIAN_SLIPS))
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="spherical_to_cartesian", jacobian="spherical_to_cartesian_jacobian", entries=JS,
+    args=lambda p, extra: tuple(float(v) for v in p),
+    reference_forward=lambda p, extra: REF.spherical_to_cartesian(*p),
+    reference_jacobian=lambda p, extra: REF.spherical_to_cartesian_jacobian(*p),
+    cases=lambda rng: [(_spherical_point(rng), ()) for _ in range(6)],
+    mistakes=lambda p, extra: known(REF.spherical_jacobian_mistakes(*p), SPHERICAL_JACOBIAN_SLIPS),
+))
+add_exact_check(CHECKS, "spherical_to_cartesian_jacobian", JS,
+                lambda rng: [tuple(float(v) for v in _spherical_point(rng, near=True)) for _ in range(3)] +
+                            [(float(r), wound(az, rng), float(el)) for r, az, el in
+                             (_spherical_point(rng) for _ in range(3))],
+                REF.spherical_to_cartesian_jacobian,
+                "close to the poles (r 0.3 to 0.5, |elevation| 1.2 to 1.37) and at azimuths many turns round")
+
+
+@CHECKS.check("volume_scale", points=1)
+def volume_scale_worked_example(ctx):
+    """volume_scale(2, 0, 0) is det J = 4"""
+    want, slips = REF.volume_scale(2, 0, 0), REF.volume_scale_mistakes(2, 0, 0)
+    got = yield call("volume_scale", 2, 0, 0)
+    return expect(got, want, label="volume_scale(2, 0, 0)", rtol=1e-9, mistakes=known(slips, VOLUME_SLIPS))
+
+
+@CHECKS.check("volume_scale", points=1)
+def volume_scale_random_points(ctx):
+    """volume_scale is the signed determinant of the spherical Jacobian at random points"""
+    points = [_spherical_point(ctx.rng) for _ in range(6)]
+    expected = [REF.volume_scale(*p) for p in points]
+    slips = [known(REF.volume_scale_mistakes(*p), VOLUME_SLIPS) for p in points]
+    got = yield [call("volume_scale", *(float(v) for v in p)) for p in points]
+    return all_of([expect(g, want, label=_label("volume_scale", *p), rtol=1e-9, atol=1e-12, mistakes=s)
+                   for g, want, s, p in zip(got, expected, slips, points)])
+
+
+@CHECKS.check("volume_scale", points=1)
+def volume_scale_is_det_of_your_jacobian(ctx):
+    """volume_scale equals the determinant of your own spherical_to_cartesian_jacobian"""
+    points = [tuple(float(v) for v in _spherical_point(ctx.rng)) for _ in range(4)]
+    return (yield from _det_of_your_jacobian("volume_scale", "spherical_to_cartesian_jacobian", points,
+                                             [REF.volume_scale(*p) for p in points]))

@@ -12,15 +12,19 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point, polar_point, vector_form
-from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt_array, value_problem
-from grader.diagnose import Mistake
+from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, planar_point,
+                                       polar_point, vector_form, wound)
+from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, fmt_array, value_problem
+from grader.diagnose import known
 from grader.expected import reference
 from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch04")
 CHECKS.uses("pipeline_jacobian", "polar_to_cartesian", "polar_to_cartesian_jacobian", "g_stage", "g_jacobian",
             "compose_jacobian")
+CHECKS.uses("lidar_to_world", "polar_to_cartesian")
+CHECKS.uses("lidar_to_world_jacobian", "polar_to_cartesian_jacobian", "compose_jacobian", "lidar_to_world")
+CHECKS.uses("lidar_pose_jacobian", "polar_to_cartesian", "lidar_to_world")
 REF = reference("ch04")
 
 G = Entries("g", rows=("u1^2 + u2", "u1 u2"))
@@ -39,8 +43,8 @@ SLIPS = {"order": "the product is in the wrong order, Jf(x) @ Jg(f(x)): the chai
          "elementwise": "that is an elementwise product (*): the chain rule multiplies matrices (@)."}
 
 
-def _slips(candidates: dict) -> list[Mistake]:
-    return [Mistake(name, SLIPS[name], candidates[name]) for name in SLIPS if name in candidates]
+def _slips(candidates: dict) -> list:
+    return known(candidates, SLIPS)
 
 
 @CHECKS.check("g_stage", points=2)
@@ -77,6 +81,10 @@ add_derivative_checks(CHECKS, Derivative(
     reference_jacobian=lambda p, extra: REF.g_jacobian(p),
     cases=lambda rng: [(_u_point(rng), (form,)) for form in FORMS * 2],
 ))
+add_exact_check(CHECKS, "g_jacobian", JG,
+                lambda rng: [(tuple(float(v) for v in planar_point(rng, *((20.0, 60.0) if k % 2 else (0.8, 4.5)))),)
+                             for k in range(6)],
+                REF.g_jacobian, "far from the origin")
 
 
 def _slips_show(candidates: dict) -> bool:
@@ -127,7 +135,7 @@ def compose_jacobian_order_and_point(ctx):
 
 @CHECKS.check("pipeline_jacobian", points=2)
 def pipeline_jacobian_worked_example(ctx):
-    """pipeline_jacobian(4, pi/3) is [[2.866, -11.856], [3.464, -8.000]]"""
+    """pipeline_jacobian at the lesson's point (4, pi/3), the lesson's worked example"""
     want, slips = REF.pipeline_jacobian(4, np.pi / 3), REF.pipeline_mistakes(4, np.pi / 3)
     got = yield call("pipeline_jacobian", 4, np.pi / 3)
     return expect(got, want, label="pipeline_jacobian(4, pi/3)", entries=J_PIPE, rtol=1e-9, mistakes=_slips(slips))
@@ -143,3 +151,131 @@ add_derivative_checks(CHECKS, Derivative(
     cases=lambda rng: [(polar_point(rng, 4.0), ()) for _ in range(6)],
     mistakes=lambda p, extra: _slips(REF.pipeline_mistakes(*p)),
 ))
+add_exact_check(CHECKS, "pipeline_jacobian", J_PIPE,
+                lambda rng: [(float(rng.uniform(0.01, 0.05)), angle(rng)) for _ in range(3)] +
+                            [(float(rng.uniform(0.5, 4.0)), wound(angle(rng), rng)) for _ in range(3)],
+                REF.pipeline_jacobian, "near r = 0 (r 0.01 to 0.05) and many turns round")
+
+
+# ------------------------------------------------------------------------------ the lidar-to-world pipeline
+
+W = Entries("w", rows=("world x", "world y"))
+J_LIDAR = Entries("J", rows=("world x", "world y"), cols=("r", "theta"), derivative=True)
+J_POSE = Entries("J_pose", rows=("world x", "world y"), cols=("px", "py", "phi"), derivative=True)
+POSE_FORMS = ("tuple", "list", "array")
+
+LIDAR_SLIPS = {
+    "missing rotation": "the point is not rotated by the heading phi: turn polar_to_cartesian(r, theta) by phi "
+                        "before adding (px, py).",
+    "rotation transposed": "the point is rotated by -phi: the rotation by phi is [[cos phi, -sin phi], "
+                           "[sin phi, cos phi]].",
+    "missing translation": "the robot's position (px, py) is not added.",
+}
+LIDAR_JACOBIAN_SLIPS = {
+    "order": "the product is in the wrong order, J_polar @ R: the chain rule puts the outer stage, the rotation, "
+             "on the left.",
+    "missing rotation": "that is the polar Jacobian alone: the rotation by phi is a stage of the pipeline too, and "
+                        "its Jacobian multiplies from the left.",
+    "rotation transposed": "the polar Jacobian is rotated by -phi: the rotation stage turns by phi.",
+}
+POSE_SLIPS = {
+    "missing rotation derivative": "the phi column is zero: turning the robot moves the world point too; "
+                                   "differentiate the rotation by phi.",
+    "world point": "the phi column turns the world point about the origin: the robot turns about its own position, "
+                   "so it is the lidar's point relative to the robot (before adding (px, py)) that turns.",
+    "missing identity": "the px and py columns are zero: moving the robot by (dpx, dpy) moves the world point by "
+                        "the same amount.",
+}
+
+
+def _lidar_case(rng: np.random.Generator, near: bool = False) -> tuple[float, float, np.ndarray]:
+    """(r, theta, pose): r in [0.3, 5] at least 0.1 from 1 (near: r in [0.3, 0.5]), theta, phi and theta + phi
+    away from the axes and diagonals, (px, py) in [-5, 5]^2."""
+    while True:
+        r = rng.uniform(0.3, 0.5) if near else rng.uniform(0.3, 5.0)
+        theta, phi = angle(rng), angle(rng)
+        turn = (theta + phi) % (np.pi / 4)
+        if abs(r - 1) >= 0.1 and 0.15 <= turn <= np.pi / 4 - 0.15:
+            return float(r), float(theta), np.array([rng.uniform(-5, 5), rng.uniform(-5, 5), phi])
+
+
+def _lidar_label(function: str, r: float, theta: float, pose: np.ndarray, form: str = "tuple") -> str:
+    return f"{function}({fmt(r)}, {fmt(theta)}, pose={fmt_array(pose)} as a {form})"
+
+
+@CHECKS.check("lidar_to_world", points=1)
+def lidar_to_world_worked_example(ctx):
+    """lidar_to_world(1, 0, pose=(1, 2, pi/2)) is (1, 3)"""
+    pose = (1.0, 2.0, np.pi / 2)
+    want, slips = REF.lidar_to_world(1, 0, pose), REF.lidar_mistakes(1, 0, pose)
+    got = yield call("lidar_to_world", 1, 0, pose)
+    return expect(got, want, label="lidar_to_world(1, 0, (1, 2, pi/2))", entries=W, rtol=1e-9,
+                  mistakes=known(slips, LIDAR_SLIPS))
+
+
+@CHECKS.check("lidar_to_world", points=2)
+def lidar_to_world_random_points(ctx):
+    """lidar_to_world at random returns and poses (the pose as a tuple, list or numpy array)"""
+    cases = [(*_lidar_case(ctx.rng), form) for form in POSE_FORMS * 2]
+    expected = [REF.lidar_to_world(r, t, pose) for r, t, pose, _ in cases]
+    slips = [known(REF.lidar_mistakes(r, t, pose), LIDAR_SLIPS) for r, t, pose, _ in cases]
+    got = yield [call("lidar_to_world", r, t, vector_form(pose, form)) for r, t, pose, form in cases]
+    return all_of([expect(g, want, label=_lidar_label("lidar_to_world", *case), entries=W, rtol=1e-9, atol=1e-12,
+                          mistakes=s) for g, want, s, case in zip(got, expected, slips, cases)])
+
+
+@CHECKS.check("lidar_to_world_jacobian", points=2)
+def lidar_to_world_jacobian_worked_example(ctx):
+    """lidar_to_world_jacobian(1, 0, pose=(1, 2, pi/2)) is [[0, -1], [1, 0]]"""
+    pose = (1.0, 2.0, np.pi / 2)
+    want, slips = REF.lidar_to_world_jacobian(1, 0, pose), REF.lidar_jacobian_mistakes(1, 0, pose)
+    got = yield call("lidar_to_world_jacobian", 1, 0, pose)
+    return expect(got, want, label="lidar_to_world_jacobian(1, 0, (1, 2, pi/2))", entries=J_LIDAR, rtol=1e-9,
+                  mistakes=known(slips, LIDAR_JACOBIAN_SLIPS))
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="lidar_to_world", jacobian="lidar_to_world_jacobian", entries=J_LIDAR,
+    args=lambda p, extra: (float(p[0]), float(p[1]), vector_form(extra[0], extra[1])),
+    reference_forward=lambda p, extra: REF.lidar_to_world(p[0], p[1], extra[0]),
+    reference_jacobian=lambda p, extra: REF.lidar_to_world_jacobian(p[0], p[1], extra[0]),
+    cases=lambda rng: [(np.array([r, t]), (pose, form)) for (r, t, pose), form
+                       in zip((_lidar_case(rng) for _ in range(6)), POSE_FORMS * 2)],
+    mistakes=lambda p, extra: known(REF.lidar_jacobian_mistakes(p[0], p[1], extra[0]), LIDAR_JACOBIAN_SLIPS),
+))
+
+
+def _lidar_exact_cases(rng: np.random.Generator) -> list[tuple]:
+    """Three returns close to the lidar (r 0.3 to 0.5), and three far from the world's origin (px, py about
+    500) with theta and phi many turns round; the pose as a tuple."""
+    near = [(r, t, tuple(float(v) for v in pose)) for r, t, pose in (_lidar_case(rng, near=True) for _ in range(3))]
+    far = [(r, wound(t, rng), (float(px * 100), float(py * 100), wound(phi, rng)))
+           for r, t, (px, py, phi) in (_lidar_case(rng) for _ in range(3))]
+    return near + far
+
+
+LIDAR_EXACT_WHERE = "close to the lidar (r 0.3 to 0.5) and far from the world's origin, many turns round"
+add_exact_check(CHECKS, "lidar_to_world_jacobian", J_LIDAR, _lidar_exact_cases, REF.lidar_to_world_jacobian,
+                LIDAR_EXACT_WHERE)
+
+
+@CHECKS.check("lidar_pose_jacobian", points=2)
+def lidar_pose_jacobian_worked_example(ctx):
+    """lidar_pose_jacobian(1, 0, pose=(1, 2, pi/2)) is [[1, 0, -1], [0, 1, 0]]"""
+    pose = (1.0, 2.0, np.pi / 2)
+    want, slips = REF.lidar_pose_jacobian(1, 0, pose), REF.lidar_pose_mistakes(1, 0, pose)
+    got = yield call("lidar_pose_jacobian", 1, 0, pose)
+    return expect(got, want, label="lidar_pose_jacobian(1, 0, (1, 2, pi/2))", entries=J_POSE, rtol=1e-9,
+                  mistakes=known(slips, POSE_SLIPS))
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="lidar_to_world", jacobian="lidar_pose_jacobian", entries=J_POSE,
+    args=lambda p, extra: (extra[0], extra[1], vector_form(p, extra[2])),
+    reference_forward=lambda p, extra: REF.lidar_to_world(extra[0], extra[1], p),
+    reference_jacobian=lambda p, extra: REF.lidar_pose_jacobian(extra[0], extra[1], p),
+    cases=lambda rng: [(pose, (r, t, form)) for (r, t, pose), form
+                       in zip((_lidar_case(rng) for _ in range(6)), POSE_FORMS * 2)],
+    mistakes=lambda p, extra: known(REF.lidar_pose_mistakes(extra[0], extra[1], p), POSE_SLIPS),
+))
+add_exact_check(CHECKS, "lidar_pose_jacobian", J_POSE, _lidar_exact_cases, REF.lidar_pose_jacobian, LIDAR_EXACT_WHERE)

@@ -5,14 +5,16 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, planar_point
-from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, value_problem
-from grader.diagnose import Mistake
+from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, elevation,
+                                       planar_point)
+from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, fmt, value_problem
+from grader.diagnose import Mistake, known
 from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch06")
 CHECKS.uses("measurement_covariance", "H_jacobian")
+CHECKS.uses("H3_jacobian", "range_bearing_elevation")
 REF = reference("ch06")
 
 Z = Entries("z", rows=("range", "bearing"))
@@ -33,8 +35,7 @@ BEARING_SLIPS = {
 
 
 def _bearing_slips(x: float, y: float) -> list[Mistake]:
-    values = REF.bearing_mistakes(x, y)
-    return [Mistake(name, help, values[name]) for name, help in BEARING_SLIPS.items()]
+    return known(REF.bearing_mistakes(x, y), BEARING_SLIPS)
 
 
 def _H_slips(x: float, y: float, H: np.ndarray) -> list[Mistake]:
@@ -84,11 +85,15 @@ add_derivative_checks(CHECKS, Derivative(
     cases=lambda rng: [(p, ()) for p in _points(rng)],
     mistakes=lambda p, extra: _H_slips(p[0], p[1], REF.H_jacobian(p[0], p[1])),
 ))
+add_exact_check(CHECKS, "H_jacobian", H,
+                lambda rng: [tuple(float(v) for v in planar_point(rng, *((0.01, 0.05) if k < 3 else (0.8, 4.5))))
+                             for k in range(6)],
+                REF.H_jacobian, "near the dish (r 0.01 to 0.05)")
 
 
 @CHECKS.check("H_jacobian", points=1)
 def H_rows_orthogonal(ctx):
-    """H H^T = diag(1, 1/r^2): the range row is a unit vector, the bearing row is orthogonal to it"""
+    """H H^T from your H is the reference's: the range row is a unit vector, the bearing row orthogonal to it"""
     calls = [call("H_jacobian", float(x), float(y)) for x, y in _points(ctx.rng, 5)]
     grams = [REF.measurement_covariance(*c.args, 1.0) for c in calls]  # H H^T = H (1^2 I) H^T
     got = yield calls
@@ -128,7 +133,7 @@ def covariance_worked_example(ctx):
 
 @CHECKS.check("measurement_covariance", points=2)
 def covariance_random_points(ctx):
-    """measurement_covariance = H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2) at random points and sigmas"""
+    """measurement_covariance = H (sigma^2 I) H^T at random points and sigmas"""
     rng = ctx.rng
     calls = [call("measurement_covariance", float(x), float(y), float(rng.uniform(0.1, 2.0))) for x, y in _points(rng, 6)]
     expected = [REF.measurement_covariance(*c.args) for c in calls]
@@ -142,3 +147,110 @@ def covariance_raises_at_origin(ctx):
     """measurement_covariance(0, 0, 1) raises ValueError"""
     got = yield call("measurement_covariance", 0.0, 0.0, 1.0)
     return expect_raises(got, "ValueError", label="measurement_covariance(0, 0, 1)")
+
+
+# ------------------------------------------------------------------------------ range, bearing and elevation (3-D)
+
+Z3 = Entries("z", rows=("range", "bearing", "elevation"))
+H3 = Entries("H3", rows=("range", "bearing", "elevation"), cols=("x", "y", "z"), derivative=True)
+GROUND_MIN = 0.1  # the contract: graded points have x^2 + y^2 >= 0.1
+
+ELEVATION_SLIPS = {
+    "colatitude": "the elevation is measured from the z-axis: it is the angle above the x-y plane, "
+                  "atan2(z, sqrt(x^2 + y^2)).",
+    "range without z": "the range leaves out z: it is the distance in 3-D.",
+    "atan": "the bearing is atan(y/x), which is off by pi where x < 0: use np.arctan2(y, x).",
+    "degrees": "the angles are in degrees: keep them in radians, as atan2 returns them.",
+}
+H3_SLIPS = {
+    "elevation row sign": "d elevation/d x and d elevation/d y have the wrong sign: moving away from the z-axis "
+                          "lowers the elevation of a point above the plane.",
+    "bearing over r^2": "the bearing row is divided by the 3-D r^2: the bearing sees only the horizontal distance, "
+                        "x^2 + y^2.",
+    "elevation over rho^2": "the elevation row is divided by x^2 + y^2: differentiating atan2(z, rho) gives "
+                            "1 / (rho^2 + z^2) = 1 / r^2 as its outer factor.",
+}
+
+
+def _point_3d(rng: np.random.Generator, near: bool = False) -> np.ndarray:
+    """(x, y, z) with x^2 + y^2 in [0.12, 16] (near: [0.1, 0.13], beside the z-axis where the bearing is
+    undefined), bearing and elevation away from the axes and diagonals, |elevation| <= 1.37."""
+    while True:
+        rho = np.sqrt(rng.uniform(0.1, 0.13)) if near else np.sqrt(rng.uniform(0.12, 16.0))
+        bearing, lift = angle(rng), elevation(rng)
+        point = np.array([rho * np.cos(bearing), rho * np.sin(bearing), rho * np.tan(lift)])
+        jacobian = REF.H3_jacobian(*point)
+        if np.max(np.abs(jacobian - jacobian.T)) >= 0.01:
+            return point
+
+
+def _label3(function: str, point) -> str:
+    return f"{function}({', '.join(fmt(v) for v in point)})"
+
+
+@CHECKS.check("range_bearing_elevation", points=1)
+def range_bearing_elevation_worked_example(ctx):
+    """range_bearing_elevation(3, 4, 0) is (5, 0.9273, 0)"""
+    want, slips = REF.range_bearing_elevation(3, 4, 0), REF.elevation_mistakes(3, 4, 0)
+    got = yield call("range_bearing_elevation", 3, 4, 0)
+    return expect(got, want, label="range_bearing_elevation(3, 4, 0)", entries=Z3, rtol=1e-9,
+                  mistakes=known(slips, ELEVATION_SLIPS))
+
+
+@CHECKS.check("range_bearing_elevation", points=2)
+def range_bearing_elevation_random_points(ctx):
+    """range_bearing_elevation at random points in all eight octants (angles from atan2, in radians)"""
+    points = [_point_3d(ctx.rng) for _ in range(8)]
+    expected = [REF.range_bearing_elevation(*p) for p in points]
+    slips = [known(REF.elevation_mistakes(*p), ELEVATION_SLIPS) for p in points]
+    got = yield [call("range_bearing_elevation", *(float(v) for v in p)) for p in points]
+    return all_of([expect(g, want, label=_label3("range_bearing_elevation", p), entries=Z3, rtol=1e-9, atol=1e-12,
+                          mistakes=s) for g, want, s, p in zip(got, expected, slips, points)])
+
+
+@CHECKS.check("H3_jacobian", points=2)
+def H3_worked_example(ctx):
+    """H3_jacobian(1, 0, 1) is [[0.7071, 0, 0.7071], [0, 1, 0], [-0.5, 0, 0.5]]"""
+    want, slips = REF.H3_jacobian(1, 0, 1), REF.H3_mistakes(1, 0, 1)
+    got = yield call("H3_jacobian", 1, 0, 1)
+    return expect(got, want, label="H3_jacobian(1, 0, 1)", entries=H3, rtol=1e-9, mistakes=known(slips, H3_SLIPS))
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="range_bearing_elevation", jacobian="H3_jacobian", entries=H3,
+    args=lambda p, extra: tuple(float(v) for v in p),
+    reference_forward=lambda p, extra: REF.range_bearing_elevation(*p),
+    reference_jacobian=lambda p, extra: REF.H3_jacobian(*p),
+    cases=lambda rng: [(_point_3d(rng), ()) for _ in range(6)],
+    mistakes=lambda p, extra: known(REF.H3_mistakes(*p), H3_SLIPS),
+))
+add_exact_check(CHECKS, "H3_jacobian", H3,
+                lambda rng: [tuple(float(v) for v in _point_3d(rng, near=k < 3)) for k in range(6)],
+                REF.H3_jacobian, "beside the z-axis (x^2 + y^2 from 0.1 to 0.13)")
+
+
+@CHECKS.check("H3_jacobian", points=1)
+def H3_rows_orthogonal(ctx):
+    """the rows of your H3 are orthogonal: H3 H3^T is the diagonal matrix of their squared lengths"""
+    points = [_point_3d(ctx.rng) for _ in range(5)]
+    grams = [h @ h.T for h in (REF.H3_jacobian(*p) for p in points)]
+    got = yield [call("H3_jacobian", *(float(v) for v in p)) for p in points]
+    verdicts = []
+    for g, gram, p in zip(got, grams, points):
+        label = _label3("H3_jacobian", p)
+        problem = value_problem(g, (3, 3), label)
+        if problem:
+            return Verdict(False, problem)
+        h = g.as_array()
+        verdicts.append(compare_arrays(h @ h.T, gram, label=f"H3 H3^T from your {label}", entries=Entries("H3 H3^T"),
+                                       rtol=1e-6, atol=1e-9))
+    return all_of(verdicts)
+
+
+@CHECKS.check("H3_jacobian", points=1)
+def H3_raises_on_the_z_axis(ctx):
+    """H3_jacobian(0, 0, z) raises ValueError (no bearing where x = y = 0), also at the origin"""
+    got = yield [call("H3_jacobian", 0.0, 0.0, z) for z in (1.3, -0.7, 0.0)]
+    return all_of([expect_raises(g, "ValueError", label=f"H3_jacobian(0, 0, {fmt(z)})",
+                                 why="the bearing is undefined where x = y = 0")
+                   for g, z in zip(got, (1.3, -0.7, 0.0))])

@@ -17,13 +17,16 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import Derivative, add_derivative_checks, angle, time_step, vector_form
+from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, time_step,
+                                       vector_form, wound)
 from grader.compare import SINGLE_PRECISION, Entries, all_of, expect, fail, fmt, passed, value_problem
-from grader.diagnose import Mistake
+from grader.diagnose import Mistake, known
 from grader.expected import reference
 from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch07")
+CHECKS.uses("bicycle_control_jacobian", "bicycle_model")
+CHECKS.uses("control_noise_covariance", "bicycle_control_jacobian", "propagate_covariance")
 REF = reference("ch07")
 
 STATE = ("x", "y", "theta")
@@ -104,6 +107,10 @@ add_derivative_checks(CHECKS, Derivative(
     cases=lambda rng: [(_state(rng), _controls(rng)) for _ in range(6)],
     mistakes=lambda p, extra: _dt_slips("F_jacobian", p, *extra),
 ))
+add_exact_check(CHECKS, "F_jacobian", F,
+                lambda rng: [((float(x * 100), float(y * 100), wound(th, rng)), *_controls(rng))
+                             for x, y, th in (_state(rng) for _ in range(6))],
+                REF.F_jacobian, "far from the origin (x, y up to 500), headings many turns round")
 
 
 @CHECKS.check("F_jacobian", points=1)
@@ -166,7 +173,7 @@ def _matrix(values: np.ndarray, form: str) -> Array:
 
 @CHECKS.check("propagate_covariance", points=2)
 def propagate_worked_example(ctx):
-    """propagate_covariance(diag(0.04, 0.04, 0.01), F of the worked example) = [[0.0401, -0.000173, -0.001], ...]"""
+    """propagate_covariance at the lesson's P = diag(0.04, 0.04, 0.01) and the F of F_jacobian's worked example"""
     P = np.diag([0.04, 0.04, 0.01])
     Fm = REF.F_jacobian((0.0, 0.0, np.pi / 6), 2.0, 0.5, 0.1)
     expected = REF.propagate_covariance(P, Fm)  # [[0.0401, -0.000173, -0.001], [-0.000173, 0.0403, 0.001732], ...]
@@ -254,4 +261,148 @@ def propagate_result_is_symmetric_psd(ctx):
         if lowest < -SYMMETRY * size:
             return fail(f"{label} has a negative eigenvalue {fmt(lowest)}: F P F^T must be positive semi-definite.",
                         got=out)
+    return passed()
+
+
+# ------------------------------------------------------------------------------ the bicycle model's controls
+
+CONTROLS = ("v", "steer")
+V = Entries("V", rows=NEW_STATE, cols=CONTROLS, derivative=True)
+Q_ENTRIES = _cov_entries(3)
+STEER_MAX = 1.0  # the contract: graded steering angles stay within this (tan and 1/cos^2 stay finite)
+LESSON_BICYCLE = ((0.0, 0.0, 0.0), 2.0, 0.0, 1.0, 0.1)  # state, v, steer, wheelbase, dt: the contract's point
+
+BICYCLE_SLIPS = {
+    "missing dt": "dt is missing: every change in one step is a rate times dt.",
+    "steer as turn rate": "the steering angle is used as the turn rate: the heading turns at v tan(steer) / wheelbase.",
+    "missing wheelbase": "the turn rate is not divided by the wheelbase: a longer car turns more slowly.",
+    "steer for tan(steer)": "the turn rate uses steer where the model has tan(steer).",
+}
+CONTROL_SLIPS = {
+    "missing 1/cos^2": "d theta'/d steer is missing the derivative of tan: differentiate tan(steer) itself.",
+    "1/cos for 1/cos^2": "d theta'/d steer has the derivative of tan as 1/cos(steer): it is 1/cos^2(steer).",
+    "tan for 1/cos^2": "d theta'/d steer keeps tan(steer): differentiate it with respect to steer.",
+    "missing dt": "dt is missing: every entry is a rate times dt.",
+}
+NOISE_SLIPS = {
+    "sigma not squared": "the standard deviations are used as variances: the control covariance is "
+                         "diag(sigma_v^2, sigma_steer^2).",
+    "sigmas swapped": "sigma_v and sigma_steer are swapped: the first control is the speed v.",
+}
+
+
+def _bicycle_case(rng: np.random.Generator, near: bool = False) -> tuple:
+    """(state, v, steer, wheelbase, dt): |v| in [0.5, 3], |steer| in [0.1, 1] (near: [0.8, 1], where tan
+    steepens), wheelbase in [0.5, 3] at least 0.1 from 1, dt in [0.05, 0.5]."""
+    v = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 3.0))
+    steer = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.8 if near else 0.1, STEER_MAX))
+    wheelbase = float(rng.choice([rng.uniform(0.5, 0.9), rng.uniform(1.1, 3.0)]))
+    return _state(rng), v, steer, wheelbase, time_step(rng)
+
+
+def _bicycle_label(function: str, state, v: float, steer: float, wheelbase: float, dt: float, *rest: float) -> str:
+    tail = "".join(f", {name}={fmt(value)}" for name, value in zip(("sigma_v", "sigma_steer"), rest))
+    return (f"{function}({_show(state)}, v={fmt(v)}, steer={fmt(steer)}, wheelbase={fmt(wheelbase)}, "
+            f"dt={fmt(dt)}{tail})")
+
+
+@CHECKS.check("bicycle_model", points=1)
+def bicycle_model_lesson_point(ctx):
+    """bicycle_model((0, 0, 0), v=2, steer=0, wheelbase=1, dt=0.1) is (0.2, 0, 0)"""
+    want = REF.bicycle_model(*LESSON_BICYCLE)
+    got = yield call("bicycle_model", (0, 0, 0), 2.0, 0.0, 1.0, 0.1)
+    return expect(got, want, label=_bicycle_label("bicycle_model", *LESSON_BICYCLE), rtol=RTOL, atol=ATOL, entries=S)
+
+
+@CHECKS.check("bicycle_model", points=2)
+def bicycle_model_random_inputs(ctx):
+    """bicycle_model at random states, speeds, steering angles, wheelbases and time steps (tuples, lists, arrays)"""
+    cases = [(_bicycle_case(ctx.rng), form) for form in ("tuple", "list", "array", "list", "tuple", "int array")]
+    cases[-1] = ((np.array([2.0, -1.0, 1.0]), *cases[-1][0][1:]), "int array")
+    expected = [REF.bicycle_model(*case) for case, _ in cases]
+    slips = [known(REF.bicycle_mistakes(*case), BICYCLE_SLIPS) for case, _ in cases]
+    got = yield [call("bicycle_model", vector_form(case[0], form), *case[1:]) for case, form in cases]
+    return all_of([expect(g, want, label=_bicycle_label("bicycle_model", *case), rtol=RTOL, atol=ATOL, entries=S,
+                          mistakes=s) for g, want, s, (case, _) in zip(got, expected, slips, cases)])
+
+
+@CHECKS.check("bicycle_control_jacobian", points=2)
+def bicycle_control_jacobian_worked_example(ctx):
+    """bicycle_control_jacobian((0, 0, 0), v=2, steer=0, wheelbase=1, dt=0.1) is [[0.1, 0], [0, 0], [0, 0.2]]"""
+    want, slips = REF.bicycle_control_jacobian(*LESSON_BICYCLE), REF.bicycle_jacobian_mistakes(*LESSON_BICYCLE)
+    got = yield call("bicycle_control_jacobian", (0, 0, 0), 2.0, 0.0, 1.0, 0.1)
+    return expect(got, want, label=_bicycle_label("bicycle_control_jacobian", *LESSON_BICYCLE), rtol=RTOL,
+                  atol=ATOL, entries=V, mistakes=known(slips, CONTROL_SLIPS))
+
+
+add_derivative_checks(CHECKS, Derivative(
+    forward="bicycle_model", jacobian="bicycle_control_jacobian", entries=V,
+    args=lambda p, extra: (vector_form(extra[0], extra[3]), float(p[0]), float(p[1]), extra[1], extra[2]),
+    reference_forward=lambda p, extra: REF.bicycle_model(extra[0], p[0], p[1], extra[1], extra[2]),
+    reference_jacobian=lambda p, extra: REF.bicycle_control_jacobian(extra[0], p[0], p[1], extra[1], extra[2]),
+    cases=lambda rng: [(np.array([v, steer]), (state, wheelbase, dt, form)) for (state, v, steer, wheelbase, dt), form
+                       in zip((_bicycle_case(rng) for _ in range(6)), ("tuple", "list", "array") * 2)],
+    mistakes=lambda p, extra: known(REF.bicycle_jacobian_mistakes(extra[0], p[0], p[1], extra[1], extra[2]),
+                                    CONTROL_SLIPS),
+))
+add_exact_check(CHECKS, "bicycle_control_jacobian", V,
+                lambda rng: [(tuple(float(v) for v in state), *rest)
+                             for state, *rest in (_bicycle_case(rng, near=k < 3) for k in range(6))],
+                REF.bicycle_control_jacobian, "at steering angles 0.8 to 1 (tan steepens)")
+
+
+@CHECKS.check("control_noise_covariance", points=1)
+def control_noise_lesson_point(ctx):
+    """control_noise_covariance at the control Jacobian's point with sigma_v = 0.5, sigma_steer = 0.1"""
+    case = (*LESSON_BICYCLE, 0.5, 0.1)
+    want, slips = REF.control_noise_covariance(*case), REF.control_noise_mistakes(*case)
+    got = yield call("control_noise_covariance", (0, 0, 0), 2.0, 0.0, 1.0, 0.1, 0.5, 0.1)
+    return expect(got, want, label=_bicycle_label("control_noise_covariance", *case), rtol=RTOL, atol=ATOL,
+                  entries=Q_ENTRIES, mistakes=known(slips, NOISE_SLIPS))
+
+
+def _noise_cases(rng: np.random.Generator, n: int) -> list[tuple]:
+    """Bicycle cases with sigma_v in [0.1, 1] and sigma_steer in [0.02, 0.3], the two never within 0.05."""
+    cases = []
+    while len(cases) < n:
+        sigma_v, sigma_steer = float(rng.uniform(0.1, 1.0)), float(rng.uniform(0.02, 0.3))
+        if abs(sigma_v - sigma_steer) >= 0.05:
+            cases.append((*_bicycle_case(rng), sigma_v, sigma_steer))
+    return cases
+
+
+@CHECKS.check("control_noise_covariance", points=2)
+def control_noise_random_inputs(ctx):
+    """control_noise_covariance = V diag(sigma_v^2, sigma_steer^2) V^T at random inputs, V the control Jacobian"""
+    cases = _noise_cases(ctx.rng, 6)
+    expected = [REF.control_noise_covariance(*case) for case in cases]
+    slips = [known(REF.control_noise_mistakes(*case), NOISE_SLIPS) for case in cases]
+    got = yield [call("control_noise_covariance", tuple(float(v) for v in case[0]), *case[1:]) for case in cases]
+    return all_of([expect(g, want, label=_bicycle_label("control_noise_covariance", *case), rtol=RTOL, atol=ATOL,
+                          entries=Q_ENTRIES, mistakes=s) for g, want, s, case in zip(got, expected, slips, cases)])
+
+
+@CHECKS.check("control_noise_covariance", points=1)
+def control_noise_symmetric_rank_two(ctx):
+    """control_noise_covariance is symmetric positive semi-definite with rank <= 2 (two controls; checked on your output)"""
+    cases = _noise_cases(ctx.rng, 5)
+    got = yield [call("control_noise_covariance", tuple(float(v) for v in case[0]), *case[1:]) for case in cases]
+    for g, case in zip(got, cases):
+        label = _bicycle_label("control_noise_covariance", *case)
+        problem = value_problem(g, (3, 3), label)
+        if problem:
+            return fail(problem)
+        out = g.as_array()
+        if not np.all(np.isfinite(out)):
+            return fail(f"{label} is not finite: {_mat(out)}.", got=out)
+        size = float(np.max(np.abs(out))) or 1.0
+        if float(np.max(np.abs(out - out.T))) > SYMMETRY * size:
+            return fail(f"{label} is not symmetric: {_mat(out)} (V S V^T always is).", got=out)
+        values = np.linalg.eigvalsh(0.5 * (out + out.T))
+        if values[0] < -SYMMETRY * size:
+            return fail(f"{label} has a negative eigenvalue {fmt(values[0])}: a covariance is positive "
+                        "semi-definite.", got=out)
+        if values[0] > SYMMETRY * size:
+            return fail(f"{label} has rank 3 (eigenvalues {_show(values)}): two noisy controls spread the state "
+                        "in at most two directions, so their covariance has rank <= 2.", got=out)
     return passed()

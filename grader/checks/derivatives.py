@@ -15,6 +15,16 @@ transpose or missing term moves an entry by at least its own size, and the point
 every nonzero entry of every derivative above MIN_ENTRY = 1e-3 in size (and a square
 Jacobian that far from symmetric) (tests/test_tolerances.py checks both bounds
 on every derivative and on such mutants), so no such error can hide under the tolerance.
+
+The exact derivative (add_exact_check). Where the chapter's point is the derivative, one check asks
+for it exact to rounding: |got - exact| <= EXACT_RTOL (|exact| + the largest entry), with no
+single-precision floor. An analytic or autograd answer in float64 is off by a few units in the last
+place (about 1e-15). A central difference is off by its truncation h^2 f'''/6 plus rounding eps |f| / h:
+at least about eps^(2/3), 4e-11 of the derivative, whatever h (more near a singular point, where the
+higher derivatives grow); a forward difference by at least about eps^(1/2). So a finite difference passed
+off as the derivative fails, and is named. (The central difference of a quadratic, example_gradient,
+bowl_gradient and g_jacobian, is exact in exact arithmetic: with a large step it passes, rightly.) A
+float32 answer (jax's and torch's default) is off by about 1e-7 and gets the hint to compute in float64.
 """
 
 from __future__ import annotations
@@ -26,12 +36,16 @@ import numpy as np
 
 from grader.checks.base import ChapterChecks, Context, Skip
 from grader.compare import Entries, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
-from grader.wire import Array, call
+from grader.diagnose import Mistake
+from grader.wire import Array, Returned, call
 
 STEP = 1e-5
 FD_RTOL = 1e-6
 FD_ATOL = 1e-6
 MIN_ENTRY = 1e-3  # every nonzero derivative entry at the sampled points is at least this large
+EXACT_RTOL = 1e-12  # the exact-derivative check, relative to the entry plus the largest entry
+SINGLE_PRECISION_ERROR = 1e-5  # at most this far off (relatively) and in float32: a float32 answer
+ROUNDED_DIGITS = 1e-3  # at most this far off (relatively): right to some digits only, as a finite difference is
 
 REGISTERED: list = []  # every Derivative given to add_derivative_checks (tests/test_tolerances.py)
 
@@ -172,6 +186,66 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
     checks.check(d.jacobian, own_points, id=f"{d.jacobian}_vs_own_{d.forward}")(vs_own)
 
 
+# --------------------------------------------------------------------- the exact derivative
+
+FLOAT64_HINT = ('compute in float64: jax.config.update("jax_enable_x64", True) before any jax call (with float '
+                'inputs), or torch tensors of dtype=torch.float64')
+
+
+def _single_precision(returned: Returned, got: np.ndarray) -> bool:
+    """The learner's array is float32 (or float16), or every entry is a float32 number cast to float64."""
+    dtype = str((returned.encoded or {}).get("dtype", ""))
+    return dtype in ("float32", "float16") or bool(np.all(got.astype(np.float32).astype(np.float64) == got))
+
+
+def exact_verdict(returned: Returned, exact: np.ndarray, label: str, entries: Entries) -> Verdict:
+    """The learner's derivative against the exact one to rounding (EXACT_RTOL of the entry and of the largest
+    entry), naming an answer right to single precision only and one right to some digits only (a finite
+    difference)."""
+    problem = value_problem(returned, exact.shape, label, entries.symbol)
+    if problem:
+        return Verdict(False, problem, exact)
+    got = returned.as_array()
+    scale = float(np.max(np.abs(exact)))
+    verdict = compare_arrays(got, exact, label=label, rtol=EXACT_RTOL, atol=EXACT_RTOL * scale, entries=entries,
+                             exact=True, expected_name="exact")
+    if verdict.passed:
+        return verdict
+    worst = float(np.max(np.abs(got - exact) / (np.abs(exact) + scale))) if np.all(np.isfinite(got)) else np.inf
+    if worst <= SINGLE_PRECISION_ERROR and _single_precision(returned, got):
+        mistake = Mistake("single precision", f"your {entries.symbol} is right to single precision only (float32, "
+                                              "jax's and torch's default); this check asks for the derivative right "
+                                              f"to float64 rounding: {FLOAT64_HINT}.")
+    elif worst <= ROUNDED_DIGITS:
+        mistake = Mistake("finite difference", f"your {entries.symbol} agrees with the exact derivative to about "
+                                               f"{max(1, int(-np.log10(worst)))} digits only, as a finite difference "
+                                               "does: this check asks for the exact derivative (worked out by hand, or "
+                                               "by autograd in float64), right to rounding where no finite difference "
+                                               "is. A finite difference checks a derivative (chapter 5); it is not one.")
+    else:
+        return verdict
+    verdict.mistake = mistake
+    verdict.message = f"{label}: {mistake.help}\n{verdict.message}"
+    return verdict
+
+
+def add_exact_check(checks: ChapterChecks, function: str, entries: Entries,
+                    cases: Callable[[np.random.Generator], list[tuple]], reference: Callable[..., np.ndarray],
+                    where: str, points: float = 1) -> None:
+    """Register `function`'s exact-derivative check: its values at `cases(rng)` (call arguments: random points
+    and points `where` no finite difference reaches rounding) against `reference(*arguments)`."""
+    def exact_check(ctx: Context):
+        arguments = cases(ctx.rng)
+        wanted = [np.asarray(reference(*args), dtype=float) for args in arguments]
+        got = yield [call(function, *args) for args in arguments]
+        return all_of([exact_verdict(g, want, f"{function}({', '.join(describe_argument(a) for a in args)})", entries)
+                       for g, want, args in zip(got, wanted, arguments)])
+
+    exact_check.__doc__ = (f"{entries.symbol} is the exact derivative, right to rounding (1e-12) at random points "
+                           f"and {where}, where no finite difference is")
+    checks.check(function, points, id=f"{function}_exact", exact_derivative=True)(exact_check)
+
+
 # --------------------------------------------------------------------- non-degenerate inputs
 
 def angle(rng: np.random.Generator) -> float:
@@ -180,6 +254,18 @@ def angle(rng: np.random.Generator) -> float:
     offset = rng.choice([rng.uniform(0.2, 0.585), rng.uniform(0.985, 1.37)])
     return float(quadrant * np.pi / 2 + offset)
 
+
+def elevation(rng: np.random.Generator, low: float = 0.2) -> float:
+    """An angle above or below the horizon, |elevation| in [low, 1.37] (within the contract's 1.4), at least 0.2
+    rad from 0 and from +-pi/4 when low is 0.2."""
+    size = rng.choice([rng.uniform(low, 0.585), rng.uniform(max(low, 0.985), 1.37)]) if low < 0.585 else \
+        rng.uniform(low, 1.37)
+    return float(rng.choice([-1.0, 1.0]) * size)
+
+def wound(value: float, rng: np.random.Generator) -> float:
+    """An angle 12 to 20 whole turns further round (or back): the same direction, but a step that a finite
+    difference adds to it is rounded there, so no finite difference is right to 1e-12 at it."""
+    return float(value + 2 * np.pi * rng.integers(12, 21) * rng.choice([-1.0, 1.0]))
 
 def planar_point(rng: np.random.Generator, r_min: float = 0.8, r_max: float = 4.5) -> np.ndarray:
     """A point (x, y) with r in [r_min, r_max] and its angle away from the axes and diagonals."""
