@@ -223,6 +223,10 @@ def test_verdicts_are_words_not_only_colours(reports, name):
     marks = {"pass": "\u2713", "fail": "\u2717", "error": "!", "skip": "\u2013", "recorded": "\u2022"}
     for (css_class, said), status in zip(parts.statuses, statuses):
         assert css_class == status and said == f"{marks[status]} {status}", (css_class, said)
+    text = path.read_text(encoding="utf-8")
+    verdict = text[text.index('<p id="verdict">'):].split("</p>", 1)[0]
+    assert "above" not in verdict  # no instruction by where things are on the screen (WCAG 1.3.3)
+    assert ("\u2717 fail" in verdict) == (name != "solutions")
 
 
 def test_differing_matrix_entries_are_said_in_words(reports):
