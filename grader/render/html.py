@@ -7,7 +7,7 @@ draw becomes a note; it never breaks the report. matplotlib and jinja2 load only
 
 `render_fragment` gives the same report for a notebook's output: a <div> with its own scoped style.
 Page and fragment meet WCAG 2.1 AA (tests/test_accessibility.py runs axe-core on them in chromium):
-contrast of 6.5:1 or more, verdicts as words and marks, and plots whose series differ by marker or
+contrast of 6.4:1 or more, verdicts as words and marks, and plots whose series differ by marker or
 line style and whose text alternative says in numbers what the learner's functions gave.
 """
 
