@@ -134,7 +134,7 @@ def test_grade_chapter_reports_each_answer_and_keeps_the_code_score(hostile_lear
                           timeout=120)
     assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr[-2000:]
     chapter = json.loads(done.stdout)["chapters"][0]
-    assert chapter["code_score"] == chapter["code_max_score"] == 15
+    assert chapter["code_score"] == chapter["code_max_score"] == float(code_points("ch06"))
     checks = {c["function"]: c for c in chapter["checks"] if c["kind"] == "quiz"}
     assert checks["H_at_point"]["message"].endswith("line 2, question H_at_point: the number is too large")
     assert checks["bearing_variance"]["message"].endswith("question bearing_variance: the number is too large")
