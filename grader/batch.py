@@ -31,9 +31,13 @@ import zipfile
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from grader.chapters import CHAPTERS
 from grader.safe_text import for_json, unicode_clean
+
+if TYPE_CHECKING:
+    from grader.course import Course
 
 CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.py$")
 ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
@@ -339,10 +343,10 @@ def _drop_launcher() -> None:
 
 
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
-                  sandboxed: bool):
-    """One learner's report; tried a second time, with a new fork server, when the first attempt
-    failed for a reason outside the learner's code (Report.infrastructure, or no process could be
-    started at all: an OSError, raised again if the second attempt meets it too)."""
+                  sandboxed: bool, course: Course | None = None):
+    """One learner's report, as `course` has it (grader.pipeline.build_report); tried a second time, with a new
+    fork server, when the first attempt failed for a reason outside the learner's code (Report.infrastructure,
+    or no process could be started at all: an OSError, raised again if the second attempt meets it too)."""
     from grader.pipeline import Request, build_report
     from grader.runner import Limits, Session
     from grader.submission import Submission
@@ -355,7 +359,7 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
                 raise
         else:
             report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots,
-                                                   label=learner))
+                                                   label=learner), course)
             if not report.infrastructure:
                 break
         _drop_launcher()
@@ -380,7 +384,8 @@ def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[st
 
 
 def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
-               limits: dict, sandboxed: bool = True, hidden: frozenset[str] = frozenset()) -> tuple[str, str, str]:
+               limits: dict, sandboxed: bool = True, hidden: frozenset[str] = frozenset(),
+               course: Course | None = None) -> tuple[str, str, str]:
     """Stage and grade one submission (in a worker process); returns (learner, status, message).
 
     A submission whose staged files hash as at its last grading is not graded again. One whose child
@@ -401,7 +406,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
     warnings = learner_yaml_warnings(root, learner, entry.origin)
-    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed)
+    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed, course)
     seconds = time.monotonic() - started
     data = report.to_dict()
     data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
@@ -456,14 +461,15 @@ def _previous_hash(folder: Path) -> str | None:
 def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None, roster: Path | None = None,
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
               limits: dict | None = None, progress=None, sandboxed: bool = True,
-              hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = ()) -> dict:
+              hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = (),
+              course: Course | None = None) -> dict:
     """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
     learner, what was skipped, what was flagged and the isolation line, for the end summary.
     NoSubmissions (and nothing written) when the folder holds nothing to grade; InfrastructureError when a
     child interpreter does not start here; RosterError for a roster that cannot be read.
     `sandboxed=False` grades without bubblewrap (--no-sandbox); `hidden` are the course's hidden check ids
     (results.json shows them after grades are published); `lms_layouts` ("canvas", "moodle") adds those
-    gradebooks."""
+    gradebooks; `course` (grader.course.Course) leaves out the checks it switches off."""
     chapters = chapters or [c.id for c in CHAPTERS]
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be at least 1, not {jobs}")
@@ -482,7 +488,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     limits = limits or {}
     with ProcessPoolExecutor(max_workers=jobs) as pool:
         futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
-                               frozenset(hidden)): entry.learner for entry in entries}
+                               frozenset(hidden), course): entry.learner for entry in entries}
         for future in as_completed(futures):
             learner = futures[future]
             try:

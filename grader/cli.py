@@ -294,15 +294,16 @@ def _emit(report, output_format: str, verbose: bool) -> None:
 def list_command(show_checks: bool) -> None:
     """List the chapters, their functions and points."""
     from grader import checks, course
-    from grader.pipeline import hidden_ids
+    from grader.pipeline import hidden_ids, switched_off
 
     the_course = course.current() if course.in_handout() else course.Course()
     for info in CHAPTERS:
         chapter = checks.load(info.id)
-        hidden = hidden_ids(the_course, (info.id,))
-        here = [c for c in chapter.checks if f"{info.id}/{c.id}" not in hidden]
+        hidden, off = hidden_ids(the_course, (info.id,)), switched_off(the_course, (info.id,))
+        here = [c for c in chapter.checks if f"{info.id}/{c.id}" not in hidden | off]
         total = sum(c.points for c in here)
-        extra = f" + {sum(c.points for c in chapter.checks) - total:g} in hidden checks" if hidden else ""
+        extra = (f" + {sum(c.points for c in chapter.checks if f'{info.id}/{c.id}' in hidden):g} in hidden checks"
+                 if hidden else "")
         click.echo(f"{info.id}  {info.title}  ({plural(total, 'point')}{extra})  exercises/{info.module}.py")
         functions: dict[str, float] = {}
         for check in here:
@@ -403,7 +404,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                  seed=the_course.grading_seed if seed is None else seed, html=not no_html,
                                  plots=plots, limits={"learner_seconds": time_budget}, sandboxed=not no_sandbox,
                                  progress=batch.progress_bar(), hidden=the_course.hidden,
-                                 lms_layouts=tuple(lms_layouts))
+                                 lms_layouts=tuple(lms_layouts), course=the_course)
     except batch.RosterError as exc:
         raise click.BadParameter(for_terminal(str(exc)), param_hint="--roster") from None
     except batch.NoSubmissions as exc:

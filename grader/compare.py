@@ -51,13 +51,13 @@ class Entries:
         return text
 
 
-def fmt(value: float, zero_below: float = 0.0) -> str:
-    """A number as a learner reads it: up to 6 significant digits; 0 for anything no larger than
+def fmt(value: float, zero_below: float = 0.0, digits: int = 6) -> str:
+    """A number as a learner reads it: up to `digits` significant digits; 0 for anything no larger than
     `zero_below` (a value meant as 0 that rounding left at 3.8e-17)."""
     value = float(value)
     if value == 0 or abs(value) <= zero_below:
         return "0"
-    return f"{value:.6g}"
+    return f"{value:.{digits}g}"
 
 
 def fmt_array(values: np.ndarray) -> str:
@@ -120,12 +120,13 @@ def expect(returned: Returned, expected: object, *, label: str, rtol: float = 1e
 
 def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: float = 1e-6,
                    atol: float = 1e-9, entries: Entries | None = None,
-                   expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False) -> Verdict:
-    """Values of two float arrays of the same shape, with the worst entries named, and the mistake the
-    wrong value matches (grader.diagnose) said first. Any real dtype is a right answer (the contract):
-    unless `exact` (a check telling apart values closer than that, e.g. finite-difference conventions),
-    the tolerance is at least single-precision round-off relative to the result's scale, so that float32
-    (jax's and torch's default), there or anywhere upstream, is right."""
+                   expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False,
+                   digits: int = 6) -> Verdict:
+    """Values of two float arrays of the same shape, with the worst entries named (to `digits` significant
+    digits), and the mistake the wrong value matches (grader.diagnose) said first. Any real dtype is a right
+    answer (the contract): unless `exact` (a check telling apart values closer than that, e.g.
+    finite-difference conventions), the tolerance is at least single-precision round-off relative to the
+    result's scale, so that float32 (jax's and torch's default), there or anywhere upstream, is right."""
     got = np.asarray(got, dtype=np.float64)
     expected = np.asarray(expected, dtype=np.float64)
     if got.shape != expected.shape:
@@ -152,11 +153,12 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: f
     lines = []
     tiny = atol / 10  # below a tenth of the tolerance a number reads as 0
     if got.ndim == 0:
-        lines.append(f"{label}: got {fmt(got, tiny)}, {expected_name} {fmt(expected, tiny)}")
+        lines.append(f"{label}: got {fmt(got, tiny, digits)}, {expected_name} {fmt(expected, tiny, digits)}")
     else:
         lines.append(f"{label}: {int(wrong.sum())} of {got.size} entries differ")
         for idx in worst:
-            lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny)}, {expected_name} {fmt(expected[idx], tiny)}")
+            lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny, digits)}, "
+                         f"{expected_name} {fmt(expected[idx], tiny, digits)}")
     lines.append(f"  ({tolerance_text(rtol, atol)}; largest difference {fmt(diff.max())})")
     mistake = diagnose(got, expected, mistakes, entries if expected_name == "expected" else None, rtol, atol)
     if mistake is not None:

@@ -1,4 +1,4 @@
-"""The course this grader serves: its seeds, hidden checks and quiz feedback.
+"""The course this grader serves: its seeds, hidden checks, quiz feedback and whether derivatives must be exact.
 
 Two places hold it. On the instructor's side, `solutions/course.yaml` (never in a release; its
 `seed` is the course seed that `grade batch` grades at). In a learner's handout, the file
@@ -32,6 +32,7 @@ class Course:
     seed: int | None = None  # the course seed (instructor side only; None in a handout)
     quiz_feedback: str = "recorded"  # "recorded": keys stay with the instructor; "immediate": practice keys ship
     hidden: frozenset[str] = frozenset()  # "ch06/H_rows_orthogonal": checks run only when submissions are graded
+    exact_derivatives: bool = True  # False: the exact-derivative checks are not part of this course
     handout: dict | None = None  # in a handout: its version and the hidden checks' counts per chapter
     source: str = ""  # where this came from, for messages
 
@@ -89,19 +90,34 @@ def _from_handout(path: Path) -> Course:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         return Course(id=str(data["course"]), public_seed=int(data["public_seed"]),
-                      quiz_feedback=str(data.get("quiz_feedback", "recorded")), handout=data, source=str(path))
+                      quiz_feedback=str(data.get("quiz_feedback", "recorded")),
+                      exact_derivatives=bool(data.get("exact_derivatives", True)), handout=data, source=str(path))
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CourseError(f"{path}: the handout's course data cannot be read ({exc}); reinstall the handout") from None
 
 
-_FIELDS = {"course", "seed", "quiz_feedback", "hidden"}
+_FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives"}
+
+
+def _key_lines(text: str) -> dict[str, int]:
+    """The line (1-based) of each top-level setting in the YAML text, for messages."""
+    import yaml
+
+    try:
+        node = yaml.compose(text)
+    except yaml.YAMLError:
+        return {}
+    if not isinstance(node, yaml.MappingNode):
+        return {}
+    return {str(key.value): key.start_mark.line + 1 for key, _ in node.value}
 
 
 def _from_yaml(path: Path) -> Course:
     import yaml
 
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        text = path.read_text(encoding="utf-8")
+        data = yaml.safe_load(text) or {}
     except OSError as exc:
         raise CourseError(f"{path}: cannot be read ({exc.strerror})") from None
     except yaml.MarkedYAMLError as exc:
@@ -111,23 +127,31 @@ def _from_yaml(path: Path) -> Course:
         raise CourseError(f"{path}: not valid YAML ({exc})") from None
     if not isinstance(data, dict):
         raise CourseError(f"{path}: expected settings `name: value`, one per line")
-    unknown = set(map(str, data)) - _FIELDS
+    lines = _key_lines(text)
+
+    def where(key: str) -> str:
+        return f"{path}, line {lines[key]}" if key in lines else str(path)
+
+    unknown = sorted(set(map(str, data)) - _FIELDS)
     if unknown:
-        raise CourseError(f"{path}: unknown setting(s) {', '.join(sorted(unknown))}; the settings are "
+        raise CourseError(f"{where(unknown[0])}: unknown setting(s) {', '.join(unknown)}; the settings are "
                           f"{', '.join(sorted(_FIELDS))}")
     feedback = str(data.get("quiz_feedback", "recorded"))
     if feedback not in QUIZ_FEEDBACK:
-        raise CourseError(f"{path}: quiz_feedback is {feedback!r}; one of {', '.join(QUIZ_FEEDBACK)}")
+        raise CourseError(f"{where('quiz_feedback')}: quiz_feedback is {feedback!r}; one of {', '.join(QUIZ_FEEDBACK)}")
     hidden = data.get("hidden") or []
     if not isinstance(hidden, list) or not all(isinstance(h, str) and h.count("/") == 1 for h in hidden):
-        raise CourseError(f"{path}: hidden is a list of chapter/check ids, e.g. [ch06/H_rows_orthogonal]")
+        raise CourseError(f"{where('hidden')}: hidden is a list of chapter/check ids, e.g. [ch06/H_rows_orthogonal]")
+    exact = data.get("exact_derivatives", True)
+    if not isinstance(exact, bool):
+        raise CourseError(f"{where('exact_derivatives')}: exact_derivatives is true or false (whether derivatives "
+                          f"must be exact to rounding, not only to a finite difference's digits), not {exact!r}")
     try:
         seed = None if data.get("seed") is None else int(data["seed"])
     except (TypeError, ValueError):
-        raise CourseError(f"{path}: seed is a whole number") from None
+        raise CourseError(f"{where('seed')}: seed is a whole number") from None
     if seed == PUBLIC_SEED:
-        raise CourseError(f"{path}: the course seed equals the public seed {PUBLIC_SEED}; hard-coded public values "
-                          "would pass")
-    return Course(id=str(data.get("course", Course.id)), seed=seed,
-                  quiz_feedback=feedback, hidden=frozenset(hidden), source=str(path))
-
+        raise CourseError(f"{where('seed')}: the course seed equals the public seed {PUBLIC_SEED}; hard-coded public "
+                          "values would pass")
+    return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
+                  exact_derivatives=exact, source=str(path))

@@ -300,7 +300,7 @@ def run(root: Path) -> int:
             warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata")
             try:
                 report = batch._grade_report(staged, learner, list(settings.chapters), course.grading_seed, False,
-                                             {"learner_seconds": settings.time_budget}, sandboxed)
+                                             {"learner_seconds": settings.time_budget}, sandboxed, course)
             finally:
                 batch._drop_launcher()
         if report.infrastructure:

@@ -4,7 +4,8 @@ call `build_report`, so a submission gets the same verdicts wherever it is grade
 Code checks run in the session's child (grader.grading), then the quiz answers are judged (no learner
 code: YAML only), then what the course hides is accounted for: on the instructor's side hidden
 checks run like any other; in a handout they are not there, and each chapter says how many checks
-and points are graded on submission instead.
+and points are graded on submission instead. A course that turns the exact-derivative checks off
+(`exact_derivatives: false`) has them nowhere: not run, not in any score.
 """
 
 from __future__ import annotations
@@ -36,14 +37,24 @@ def hidden_ids(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[s
     return frozenset(f"{c}/{i}" for c in chapters for i in hidden.get(c, {}).get("ids", []))
 
 
+def switched_off(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[str]:
+    """The "chNN/check_id" of checks the course leaves out: the exact-derivative checks, where it turns them off."""
+    if course.exact_derivatives:
+        return frozenset()
+    from grader import checks as check_registry
+
+    return frozenset().union(*(check_registry.load(c).exact_derivative_ids for c in chapters))
+
+
 def build_report(session: Session, request: Request, course: courses.Course | None = None) -> Report:
-    """Grade `request.chapters` of the session's submission into one Report (closes the session)."""
+    """Grade `request.chapters` of the session's submission into one Report (closes the session), as `course`
+    has it (default: a handout's own course; on the instructor's side every check runs)."""
     from grader.grading import grade
 
-    # Only a handout needs its course here (what it hides); on the instructor's side every check runs.
     course = course or (courses.current() if courses.in_handout() else courses.Course())
     report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
-                   submission_label=request.label, exclude=hidden_ids(course, request.chapters))
+                   submission_label=request.label,
+                   exclude=hidden_ids(course, request.chapters) | switched_off(course, request.chapters))
     for chapter in report.chapters:
         chapter.hidden_checks, chapter.hidden_points = course.hidden_in(chapter.chapter)
     if request.quiz:

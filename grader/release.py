@@ -52,13 +52,14 @@ def record(course: courses.Course) -> expected.Recording:
     keeping each expected value they ask for (no learner code runs: planning needs none)."""
     from grader import checks as check_registry
     from grader.grading import ChapterPlan, _plots
+    from grader.pipeline import switched_off
 
     recording = expected.Recording(seed=course.public_seed)
     broken = []
     with expected.using(recording):
         for info in CHAPTERS:
             chapter = check_registry.load(info.id)
-            exclude = frozenset(f"{info.id}/{i}" for i in _hidden_ids(course, info.id))
+            exclude = frozenset(f"{info.id}/{i}" for i in _hidden_ids(course, info.id)) | switched_off(course, (info.id,))
             plan = ChapterPlan(chapter, course.public_seed, _plots(info.id), exclude)
             broken += [f"{info.id} {name}: {p.unavailable or p.setup_error}"
                        for name, p in [(c.id, p) for c, p in plan.pending] + plan.plot_pending if p.generator is None]
@@ -68,11 +69,13 @@ def record(course: courses.Course) -> expected.Recording:
 
 
 def _hidden_ids(course: courses.Course, chapter: str) -> list[str]:
+    """The ids of `chapter`'s checks the course hides (a check it leaves out altogether is not hidden)."""
     from grader import checks as check_registry
+    from grader.pipeline import switched_off
 
     known = {c.id for c in check_registry.load(chapter).checks}
-    return [h.split("/", 1)[1] for h in sorted(course.hidden) if h.split("/", 1)[0] == chapter
-            and h.split("/", 1)[1] in known]
+    return [h.split("/", 1)[1] for h in sorted(course.hidden - switched_off(course, (chapter,)))
+            if h.split("/", 1)[0] == chapter and h.split("/", 1)[1] in known]
 
 
 def hidden_summary(course: courses.Course) -> dict:
@@ -274,7 +277,8 @@ def build(out: Path, course: courses.Course, *, force: bool = False) -> Release:
         _write_banks(stage, course)
         version = _version(stage)
         handout = {"course": course.id, "version": version, "public_seed": course.public_seed,
-                   "quiz_feedback": course.quiz_feedback, "hidden": hidden}
+                   "quiz_feedback": course.quiz_feedback, "exact_derivatives": course.exact_derivatives,
+                   "hidden": hidden}
         (data / "handout.json").write_text(json.dumps(handout, indent=1), encoding="utf-8")
         (stage / "README.md").write_text(f"The handout grader of the course {course.id}.\n", encoding="utf-8")
         (stage / "pyproject.toml").write_text(_PYPROJECT.format(

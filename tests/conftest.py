@@ -41,12 +41,19 @@ def build_submission(root: Path, replacements: dict[str, str] | None = None) -> 
 
 def replace_function(module: str, function: str, new_source: str) -> str:
     """The reference module's source with one top-level function replaced by `new_source`."""
-    text = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / f"{module}.py").read_text())
-    pattern = re.compile(rf"^def {function}\(.*?(?=^\S)", re.S | re.M)
-    if not pattern.search(text + "\n#end\n"):
-        raise KeyError(f"{function} not found in {module}")
-    replacement = textwrap.dedent(new_source).strip() + "\n\n\n"
-    return pattern.sub(lambda _: replacement, text + "\n#end\n", count=1)
+    return replace_functions(module, {function: new_source})
+
+
+def replace_functions(module: str, replacements: dict[str, str]) -> str:
+    """The reference module's source with top-level functions replaced: {function: its new source}."""
+    text = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / f"{module}.py").read_text()) + "\n#end\n"
+    for function, new_source in replacements.items():
+        pattern = re.compile(rf"^def {function}\(.*?(?=^\S)", re.S | re.M)
+        if not pattern.search(text):
+            raise KeyError(f"{function} not found in {module}")
+        replacement = textwrap.dedent(new_source).strip() + "\n\n\n"
+        text = pattern.sub(lambda _, replacement=replacement: replacement, text, count=1)
+    return text
 
 
 def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, timeout: float = 120) -> tuple[int, str]:

@@ -208,7 +208,7 @@ def exact_verdict(returned: Returned, exact: np.ndarray, label: str, entries: En
     got = returned.as_array()
     scale = float(np.max(np.abs(exact)))
     verdict = compare_arrays(got, exact, label=label, rtol=EXACT_RTOL, atol=EXACT_RTOL * scale, entries=entries,
-                             exact=True, expected_name="exact")
+                             exact=True, expected_name="exact", digits=15)
     if verdict.passed:
         return verdict
     worst = float(np.max(np.abs(got - exact) / (np.abs(exact) + scale))) if np.all(np.isfinite(got)) else np.inf
