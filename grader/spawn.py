@@ -131,6 +131,67 @@ def read_chunk(fd: int, timeout: float) -> bytes:
     return os.read(fd, 1 << 16)
 
 
+class StreamReader:
+    """Chunks from a child's pipe within a timeout, on every system: poll where the system has it, else a
+    thread that reads ahead (Windows pipes can be neither polled nor selected)."""
+
+    def __init__(self, stream) -> None:
+        import select
+
+        self.stream = stream
+        self.chunks = None
+        if not hasattr(select, "poll"):
+            import queue
+            import threading
+
+            self.chunks = queue.Queue()
+            threading.Thread(target=self._pump, daemon=True).start()
+
+    def _pump(self) -> None:
+        while True:
+            chunk = self.stream.read1(1 << 16) if hasattr(self.stream, "read1") else self.stream.read(1 << 16)
+            self.chunks.put(chunk)
+            if not chunk:
+                return
+
+    def read(self, timeout: float) -> bytes:
+        """The next bytes (b"" at the pipe's end); TimeoutError when none come within `timeout`."""
+        if self.chunks is None:
+            return read_chunk(self.stream.fileno(), timeout)
+        import queue
+
+        try:
+            return self.chunks.get(timeout=timeout) if timeout > 0 else self.chunks.get_nowait()
+        except queue.Empty:
+            raise TimeoutError from None
+
+
+def start_helper(command: list[str]) -> subprocess.Popen:
+    """A helper interpreter of the grader's own (e.g. sympy's worker) talking over stdin and stdout, in a
+    process group of its own where the system has them, so that stop_helper ends all it started."""
+    posix = strategy() == "posix"
+    return subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            bufsize=0, env=child_environment(), start_new_session=posix,
+                            creationflags=0 if posix else getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0))
+
+
+def stop_helper(process: subprocess.Popen) -> None:
+    """Kill a start_helper process (with its process group where there is one) and close its pipes."""
+    try:
+        if strategy() == "posix":
+            os.killpg(process.pid, 9)
+        else:
+            process.kill()
+    except (ProcessLookupError, PermissionError, OSError):
+        pass
+    process.wait()
+    for stream in (process.stdin, process.stdout):
+        try:
+            stream.close()
+        except OSError:
+            pass
+
+
 def strategy() -> str:
     """How children start here: "posix" where process groups and passed descriptors exist, else
     "portable"; GRADER_LAUNCHER forces one (for tests of the other)."""
@@ -228,35 +289,18 @@ class PortableChild:
     output in a capture file it was given by name, its process tree in a Windows job object if any."""
 
     def __init__(self, process: subprocess.Popen, capture: str, scratch: str, root: str, job: object) -> None:
-        import queue
-        import threading
-
         self.process = process
         self.capture = capture
         self.scratch = scratch
         self.root = root
         self.job = job
-        self.chunks: queue.Queue = queue.Queue()
-        threading.Thread(target=self._pump, daemon=True).start()
-
-    def _pump(self) -> None:
-        stream = self.process.stdout
-        while True:
-            chunk = stream.read1(1 << 16) if hasattr(stream, "read1") else stream.read(1 << 16)
-            self.chunks.put(chunk)
-            if not chunk:
-                return
+        self.results = StreamReader(process.stdout)
 
     def send(self, request: dict) -> None:
         _send(self.process.stdin, dict(request, root=self.root, confine=False))
 
     def read(self, timeout: float) -> bytes:
-        import queue
-
-        try:
-            return self.chunks.get(timeout=max(timeout, 0.0)) if timeout > 0 else self.chunks.get_nowait()
-        except queue.Empty:
-            raise TimeoutError from None
+        return self.results.read(timeout)
 
     def wait(self, timeout: float) -> None:
         try:

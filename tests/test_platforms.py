@@ -157,3 +157,13 @@ def test_watch_runs_on_the_route(route, tmp_path):
         assert any(line.startswith("ch06: newly failing: H_worked_example") for line in after)
     finally:
         watcher.stop()
+
+
+@pytest.mark.parametrize("prelude", [WINDOWS, MACOS], ids=["windows", "macos"])
+def test_sympy_decides_in_its_own_process_on_the_route(prelude):
+    """What only sympy can decide (undefined at every real point) is decided in its worker process, read
+    and stopped without poll or process groups on Windows; sympy never enters the grading process."""
+    code = ("import sys\nfrom grader.quiz.symbolic import equivalent\n"
+            "print(equivalent('sqrt(-1 - x^2)*2', '2*sqrt(-1 - x^2)', ('x',)), "
+            "equivalent('sqrt(-1 - x^2)*3', '2*sqrt(-1 - x^2)', ('x',)), 'sympy' in sys.modules)")
+    assert _emulated(prelude, code).split() == ["True", "False", "False"]

@@ -32,11 +32,8 @@ import ast
 import json
 import keyword
 import math
-import os
 import random
 import re
-import selectors
-import signal
 import subprocess
 import sys
 import time
@@ -437,7 +434,7 @@ class Simplifier:
     seconds in C-level big-number code that no thread can interrupt. So it runs in a child
     interpreter of its own, started on first use (importing sympy there does not count against
     SIMPLIFY_SECONDS), with CPU-time and memory limits (resource.setrlimit where the platform has
-    it), and killed with its process group when an answer takes longer than SIMPLIFY_SECONDS or the
+    it), and killed with its process group (grader.spawn.stop_helper) when an answer takes longer than SIMPLIFY_SECONDS or the
     learner's `deadline` (a time.monotonic() value) passes (then `out_of_time`). After a kill every
     further question to this Simplifier is undecided at once. Use it as a context manager: the process
     ends with the block."""
@@ -448,6 +445,7 @@ class Simplifier:
         self.stopped = False
         self.out_of_time = False  # stopped because the learner's deadline came first
         self._buffer = b""
+        self._reader = None  # a grader.spawn.StreamReader on the worker's output
 
     def __enter__(self) -> Simplifier:
         return self
@@ -465,32 +463,27 @@ class Simplifier:
         return line or None
 
     def _start(self) -> bool:
-        from grader.spawn import child_environment, child_path
+        from grader.spawn import StreamReader, child_path, start_helper
 
         # no -I/-E: the environment is grader.spawn's own (no PYTHONPATH), and its PYTHONHASHSEED=0 makes
         # sympy's term order, and so its verdict, the same on every run
-        command = [sys.executable, "-S", "-c", _WORKER_BOOT.format(child_path())]
         try:
-            self.process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                            stderr=subprocess.DEVNULL, bufsize=0, start_new_session=True,
-                                            env=child_environment())
+            self.process = start_helper([sys.executable, "-S", "-c", _WORKER_BOOT.format(child_path())])
         except OSError:
             return False
+        self._reader = StreamReader(self.process.stdout)
         return self._wait(SYMPY_START_SECONDS) == b"ready"
 
     def _line(self, until: float) -> bytes | None:
         """The worker's next line; None if none came by `until`, b"" if the worker ended."""
-        fd = self.process.stdout.fileno()
-        with selectors.DefaultSelector() as selector:
-            selector.register(fd, selectors.EVENT_READ)
-            while b"\n" not in self._buffer:
-                remaining = until - time.monotonic()
-                if remaining <= 0 or not selector.select(remaining):
-                    return None
-                chunk = os.read(fd, 4096)
-                if not chunk:
-                    return b""
-                self._buffer += chunk
+        while b"\n" not in self._buffer:
+            try:
+                chunk = self._reader.read(until - time.monotonic())
+            except TimeoutError:
+                return None
+            if not chunk:
+                return b""
+            self._buffer += chunk
         line, self._buffer = self._buffer.split(b"\n", 1)
         return line.strip() or b"?"
 
@@ -523,13 +516,9 @@ class Simplifier:
         """Kill the worker and everything it started."""
         if self.process is None:
             return
-        try:
-            os.killpg(self.process.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
-            pass
-        self.process.wait()
-        self.process.stdin.close()
-        self.process.stdout.close()
+        from grader.spawn import stop_helper
+
+        stop_helper(self.process)
         self.process = None
 
 
