@@ -45,6 +45,7 @@ FD_ATOL = 1e-6
 MIN_ENTRY = 1e-3  # every nonzero derivative entry at the sampled points is at least this large
 EXACT_RTOL = 1e-12  # the exact-derivative check, relative to the entry plus the largest entry
 SINGLE_PRECISION_ERROR = 1e-5  # at most this far off (relatively) and in float32: a float32 answer
+SINGLE_PRECISION_TRACE = 1e-9  # at least this far off: float32 arithmetic somewhere upstream is possible too
 ROUNDED_DIGITS = 1e-3  # at most this far off (relatively): right to some digits only, as a finite difference is
 
 REGISTERED: list = []  # every Derivative given to add_derivative_checks (tests/test_tolerances.py)
@@ -217,11 +218,14 @@ def exact_verdict(returned: Returned, exact: np.ndarray, label: str, entries: En
                                               "jax's and torch's default); this check asks for the derivative right "
                                               f"to float64 rounding: {FLOAT64_HINT}.")
     elif worst <= ROUNDED_DIGITS:
+        single = (f" (Or some of it is computed in single precision, float32: {FLOAT64_HINT}.)"
+                  if worst >= SINGLE_PRECISION_TRACE else "")
         mistake = Mistake("finite difference", f"your {entries.symbol} agrees with the exact derivative to about "
                                                f"{max(1, int(-np.log10(worst)))} digits only, as a finite difference "
                                                "does: this check asks for the exact derivative (worked out by hand, or "
                                                "by autograd in float64), right to rounding where no finite difference "
-                                               "is. A finite difference checks a derivative (chapter 5); it is not one.")
+                                               "is. A finite difference checks a derivative (chapter 5); it is not "
+                                               f"one.{single}")
     else:
         return verdict
     verdict.mistake = mistake
