@@ -297,6 +297,149 @@ CODE = {
                 out[0, j] = (f(x + e) - f(x - e)) / (2 * h)
             return out
         """, "row instead of flat"),
+    # ---------------------------------------------------------------- the maps beyond the worked examples
+    "planner obstacle term over d^2": ("ch02_gradient", "planner_cost_gradient", """
+        def planner_cost_gradient(x, y, obstacle):
+            ox, oy = np.asarray(obstacle, dtype=float)
+            d2 = (x - ox) ** 2 + (y - oy) ** 2
+            if d2 == 0:
+                raise ValueError("at the obstacle")
+            return np.array([-2 * (x - ox) / d2, 2 * y - 2 * (y - oy) / d2], dtype=float)
+        """, "d^2 for d^4"),
+    "planner obstacle derivative with a plus": ("ch02_gradient", "planner_cost_gradient", """
+        def planner_cost_gradient(x, y, obstacle):
+            ox, oy = np.asarray(obstacle, dtype=float)
+            d2 = (x - ox) ** 2 + (y - oy) ** 2
+            if d2 == 0:
+                raise ValueError("at the obstacle")
+            return np.array([2 * (x - ox) / d2**2, 2 * y + 2 * (y - oy) / d2**2], dtype=float)
+        """, "obstacle term sign"),
+    "planner without the inner 2": ("ch02_gradient", "planner_cost_gradient", """
+        def planner_cost_gradient(x, y, obstacle):
+            ox, oy = np.asarray(obstacle, dtype=float)
+            d2 = (x - ox) ** 2 + (y - oy) ** 2
+            if d2 == 0:
+                raise ValueError("at the obstacle")
+            return np.array([-(x - ox) / d2**2, 2 * y - (y - oy) / d2**2], dtype=float)
+        """, "missing 2"),
+    "planner cost with 1/d": ("ch02_gradient", "planner_cost", """
+        def planner_cost(x, y, obstacle):
+            ox, oy = np.asarray(obstacle, dtype=float)
+            d = np.hypot(x - ox, y - oy)
+            if d == 0:
+                raise ValueError("at the obstacle")
+            return float(y * y + 1 / d)
+        """, "1/d for 1/d^2"),
+    "spherical J transposed": ("ch03_jacobian", "spherical_to_cartesian_jacobian", """
+        def spherical_to_cartesian_jacobian(r, azimuth, elevation):
+            ca, sa, ce, se = np.cos(azimuth), np.sin(azimuth), np.cos(elevation), np.sin(elevation)
+            return np.array([[ce * ca, ce * sa, se], [-r * ce * sa, r * ce * ca, 0.0], [-r * se * ca, -r * se * sa, r * ce]])
+        """, "transpose"),
+    "spherical J without r": ("ch03_jacobian", "spherical_to_cartesian_jacobian", """
+        def spherical_to_cartesian_jacobian(r, azimuth, elevation):
+            ca, sa, ce, se = np.cos(azimuth), np.sin(azimuth), np.cos(elevation), np.sin(elevation)
+            return np.array([[ce * ca, -ce * sa, -se * ca], [ce * sa, ce * ca, -se * sa], [se, 0.0, ce]])
+        """, "missing r"),
+    "spherical J azimuth column without cos(el)": ("ch03_jacobian", "spherical_to_cartesian_jacobian", """
+        def spherical_to_cartesian_jacobian(r, azimuth, elevation):
+            ca, sa, ce, se = np.cos(azimuth), np.sin(azimuth), np.cos(elevation), np.sin(elevation)
+            return np.array([[ce * ca, -r * sa, -r * se * ca], [ce * sa, r * ca, -r * se * sa], [se, 0.0, r * ce]])
+        """, "missing cos(elevation)"),
+    "spherical with the elevation from the z-axis": ("ch03_jacobian", "spherical_to_cartesian", """
+        def spherical_to_cartesian(r, azimuth, elevation):
+            return r * np.array([np.sin(elevation) * np.cos(azimuth), np.sin(elevation) * np.sin(azimuth),
+                                 np.cos(elevation)])
+        """, "colatitude"),
+    "volume scale with one r": ("ch03_jacobian", "volume_scale", """
+        def volume_scale(r, azimuth, elevation):
+            return float(r * np.cos(elevation))
+        """, "r for r^2"),
+    "lidar point not rotated": ("ch04_chain_rule", "lidar_to_world", """
+        def lidar_to_world(r, theta, pose):
+            px, py, phi = np.asarray(pose, dtype=float)
+            return polar_to_cartesian(r, theta) + np.array([px, py])
+        """, "missing rotation"),
+    "lidar Jacobian in the wrong order": ("ch04_chain_rule", "lidar_to_world_jacobian", """
+        def lidar_to_world_jacobian(r, theta, pose):
+            phi = float(np.asarray(pose, dtype=float)[2])
+            rotation = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
+            return polar_to_cartesian_jacobian(r, theta) @ rotation
+        """, "order"),
+    "lidar Jacobian without the rotation": ("ch04_chain_rule", "lidar_to_world_jacobian", """
+        def lidar_to_world_jacobian(r, theta, pose):
+            return polar_to_cartesian_jacobian(r, theta)
+        """, "missing rotation"),
+    "pose Jacobian without the rotation derivative": ("ch04_chain_rule", "lidar_pose_jacobian", """
+        def lidar_pose_jacobian(r, theta, pose):
+            return np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+        """, "missing rotation derivative"),
+    "pose Jacobian turning the world point": ("ch04_chain_rule", "lidar_pose_jacobian", """
+        def lidar_pose_jacobian(r, theta, pose):
+            wx, wy = lidar_to_world(r, theta, pose)
+            return np.array([[1.0, 0.0, -wy], [0.0, 1.0, wx]])
+        """, "world point"),
+    "elevation from the z-axis": ("ch06_measurement", "range_bearing_elevation", """
+        def range_bearing_elevation(x, y, z):
+            ground = np.hypot(x, y)
+            return np.array([np.sqrt(x * x + y * y + z * z), np.arctan2(y, x), np.arctan2(ground, z)], dtype=float)
+        """, "colatitude"),
+    "H3 elevation row sign": ("ch06_measurement", "H3_jacobian", """
+        def H3_jacobian(x, y, z):
+            rho2 = float(x * x + y * y)
+            if rho2 == 0:
+                raise ValueError("on the z-axis")
+            r2, rho = rho2 + z * z, np.sqrt(rho2)
+            r = np.sqrt(r2)
+            return np.array([[x / r, y / r, z / r], [-y / rho2, x / rho2, 0.0],
+                             [z * x / (r2 * rho), z * y / (r2 * rho), rho / r2]])
+        """, "elevation row sign"),
+    "H3 bearing row over r^2": ("ch06_measurement", "H3_jacobian", """
+        def H3_jacobian(x, y, z):
+            rho2 = float(x * x + y * y)
+            if rho2 == 0:
+                raise ValueError("on the z-axis")
+            r2, rho = rho2 + z * z, np.sqrt(rho2)
+            r = np.sqrt(r2)
+            return np.array([[x / r, y / r, z / r], [-y / r2, x / r2, 0.0],
+                             [-z * x / (r2 * rho), -z * y / (r2 * rho), rho / r2]])
+        """, "bearing over r^2"),
+    "H3 transposed": ("ch06_measurement", "H3_jacobian", """
+        def H3_jacobian(x, y, z):
+            rho2 = float(x * x + y * y)
+            if rho2 == 0:
+                raise ValueError("on the z-axis")
+            r2, rho = rho2 + z * z, np.sqrt(rho2)
+            r = np.sqrt(r2)
+            return np.array([[x / r, -y / rho2, -z * x / (r2 * rho)], [y / r, x / rho2, -z * y / (r2 * rho)],
+                             [z / r, 0.0, rho / r2]])
+        """, "transpose"),
+    "bicycle steering angle as turn rate": ("ch07_dynamics", "bicycle_model", """
+        def bicycle_model(state, v, steer, wheelbase, dt):
+            x, y, th = np.asarray(state, dtype=float)
+            return np.array([x + v * np.cos(th) * dt, y + v * np.sin(th) * dt, th + steer * dt])
+        """, "steer as turn rate"),
+    "control Jacobian without 1/cos^2": ("ch07_dynamics", "bicycle_control_jacobian", """
+        def bicycle_control_jacobian(state, v, steer, wheelbase, dt):
+            th = float(np.asarray(state, dtype=float)[2])
+            return np.array([[np.cos(th) * dt, 0.0], [np.sin(th) * dt, 0.0],
+                             [np.tan(steer) / wheelbase * dt, v * dt / wheelbase]])
+        """, "missing 1/cos^2"),
+    "control Jacobian without dt": ("ch07_dynamics", "bicycle_control_jacobian", """
+        def bicycle_control_jacobian(state, v, steer, wheelbase, dt):
+            th = float(np.asarray(state, dtype=float)[2])
+            return np.array([[np.cos(th), 0.0], [np.sin(th), 0.0],
+                             [np.tan(steer) / wheelbase, v / (wheelbase * np.cos(steer) ** 2)]])
+        """, "missing dt"),
+    "control noise with standard deviations": ("ch07_dynamics", "control_noise_covariance", """
+        def control_noise_covariance(state, v, steer, wheelbase, dt, sigma_v, sigma_steer):
+            V = bicycle_control_jacobian(state, v, steer, wheelbase, dt)
+            return V @ np.diag([sigma_v, sigma_steer]) @ V.T
+        """, "sigma not squared"),
+    "control noise sigmas swapped": ("ch07_dynamics", "control_noise_covariance", """
+        def control_noise_covariance(state, v, steer, wheelbase, dt, sigma_v, sigma_steer):
+            V = bicycle_control_jacobian(state, v, steer, wheelbase, dt)
+            return V @ np.diag([sigma_steer ** 2, sigma_v ** 2]) @ V.T
+        """, "sigmas swapped"),
 }
 
 

@@ -132,3 +132,29 @@ def test_stub_matches_solution_signatures_and_raises_not_implemented(info):
                                  for p in inspect.signature(function).parameters.values())
         with pytest.raises(NotImplementedError):
             function(*arguments)
+
+
+def test_beyond_the_worked_examples():
+    """The contract's checked point of each map beyond the worked examples, and its singular points."""
+    ch02, ch03, ch04 = ref("ch02_gradient"), ref("ch03_jacobian"), ref("ch04_chain_rule")
+    ch06, ch07 = ref("ch06_measurement"), ref("ch07_dynamics")
+    close(ch02.planner_cost(0, 1, (2, 1)), 1.25, 12)
+    close(ch02.planner_cost_gradient(0, 1, (2, 1)), [0.25, 2], 12)
+    close(ch03.spherical_to_cartesian(2, 0, 0), [2, 0, 0], 12)
+    close(ch03.spherical_to_cartesian_jacobian(2, 0, 0), np.diag([1, 2, 2]), 12)
+    close(ch03.volume_scale(2, 0, 0), 4, 12)
+    close(ch03.volume_scale(1.5, 0.4, -0.9), 1.5**2 * math.cos(-0.9), 12)
+    pose = (1, 2, PI / 2)
+    close(ch04.lidar_to_world(1, 0, pose), [1, 3], 12)
+    close(ch04.lidar_to_world_jacobian(1, 0, pose), [[0, -1], [1, 0]], 12)
+    close(ch04.lidar_pose_jacobian(1, 0, pose), [[1, 0, -1], [0, 1, 0]], 12)
+    close(ch06.range_bearing_elevation(3, 4, 0), [5, 0.9273, 0], 4)
+    close(ch06.H3_jacobian(1, 0, 1), [[0.7071, 0, 0.7071], [0, 1, 0], [-0.5, 0, 0.5]], 4)
+    close(ch07.bicycle_control_jacobian((0, 0, 0), 2, 0, 1, 0.1), [[0.1, 0], [0, 0], [0, 0.2]], 12)
+    Q = ch07.control_noise_covariance((0.3, -1, 0.7), 1.5, 0.4, 2.0, 0.2, 0.3, 0.05)
+    close(Q, Q.T, 15)
+    assert np.linalg.matrix_rank(Q) <= 2
+    for function, args in ((ch02.planner_cost, (2, 1, (2, 1))), (ch02.planner_cost_gradient, (2, 1, (2, 1))),
+                           (ch06.H3_jacobian, (0, 0, 1.5)), (ch06.H3_jacobian, (0, 0, 0))):
+        with pytest.raises(ValueError):
+            function(*args)

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, planar_point,
-                                       vector_form)
+from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
+                                       planar_point, vector_form)
 from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, fmt_array, value_problem
 from grader.diagnose import Mistake, known
 from grader.expected import reference
@@ -178,7 +178,7 @@ def _planner_case(rng: np.random.Generator, near: bool = False) -> tuple[np.ndar
     0.15 from 1 (where d^2 and d^4 agree), off the obstacle's axes, and every gradient entry at least 0.05."""
     while True:
         obstacle = rng.uniform(-3, 3, 2)
-        d = rng.uniform(OBSTACLE_MIN, 0.6) if near else rng.uniform(OBSTACLE_MIN, 3.0)
+        d = rng.uniform(OBSTACLE_MIN + INSIDE, 0.6) if near else rng.uniform(OBSTACLE_MIN + INSIDE, 3.0)
         t = angle(rng)
         point = obstacle + d * np.array([np.cos(t), np.sin(t)])
         lane, push = 2 * point[1], 2 * d * np.array([np.cos(t), np.sin(t)]) / d**4

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import Skip, chapter_checks
-from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, elevation,
-                                       polar_point, wound)
+from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
+                                       elevation, polar_point, wound)
 from grader.compare import SINGLE_PRECISION, Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
 from grader.diagnose import Mistake, known
 from grader.expected import reference
@@ -135,6 +135,7 @@ def _det_of_your_jacobian(scale: str, jacobian: str, points: list[tuple], scales
 S = Entries("p", rows=("x", "y", "z"))
 JS = Entries("J", rows=("x", "y", "z"), cols=("r", "azimuth", "elevation"), derivative=True)
 ELEVATION_MAX = 1.4  # the contract: graded elevations stay within this of the horizon (cos(elevation) > 0.17)
+R_MIN = 0.3  # the contract: graded ranges are at least this
 
 SPHERICAL_SLIPS = {
     "colatitude": "the elevation is measured from the z-axis: it is the angle above the x-y plane, so z = r "
@@ -160,10 +161,10 @@ VOLUME_SLIPS = {
 
 
 def _spherical_point(rng: np.random.Generator, near: bool = False) -> np.ndarray:
-    """(r, azimuth, elevation): r in [0.3, 5] and every angle away from the axes (near: r in [0.3, 0.5] and
+    """(r, azimuth, elevation): r in [0.31, 5] and every angle away from the axes (near: r in [0.31, 0.5] and
     |elevation| in [1.2, 1.37], close to the poles where the Jacobian is singular); J never symmetric."""
     while True:
-        r = rng.uniform(0.3, 0.5) if near else rng.uniform(0.3, 5.0)
+        r = rng.uniform(R_MIN + INSIDE, 0.5) if near else rng.uniform(R_MIN + INSIDE, 5.0)
         point = np.array([r, angle(rng), elevation(rng, 1.2 if near else 0.2)])
         jacobian = REF.spherical_to_cartesian_jacobian(*point)
         if np.max(np.abs(jacobian - jacobian.T)) >= 0.01:

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, planar_point,
-                                       polar_point, vector_form, wound)
+from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
+                                       planar_point, polar_point, vector_form, wound)
 from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, fmt_array, value_problem
 from grader.diagnose import known
 from grader.expected import reference
@@ -163,6 +163,7 @@ W = Entries("w", rows=("world x", "world y"))
 J_LIDAR = Entries("J", rows=("world x", "world y"), cols=("r", "theta"), derivative=True)
 J_POSE = Entries("J_pose", rows=("world x", "world y"), cols=("px", "py", "phi"), derivative=True)
 POSE_FORMS = ("tuple", "list", "array")
+R_MIN = 0.3  # the contract: graded ranges are at least this
 
 LIDAR_SLIPS = {
     "missing rotation": "the point is not rotated by the heading phi: turn polar_to_cartesian(r, theta) by phi "
@@ -189,10 +190,10 @@ POSE_SLIPS = {
 
 
 def _lidar_case(rng: np.random.Generator, near: bool = False) -> tuple[float, float, np.ndarray]:
-    """(r, theta, pose): r in [0.3, 5] at least 0.1 from 1 (near: r in [0.3, 0.5]), theta, phi and theta + phi
+    """(r, theta, pose): r in [0.31, 5] at least 0.1 from 1 (near: r in [0.31, 0.5]), theta, phi and theta + phi
     away from the axes and diagonals, (px, py) in [-5, 5]^2."""
     while True:
-        r = rng.uniform(0.3, 0.5) if near else rng.uniform(0.3, 5.0)
+        r = rng.uniform(R_MIN + INSIDE, 0.5) if near else rng.uniform(R_MIN + INSIDE, 5.0)
         theta, phi = angle(rng), angle(rng)
         turn = (theta + phi) % (np.pi / 4)
         if abs(r - 1) >= 0.1 and 0.15 <= turn <= np.pi / 4 - 0.15:

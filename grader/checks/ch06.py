@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, elevation,
-                                       planar_point)
+from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
+                                       elevation, planar_point)
 from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, fmt, value_problem
 from grader.diagnose import Mistake, known
 from grader.expected import reference
@@ -173,10 +173,10 @@ H3_SLIPS = {
 
 
 def _point_3d(rng: np.random.Generator, near: bool = False) -> np.ndarray:
-    """(x, y, z) with x^2 + y^2 in [0.12, 16] (near: [0.1, 0.13], beside the z-axis where the bearing is
+    """(x, y, z) with x^2 + y^2 in [0.12, 16] (near: [0.101, 0.13], beside the z-axis where the bearing is
     undefined), bearing and elevation away from the axes and diagonals, |elevation| <= 1.37."""
     while True:
-        rho = np.sqrt(rng.uniform(0.1, 0.13)) if near else np.sqrt(rng.uniform(0.12, 16.0))
+        rho = np.sqrt(rng.uniform(GROUND_MIN + INSIDE / 10, 0.13)) if near else np.sqrt(rng.uniform(0.12, 16.0))
         bearing, lift = angle(rng), elevation(rng)
         point = np.array([rho * np.cos(bearing), rho * np.sin(bearing), rho * np.tan(lift)])
         jacobian = REF.H3_jacobian(*point)

@@ -17,8 +17,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (Derivative, add_derivative_checks, add_exact_check, angle, time_step,
-                                       vector_form, wound)
+from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
+                                       time_step, vector_form, wound)
 from grader.compare import SINGLE_PRECISION, Entries, all_of, expect, fail, fmt, passed, value_problem
 from grader.diagnose import Mistake, known
 from grader.expected import reference
@@ -292,10 +292,10 @@ NOISE_SLIPS = {
 
 
 def _bicycle_case(rng: np.random.Generator, near: bool = False) -> tuple:
-    """(state, v, steer, wheelbase, dt): |v| in [0.5, 3], |steer| in [0.1, 1] (near: [0.8, 1], where tan
+    """(state, v, steer, wheelbase, dt): |v| in [0.5, 3], |steer| in [0.1, 0.99] (near: [0.8, 0.99], where tan
     steepens), wheelbase in [0.5, 3] at least 0.1 from 1, dt in [0.05, 0.5]."""
     v = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 3.0))
-    steer = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.8 if near else 0.1, STEER_MAX))
+    steer = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.8 if near else 0.1, STEER_MAX - INSIDE))
     wheelbase = float(rng.choice([rng.uniform(0.5, 0.9), rng.uniform(1.1, 3.0)]))
     return _state(rng), v, steer, wheelbase, time_step(rng)
 

@@ -43,6 +43,7 @@ STEP = 1e-5
 FD_RTOL = 1e-6
 FD_ATOL = 1e-6
 MIN_ENTRY = 1e-3  # every nonzero derivative entry at the sampled points is at least this large
+INSIDE = 0.01  # points are drawn this far inside the contract's bounds, so finite-difference steps stay inside too
 EXACT_RTOL = 1e-12  # the exact-derivative check, relative to the entry plus the largest entry
 SINGLE_PRECISION_ERROR = 1e-5  # at most this far off (relatively) and in float32: a float32 answer
 SINGLE_PRECISION_TRACE = 1e-9  # at least this far off: float32 arithmetic somewhere upstream is possible too
