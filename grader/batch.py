@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from grader.chapters import CHAPTERS
+from grader.render import plural
 from grader.safe_text import for_json, unicode_clean
 
 if TYPE_CHECKING:
@@ -426,7 +427,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         write_atomically(folder / "report.html", html_renderer.render(report))
     write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
     problems = sum(bool(c.problems) for c in report.chapters)
-    with_problems = f", {lms.plural(problems, 'chapter')} with problems" if problems else ""
+    with_problems = f", {plural(problems, 'chapter')} with problems" if problems else ""
     return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
 
 

@@ -14,8 +14,9 @@ import sys
 
 import click
 
-from grader.chapters import CHAPTERS, ChapterInfo, resolve
 from grader import launch
+from grader.chapters import CHAPTERS, ChapterInfo, resolve
+from grader.render import plural
 from grader.runner import Session
 from grader.submission import Submission, SubmissionNotFound, locate
 
@@ -101,11 +102,6 @@ def _use_colour(stream) -> bool:
     if os.environ.get("FORCE_COLOR", ""):
         return True
     return hasattr(stream, "isatty") and stream.isatty()
-
-
-def plural(count: float, word: str, words: str | None = None) -> str:
-    """'1 point', '2 points', '0.5 points'."""
-    return f"{count:g} {word if count == 1 else (words or word + 's')}"
 
 
 def _unicode_ok(stream) -> bool:

@@ -400,10 +400,12 @@ def scan(folder: Path, secrets: Secrets | None = None, allow_practice_keys: bool
 
 
 def describe(release: Release) -> str:
+    from grader.render import plural
+
     size = release.wheel.stat().st_size
     files = sum(1 for p in release.folder.rglob("*") if p.is_file())
     hidden = sum(h["checks"] for h in release.hidden.values())
     return (f"Handout {release.version} in {release.folder}: {files} files, the grader {release.wheel.name} "
-            f"({size / 1024:.0f} KiB); {hidden} hidden check(s). Checked: no reference code, quiz key or reference "
+            f"({size / 1024:.0f} KiB); {plural(hidden, 'hidden check')}. Checked: no reference code, quiz key or reference "
             "answer in any file or wheel member.")
 

@@ -144,7 +144,7 @@ def test_a_learner_grades_the_stubs_in_an_empty_folder(handout, learner_grade, t
     assert "+ 1 in hidden checks" in listed.stdout
     graded = _learner(learner_grade, "all", cwd=tmp_path)
     assert graded.returncode == 1 and "not implemented yet" in graded.stdout and "Total: 0/" in graded.stdout
-    assert "1 hidden check (1 points) run when you submit" in graded.stdout
+    assert "1 hidden check (1 point) run when you submit" in graded.stdout
     shown = _learner(learner_grade, "quiz", "ch06", "--show", cwd=tmp_path)
     assert shown.returncode == 0 and "[H_at_point]" in shown.stdout
     other_seed = _learner(learner_grade, "ch06", "--seed", "3", cwd=tmp_path)

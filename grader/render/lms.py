@@ -16,6 +16,7 @@ from xml.etree import ElementTree
 
 from grader.chapters import BY_ID
 from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.render import plural
 from grader.safe_text import clean_value, for_csv, for_json, for_terminal, for_xml
 
 SCHEMA_DIR = Path(__file__).resolve().parent.parent / "schemas"
@@ -33,11 +34,6 @@ def schema(name: str) -> dict:
 ERROR_PREFIX = "Could not be graded (an error, not a wrong answer): "
 SKIP_PREFIX = "Not judged (skipped): "
 RECORDED_PREFIX = "Recorded, graded on submission: "
-
-
-def plural(count: float, word: str, words: str | None = None) -> str:
-    """'1 point', '2 points', '0.5 points', '1 submission'."""
-    return f"{count:g} {word if count == 1 else (words or word + 's')}"
 
 
 def check_message(check: CheckResult, chapter: ChapterResult) -> str:

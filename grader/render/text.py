@@ -6,6 +6,7 @@ import click
 
 from grader import safe_text
 from grader.model import CheckResult, Report, Status
+from grader.render import plural
 
 _MARKS = {Status.PASS: ("✓", "PASS"), Status.FAIL: ("✗", "FAIL"), Status.ERROR: ("!", "ERR "),
           Status.SKIP: ("-", "SKIP"), Status.RECORDED: ("•", "REC ")}
@@ -51,7 +52,7 @@ def _folded_line(function: str, checks: list[CheckResult], colour: bool, unicode
     mark = _mark(Status.FAIL, unicode_ok)
     mark = click.style(mark, fg=_COLOURS[Status.FAIL], bold=True) if colour else mark
     worth = sum(c.max_points for c in checks)
-    return f"  {mark} [0/{_points(worth)}] {function}: not implemented yet ({_count(len(checks), 'check')}; -v lists them)"
+    return f"  {mark} [0/{_points(worth)}] {function}: not implemented yet ({plural(len(checks), 'check')}; -v lists them)"
 
 
 def start_here(report: Report) -> list[str]:
@@ -70,12 +71,8 @@ def start_here(report: Report) -> list[str]:
             f"computes); the first check is: {checks[0].description}. Then run `grade {chapter.chapter}` again.", ""]
 
 
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
-
-
 def _pending_note(points: float, what: str) -> str:
-    return f" (+{_points(points)} points {what})" if points > 0 else ""
+    return f" (+{plural(points, 'point')} {what})" if points > 0 else ""
 
 
 def verdict_line(report: Report) -> str:
@@ -84,7 +81,8 @@ def verdict_line(report: Report) -> str:
     if not report.all_passed:
         return "Not all checks pass yet: see the marks above."
     if report.pending_score > 0:
-        return (f"All public checks pass; {_points(report.pending_score)} more points are graded when you submit "
+        return (f"All public checks pass; {plural(report.pending_score, 'more point')} "
+                f"{'is' if report.pending_score == 1 else 'are'} graded when you submit "
                 "(hidden checks, recorded quiz answers).")
     return "All checks pass."
 
@@ -123,7 +121,7 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
                 elif check is folded[check.function][0]:  # one line for a function not written yet
                     out.append(_folded_line(check.function, folded[check.function], colour, unicode_ok))
         if chapter.hidden_checks:
-            out.append(f"  + {_count(chapter.hidden_checks, 'hidden check')} ({_points(chapter.hidden_points)} points) "
+            out.append(f"  + {plural(chapter.hidden_checks, 'hidden check')} ({plural(chapter.hidden_points, 'point')}) "
                        "run when you submit")
         out.append(f"  {chapter.chapter} total: {_points(chapter.score)}/{_points(chapter.max_score)}"
                    + _pending_note(chapter.pending_score, "graded when you submit"))
