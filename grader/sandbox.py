@@ -188,7 +188,10 @@ class Sandbox:
             why = ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "
                    "killed on a timeout (a job object, with its memory capped, where Windows offers one)"
                    if strategy() == "portable" else
-                   "bubblewrap not found; apt-get install bubblewrap: learner code runs with resource limits only")
+                   "bubblewrap not found; apt-get install bubblewrap: learner code runs with resource limits only"
+                   if os.path.isdir("/proc/self/ns") else  # Linux namespaces exist here: bubblewrap would run
+                   "this system has no bubblewrap; learner code runs in a child process with resource limits, "
+                   "its process group killed on a timeout")
             return (f"isolation: no sandbox ({why}); it runs as you and can read every file you can ({readable})")
         who = "as uid 65534" if self.drops_to_nobody else "as you"
         from grader.runner import Limits
