@@ -3,10 +3,13 @@
 A question says what is asked; its key, in a separate file, says what is right, how close is close
 enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
 (seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine);
-their key is computed by the reference implementation (grader.expected.reference_function, trusted
-code imported in the grading process), never stored. The options of a choice or multi question are
-shown to each learner in their own order (another SHA-256 seed), so the letter of the right option
-differs between learners; keys and feedback name the options by their canonical letters.
+the key of a numeric one is computed by the reference implementation
+(grader.expected.reference_function, trusted code imported in the grading process), never stored;
+that of a symbolic one (a derivation per learner: the map itself holds the numbers) is an
+expression in the question's symbols and parameters, each learner's numbers put in where it is
+judged. Neither ships with a handout. The options of a choice or multi question are shown to each
+learner in their own order (another SHA-256 seed), so the letter of the right option differs
+between learners; keys and feedback name the options by their canonical letters.
 """
 
 from __future__ import annotations
@@ -106,6 +109,8 @@ class Key:
     # known wrong answers: {name, feedback, and one of: answer (numbers, or expressions in the question's
     # params and `derived`; symbolic: an expression), transform (TRANSFORMS), factor (times the key)}
     wrong: list[dict] = field(default_factory=list)
+    # the symbolic `answer` and `wrong` expressions of a per-learner question may use its params: each learner's
+    # numbers are put in where it is judged (judge.right_answer, mistakes.wrong_expression)
     compute: dict | None = None  # {function: a reference of the chapter, args: [param names], item: index}
     explanation: str = ""
     angle: bool = False  # the answer is an angle in radians: one in degrees is named
@@ -228,8 +233,15 @@ def _wrong_entries(chapter: str, qid: str, raw: object) -> list[dict]:
 
 
 def public_keys(chapter: str, quiz_dir: Path | None = None) -> dict:
-    """The keys of `chapter` that may ship in an immediate-feedback handout: every key that needs
-    no reference computation (no `compute:`), as plain data shaped like quizzes/keys/chNN.yaml
-    (yaml.safe_dump it there and keys() reads it back). Empty when the keys are not installed."""
-    data = _raw_keys(chapter, quiz_dir or QUIZ_DIR) or {}
-    return {qid: copy.deepcopy(raw) for qid, raw in data.items() if "compute" not in raw}
+    """The keys of `chapter` that may ship in an immediate-feedback handout: the keys of the questions
+    that are the same for everyone, that is every key that needs no reference computation (no
+    `compute:`) of a question without per-learner numbers (no `params`: a per-learner symbolic key
+    written in the parameters is the general answer to everyone's variant), as plain data shaped like
+    quizzes/keys/chNN.yaml (yaml.safe_dump it there and keys() reads it back). Empty when the keys
+    are not installed."""
+    folder = quiz_dir or QUIZ_DIR
+    data = _raw_keys(chapter, folder) or {}
+    if not data:
+        return {}
+    per_learner = {question.id for question in questions(chapter, folder) if question.params}
+    return {qid: copy.deepcopy(raw) for qid, raw in data.items() if "compute" not in raw and qid not in per_learner}

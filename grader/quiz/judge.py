@@ -25,6 +25,7 @@ from grader.quiz.symbolic import (
     equivalent,
     evaluate,
     number,
+    substitute,
 )
 
 UNDECIDED = (f"could not be decided in time: whether this expression equals the right one took sympy longer "
@@ -145,8 +146,14 @@ def right_numbers(right_value: object, key: Key, values: dict[str, float] | None
 
 
 def right_answer(question: Question, key: Key, right_value: object, values: dict[str, float] | None = None) -> object:
-    """The right answer in the question's terms: floats for a numeric, vector or matrix question."""
-    return right_numbers(right_value, key, values) if question.kind in ("numeric", "vector", "matrix") else right_value
+    """The right answer in the question's terms: floats for a numeric, vector or matrix question; for a
+    symbolic one, the key's expression with the learner's numbers (`values`) for the question's
+    parameters."""
+    if question.kind in ("numeric", "vector", "matrix"):
+        return right_numbers(right_value, key, values)
+    if question.kind == "symbolic":
+        return substitute(str(right_value), values or {}, question.symbols + tuple(question.derived))
+    return right_value
 
 
 def judge(question: Question, key: Key, value: object, right_value: object, seed: int,
@@ -154,10 +161,10 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
           values: dict[str, float] | None = None, text: str = "") -> Judgement:
     """The verdict on `value` (letters as shown through `lettering`, default the bank's own) against
     `right_value`; feedback of a wrong option names it by its shown letter, a wrong value or
-    expression that matches a known mistake (grader.quiz.mistakes; `values`: the learner's numbers)
-    gets that mistake's name and sentence. AnswerError when the answer cannot be read. A symbolic
-    answer that sympy must decide is decided in a separate process within SIMPLIFY_SECONDS and before
-    `deadline` (time.monotonic()), else `undecided`."""
+    expression that matches a known mistake (grader.quiz.mistakes; `values`: the learner's numbers,
+    which also fill in a per-learner symbolic key) gets that mistake's name and sentence. AnswerError
+    when the answer cannot be read. A symbolic answer that sympy must decide is decided in a separate
+    process within SIMPLIFY_SECONDS and before `deadline` (time.monotonic()), else `undecided`."""
     lettering = lettering or identity_lettering(question)
     got = read_answer(question, value, lettering, text)
     kind = question.kind
@@ -190,14 +197,14 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
         if mistake is not None:
             return Judgement(0.0, f"{mistake.help}\n{outside}", mistake=mistake.name)
         return Judgement(0.0, outside)
+    right = right_answer(question, key, right_value, values)
     with Simplifier(deadline) as simplifier:  # a process only if sympy must decide
-        same = equivalent(got, str(right_value), question.symbols, question.domain, seed, simplifier,
-                          derived=question.derived)
+        same = equivalent(got, right, question.symbols, question.domain, seed, simplifier, derived=question.derived)
         if same:
             return Judgement(1.0, key.explanation, True)
         if same is None:
             return Judgement(0.0, UNDECIDED, undecided=True, out_of_time=simplifier.out_of_time)
-    mistake = expression_mistake(question, key, got, str(right_value), seed)
+    mistake = expression_mistake(question, key, got, right, seed, values or {})
     if mistake is not None:
         return Judgement(0.0, mistake.help, mistake=mistake.name)
     return Judgement(0.0, "not equivalent to the right expression")

@@ -7,8 +7,9 @@ learner, or a transform or factor of the key), then degrees for an angle key (`a
 the generic slips of any value (grader.diagnose.generic: transposed, every sign, one row's, one
 column's or one entry's sign, rows, columns or entries swapped), named with the question's own
 entry names (`entries:` in the bank). Expressions (`expression_mistake`): the key's own wrong
-answers, then minus the key ("every sign") and a constant multiple of it ("constant factor"),
-compared by the quiz's own numeric equivalence and never by sympy.
+answers (expressions in the question's symbols and, for a per-learner question, its parameters,
+filled in with this learner's numbers), then minus the key ("every sign") and a constant multiple
+of it ("constant factor"), compared by the quiz's own numeric equivalence and never by sympy.
 
 A mistake is named only for an answer that is not right, only when the answer equals the mistake's
 value within the key's tolerance, and only when that value is not itself right.
@@ -21,7 +22,7 @@ import numpy as np
 from grader.compare import Entries, fmt
 from grader.diagnose import Mistake, diagnose
 from grader.quiz.bank import Key, Question
-from grader.quiz.symbolic import AnswerError, Undefined, check_text, equivalent, evaluate, ratio
+from grader.quiz.symbolic import AnswerError, Undefined, check_text, equivalent, evaluate, ratio, substitute
 
 DEGREES = Mistake("degrees", "The answer is in degrees: give the angle in radians (times pi/180).")
 SYMBOLS = {"numeric": "your answer", "vector": "your vector", "matrix": "your matrix"}
@@ -103,14 +104,23 @@ def numbers_mistake(question: Question, key: Key, got: np.ndarray, want: np.ndar
     return Mistake(found.name, found.help[:1].upper() + found.help[1:], found.value)  # a generic one leads a message
 
 
-def expression_mistake(question: Question, key: Key, got: str, right: str, seed: int) -> Mistake | None:
-    """The first of the key's wrong expressions that `got` equals, else minus or a constant multiple of
-    the right expression; decided by the numbers alone (never sympy)."""
+def wrong_expression(question: Question, wrong: dict, values: dict[str, float]) -> str:
+    """One of a symbolic key's wrong answers for one learner: the question's parameters in it replaced by
+    the learner's numbers (`values`). AnswerError if it does not read."""
+    return substitute(str(wrong["answer"]), values, question.symbols + tuple(question.derived))
+
+
+def expression_mistake(question: Question, key: Key, got: str, right: str, seed: int,
+                       values: dict[str, float] | None = None) -> Mistake | None:
+    """The first of the key's wrong expressions (with the learner's numbers `values` for the question's
+    parameters) that `got` equals, else minus or a constant multiple of the right expression; decided by
+    the numbers alone (never sympy)."""
     same = {"symbols": question.symbols, "domain": question.domain, "seed": seed, "derived": question.derived}
     for wrong in key.wrong:
         try:
-            if equivalent(got, str(wrong["answer"]), decide=False, **same) and \
-                    not equivalent(str(wrong["answer"]), right, decide=False, **same):
+            candidate = wrong_expression(question, wrong, values or {})
+            if equivalent(got, candidate, decide=False, **same) and \
+                    not equivalent(candidate, right, decide=False, **same):
                 return Mistake(wrong["name"], wrong["feedback"])
         except AnswerError:
             continue  # a wrong answer the bank's own test would have refused

@@ -404,6 +404,31 @@ def number(text: object) -> float:
         raise AnswerError(f"it has no finite real value ({exc})") from None
 
 
+class _Numbers(ast.NodeTransformer):
+    """Replaces the names of `values` by their numbers (a negative one as a minus sign and a number)."""
+
+    def __init__(self, values: dict[str, float]) -> None:
+        self.values = values
+
+    def visit_Name(self, node: ast.Name) -> ast.AST:
+        if node.id not in self.values:
+            return node
+        value = float(self.values[node.id])
+        size = ast.Constant(int(abs(value)) if value.is_integer() else abs(value))
+        return ast.UnaryOp(ast.USub(), size) if value < 0 else size
+
+
+def substitute(text: str, values: dict[str, float], symbols: tuple[str, ...] = ()) -> str:
+    """`text`, an expression in `symbols` and the names of `values` (a per-learner key: the question's
+    parameters), with each of those names replaced by its number: one learner's expression, in
+    `symbols` alone. AnswerError if `text` does not pass the whitelist with those names."""
+    if not values:
+        return text
+    tree = check_text(text, symbols + tuple(values))
+    written = ast.unparse(ast.fix_missing_locations(_Numbers(values).visit(tree)))
+    return written.replace(" ** ", "^").replace(" * ", "*").replace(" / ", "/")
+
+
 def parse(text: str, symbols: tuple[str, ...] = (), derived: dict[str, str] | None = None):
     """The answer as a sympy expression, after the whitelist check: parse_expr with a dictionary of
     exactly the allowed symbols, functions and constants, and no other name (no auto-symbols); a
