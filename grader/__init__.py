@@ -1,1 +1,14 @@
 """Auto-grader for the lesson "Jacobians & Linearization"."""
+
+
+def load_ipython_extension(ipython) -> None:
+    """`%load_ext grader` in IPython or Jupyter: the `%grade` magic (grader.magic)."""
+    from grader.magic import load
+
+    load(ipython)
+
+
+def unload_ipython_extension(ipython) -> None:
+    from grader.magic import unload
+
+    unload(ipython)

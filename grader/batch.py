@@ -40,9 +40,10 @@ from grader.safe_text import for_json, unicode_clean
 if TYPE_CHECKING:
     from grader.course import Course
 
-CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.py$")
+CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.(py|ipynb)$")  # a chapter may be kept as a notebook
 ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
 MAX_FILE_BYTES = 1 << 20
+MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged without them (grader.notebook)
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
@@ -199,6 +200,19 @@ def _wanted(relative: str) -> str | None:
     return None
 
 
+def _limit(target: str) -> int:
+    return MAX_NOTEBOOK_BYTES if target.endswith(".ipynb") else MAX_FILE_BYTES
+
+
+def _staged(target: str, data: bytes) -> bytes:
+    """What is staged of a file: a notebook without its outputs (grading reads its code cells only)."""
+    if not target.endswith(".ipynb"):
+        return data
+    from grader.notebook import without_outputs
+
+    return without_outputs(data)
+
+
 def stage(entry: Entry, staging: Path) -> Path:
     """Copy the submission's chapter and answer files into staging/<folder>/exercises/ (a file
     already staged with the same bytes is left as it is; files no longer submitted are removed)."""
@@ -220,10 +234,10 @@ def stage(entry: Entry, staging: Path) -> Path:
                 if target is None:
                     continue
                 size = path.stat().st_size
-                if size > MAX_FILE_BYTES:
-                    raise StagingError(f"{path.name} is {size} bytes; at most {MAX_FILE_BYTES} are read")
-                files[target] = path.read_bytes()
-                total += size
+                if size > _limit(target):
+                    raise StagingError(f"{path.name} is {size} bytes; at most {_limit(target)} are read")
+                files[target] = _staged(target, path.read_bytes())
+                total += len(files[target])
     else:
         try:
             archive = zipfile.ZipFile(entry.source)
@@ -240,18 +254,18 @@ def stage(entry: Entry, staging: Path) -> Path:
                 target = _wanted(name)
                 if target is None or info.is_dir():
                     continue
-                if info.file_size > MAX_FILE_BYTES:
-                    raise StagingError(f"{name} is {info.file_size} bytes unpacked; at most {MAX_FILE_BYTES}")
+                if info.file_size > _limit(target):
+                    raise StagingError(f"{name} is {info.file_size} bytes unpacked; at most {_limit(target)}")
                 with archive.open(info) as handle:
-                    data = handle.read(MAX_FILE_BYTES + 1)
-                if len(data) > MAX_FILE_BYTES:
-                    raise StagingError(f"{name} unpacks to more than {MAX_FILE_BYTES} bytes")
-                files[target] = data
-                total += len(data)
+                    data = handle.read(_limit(target) + 1)
+                if len(data) > _limit(target):
+                    raise StagingError(f"{name} unpacks to more than {_limit(target)} bytes")
+                files[target] = _staged(target, data)
+                total += len(files[target])
     if total > MAX_TOTAL_BYTES or len(files) > MAX_FILES:
         raise StagingError("the submission is too large")
     if not any(CHAPTER_FILE.match(name) for name in files):
-        raise StagingError("no chapter files (chNN_*.py) found, neither in exercises/ nor at the top")
+        raise StagingError("no chapter files (chNN_*.py or chNN_*.ipynb) found, neither in exercises/ nor at the top")
     (package / "answers").mkdir(parents=True, exist_ok=True)
     for path in package.rglob("*"):
         if path.is_file() and path.relative_to(package).as_posix() not in files:

@@ -84,6 +84,38 @@ def chapters_from(names: tuple[str, ...]) -> list[ChapterInfo]:
     return [c for c in CHAPTERS if c.id in picked]
 
 
+def chapters_and_functions(names: tuple[str, ...]) -> tuple[list[ChapterInfo], tuple[str, ...]]:
+    """`grade ch06 H_jacobian`: the chapters named, and the functions whose checks alone are graded (a
+    function alone names its chapter: `grade H_jacobian`). BadParameter for a name that is neither."""
+    import re
+
+    chapter_like = [n for n in names if _is_chapter(n) or re.fullmatch(r"(ch)?\d+", n.strip(), re.I)]
+    functions = tuple(dict.fromkeys(n for n in names if n not in chapter_like))
+    picked = chapters_from(tuple(chapter_like)) if chapter_like else []
+    if not functions:
+        return picked, ()
+    from grader import checks
+
+    owners: dict[str, str] = {}
+    for info in CHAPTERS:
+        for check in checks.load(info.id).checks:
+            owners.setdefault(check.function, info.id)
+    for function in functions:
+        if function not in owners:
+            import difflib
+
+            close = difflib.get_close_matches(function, list(owners), n=1)
+            hint = f"; did you mean {close[0]}?" if close else ""
+            raise click.BadParameter(f"{function!r} is neither a chapter nor a function of one{hint} (`grade list` "
+                                     "names every chapter's functions)", param_hint="CHAPTER... [FUNCTION...]")
+        if picked and owners[function] not in {c.id for c in picked}:
+            raise click.BadParameter(f"{function} is a function of {owners[function]}, not of "
+                                     f"{', '.join(c.id for c in picked)}", param_hint="CHAPTER... [FUNCTION...]")
+    if not picked:
+        picked = [c for c in CHAPTERS if c.id in {owners[f] for f in functions}]
+    return picked, functions
+
+
 def find_submission(directory: str | None, use_solutions: bool) -> Submission:
     """The submission to grade: --solutions, --submission DIR, or the project around the cwd."""
     try:
@@ -142,12 +174,14 @@ def chapter_and_submission_options(command):
 def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solutions: bool,
                 output_format: str, seed: int | None, verbose: bool, learner: str | None,
                 no_quiz: bool, no_sandbox: bool, html_path: str | None, watch: bool) -> None:
-    """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total."""
-    picked = chapters_from(chapters)
+    """Grade CHAPTER... (ch06, 6 or all): code checks and quiz, each with its points, and a total.
+    `grade ch06 H_jacobian` grades that function's checks only (FUNCTION... after the chapter)."""
+    picked, functions = chapters_and_functions(chapters)
+    no_quiz = no_quiz or bool(functions)
     seed = _seed_here(seed)
     submission = find_submission(submission_dir, use_solutions)
     if watch:
-        _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose)
+        _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose, functions)
         return
     # the child may already run (grader.launch); else start it now, to overlap our imports below
     session = launch.take(submission)
@@ -172,7 +206,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
     try:
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
-                                               plots=html_path is not None))
+                                               plots=html_path is not None, functions=functions))
     finally:
         session.close()
     if html_path is not None:
@@ -183,7 +217,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
 
 def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,
-           no_sandbox: bool, verbose: bool) -> None:
+           no_sandbox: bool, verbose: bool, functions: tuple[str, ...] = ()) -> None:
     """`--watch`: a resident fork server grades each saved chapter again (grader.watch)."""
     import functools
     import time
@@ -206,8 +240,8 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
         launcher = server.start
     else:  # no safe fork here (Windows, macOS): a fresh interpreter per run
         launcher = functools.partial(start_child, wrap=sandbox)
-    watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz),
-                            launcher)
+    watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz,
+                                                          functions=functions), launcher)
     stream = sys.stdout
 
     def show(report, changes: list[str], seconds: float, saved: list[str]) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Generator
@@ -12,6 +13,7 @@ from grader.checks.base import Check, ChapterChecks, Context, Skip
 from grader.compare import Verdict
 from grader.course import PUBLIC_SEED
 from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.notebook import KERNEL, relocate
 from grader.runner import ChapterRequest, ChapterRun, Session
 from grader.wire import NOT_IMPLEMENTED, Call, Returned
 
@@ -160,12 +162,45 @@ def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
     return result
 
 
+def _relocate(run: ChapterRun, sources: dict) -> None:
+    """Errors of modules made from notebook cells say "cell N, line M" (grader.notebook.relocate)."""
+    if not sources:
+        return
+    relocate(run.import_error, sources)
+    for returned in run.results:
+        if returned is not None:
+            relocate(returned.error, sources)
+
+
+IMPORT_FORMS = ("an earlier chapter's file is imported in one of three forms, all graded alike: "
+                "`from .ch03_jacobian import polar_to_cartesian` (relative), "
+                "`from exercises.ch03_jacobian import polar_to_cartesian` or "
+                "`from ch03_jacobian import polar_to_cartesian` (which also works when the file runs as a script); "
+                "the module is the chapter's file name without .py or .ipynb (`grade list` names them), and the file "
+                "must be in the same folder")
+
+
+def import_hint(error: dict) -> str:
+    """The accepted import forms, for an ImportError that an import of an earlier chapter may have caused."""
+    if error.get("exception") not in ("ModuleNotFoundError", "ImportError"):
+        return ""
+    message = error.get("message", "")
+    if re.search(r"relative import|No module named '(exercises|ch\d|solutions\.ch)|cannot import name", message) or \
+            re.search(r"'ch\d\d?_?\w*'", message):
+        return f"\nHow to import: {IMPORT_FORMS}."
+    return ""
+
+
 def import_problem(error: dict, module_file: str) -> str:
     """The learner-facing message for a chapter file that could not be imported."""
     if error.get("grader"):
         return f"{module_file} could not be graded: {error.get('message')}"
     exception = error.get("exception", "")
+    if exception == "NotebookError":
+        return error.get("message", "")
     line = f", line {error['line']}" if error.get("line") else ""
+    if error.get("where"):  # a notebook: "exercises/ch06_measurement.ipynb, cell 4, line 2"
+        module_file, line = error["where"], ""
     if exception == "SyntaxError" or exception == "IndentationError":
         head = f"{module_file}{line}: {exception}: {error.get('message')}"
     elif exception == "ModuleNotFoundError" and "No module named" in error.get("message", "") and not error.get("traceback", "").count("File"):
@@ -177,7 +212,8 @@ def import_problem(error: dict, module_file: str) -> str:
     else:
         head = f"{module_file}{line} raised {exception} while being imported: {error.get('message')}"
     trace = error.get("traceback", "")
-    return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "")
+    return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "") + \
+        import_hint(error)
 
 
 def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
@@ -211,10 +247,22 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
              for cid in chapter_ids]
     runs = session.run([plan.request() for plan in plans])
     submission = session.submission
+    prepared = session.prepared
     report = Report(submission_label or str(submission.root), seed=seed)
     for plan in plans:
-        module_file = str(Path(submission.package) / f"{plan.chapter.info.module}.py")  # as the system writes it
-        report.chapters.append(plan.judge(runs[plan.chapter.info.id], module_file))
+        module = plan.chapter.info.module
+        graded = prepared.graded.get(module)  # a notebook, or the cells a kernel ran
+        module_file = str(Path(graded) if graded and graded.endswith(".ipynb") else graded or
+                          Path(submission.package) / f"{module}.py")  # as the system writes it
+        run = runs[plan.chapter.info.id]
+        if module in prepared.problems:  # a notebook that could not be read: the child had no module
+            run.import_error = {"exception": "NotebookError", "message": prepared.problems[module], "traceback": "",
+                                "line": None}
+        _relocate(run, prepared.sources)
+        chapter = plan.judge(run, module_file)
+        chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
+        chapter.notes.extend(prepared.notes.get(module, []))
+        report.chapters.append(chapter)
     point_upstream(report, {plan.chapter.info.id: plan.chapter for plan in plans})
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()

@@ -65,6 +65,8 @@ class ChapterResult:
 
     hidden_checks: int = 0  # checks of this chapter not run here (graded on submission)
     hidden_points: float = 0.0
+    source: str = ""  # the file graded ("exercises/ch06_measurement.ipynb"), or the code a notebook's kernel ran
+    notes: list[str] = field(default_factory=list)  # what the learner should know that is no problem of the code
 
     def score_of(self, kind: str | None = None) -> float:
         return _round(sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted))
@@ -103,6 +105,8 @@ class ChapterResult:
             "hidden_checks": self.hidden_checks,
             "hidden_points": _round(self.hidden_points),
             "problems": list(self.problems),
+            "source": self.source or None,
+            "notes": list(self.notes),
             "checks": [c.to_dict() for c in self.checks],
         }
 
@@ -147,7 +151,8 @@ class Report:
                       for c in ch.get("checks", [])]
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),
-                                          hidden_points=float(ch.get("hidden_points", 0.0))))
+                                          hidden_points=float(ch.get("hidden_points", 0.0)),
+                                          source=ch.get("source") or "", notes=list(ch.get("notes") or [])))
         return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
                    infrastructure=data.get("infrastructure") or "")
 

@@ -10,6 +10,7 @@ and points are graded on submission instead. A course that turns the exact-deriv
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from grader import course as courses
@@ -27,6 +28,7 @@ class Request:
     quiz: bool = True
     plots: bool = False  # gather the HTML report's plot data in the same round trip
     label: str | None = None  # how the report names the submission (default: its folder)
+    functions: tuple[str, ...] = ()  # grade only these functions' checks (and no quiz); () grades them all
 
 
 def hidden_ids(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[str]:
@@ -46,17 +48,50 @@ def switched_off(course: courses.Course, chapters: tuple[str, ...]) -> frozenset
     return frozenset().union(*(check_registry.load(c).exact_derivative_ids for c in chapters))
 
 
+def other_functions(request: Request) -> tuple[frozenset[str], dict[str, str]]:
+    """With `request.functions`, the "chNN/check_id" of every check of another function, and per chapter a
+    note saying what was left out; nothing without."""
+    if not request.functions:
+        return frozenset(), {}
+    from grader import checks as check_registry
+    from grader.render import plural
+
+    left: set[str] = set()
+    notes = {}
+    for chapter in request.chapters:
+        checks = check_registry.load(chapter).checks
+        others = [c for c in checks if c.function not in request.functions]
+        left |= {f"{chapter}/{c.id}" for c in others}
+        graded = ", ".join(dict.fromkeys(c.function for c in checks if c.function in request.functions))
+        names = ", ".join(dict.fromkeys(c.function for c in others))
+        notes[chapter] = (f"graded {graded} only; left out {plural(len(others), 'check')} "
+                          f"({plural(sum(c.points for c in others), 'point')}) of {names}" if others else
+                          f"graded {graded}") + f", and the quiz: `grade {chapter}` grades the whole chapter"
+    return frozenset(left), notes
+
+
 def build_report(session: Session, request: Request, course: courses.Course | None = None) -> Report:
     """Grade `request.chapters` of the session's submission into one Report (closes the session), as `course`
     has it (default: a handout's own course; on the instructor's side every check runs)."""
     from grader.grading import grade
 
     course = course or (courses.current() if courses.in_handout() else courses.Course())
+    others, notes = other_functions(request)
+    hidden = hidden_ids(course, request.chapters)
     report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
                    submission_label=request.label,
-                   exclude=hidden_ids(course, request.chapters) | switched_off(course, request.chapters))
+                   exclude=hidden | switched_off(course, request.chapters) | others)
     for chapter in report.chapters:
         chapter.hidden_checks, chapter.hidden_points = course.hidden_in(chapter.chapter)
+        if chapter.chapter in notes:  # one function: only its hidden checks are left for the submission
+            from grader import checks as check_registry
+
+            mine = [c for c in check_registry.load(chapter.chapter).checks
+                    if f"{chapter.chapter}/{c.id}" in hidden and f"{chapter.chapter}/{c.id}" not in others]
+            chapter.hidden_checks, chapter.hidden_points = len(mine), sum(c.points for c in mine)
+            chapter.notes.append(notes[chapter.chapter])
+    if request.functions:
+        request = dataclasses.replace(request, quiz=False)
     if request.quiz:
         from grader.quiz import add_quiz_results
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
 from grader.spawn import CommandWrapper, start_child
-from grader.submission import Submission
+from grader.submission import Prepared, Submission
 from grader.wire import (
     CRASHED, DONE, IMPORT, IMPORT_FAILED, IMPORTED, MAX_LINE, MISSING_EVENT, NOT_RUN, RAISED_EVENT, RETURNED, TIMEOUT,
     Call, Returned, clean_error, from_event,
@@ -167,9 +167,17 @@ class Session:
         self.wrap = wrap
         self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
         self.output = ""
-        self._files: dict[str, str] | None = None
+        self._prepared: Prepared | None = None
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
         self._child: _Child | None = _Child(started or self.launcher(submission))
+
+    @property
+    def prepared(self) -> Prepared:
+        """The submission's files as the child gets them, and how to speak of them (read once per session:
+        every fresh child gets the same files)."""
+        if self._prepared is None:
+            self._prepared = self.submission.prepare()
+        return self._prepared
 
     def close(self) -> None:
         if self._child is not None:
@@ -207,9 +215,7 @@ class Session:
         for req in pending:
             calls = [c.to_json(i) for i, c in enumerate(req.calls) if runs[req.chapter].results[i] is None]
             chapters.append({"chapter": req.chapter, "module": req.module, "calls": calls})
-        if self._files is None:  # read once per session: every fresh child gets the same files
-            self._files = self.submission.files()
-        return {"package": self.submission.package, "files": self._files,
+        return {"package": self.submission.package, "files": self.prepared.files,
                 "chapters": chapters, "limits": self.limits.rlimits()}
 
     def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
@@ -11,34 +12,97 @@ MAX_FILES_BYTES = 32 << 20
 
 
 class Submission(NamedTuple):
-    """Where the learner's chapter files are: `root/package/chNN_*.py`."""
+    """Where the learner's chapter files are: `root/package/chNN_*.py` or `chNN_*.ipynb`. `kernel` holds
+    chapters whose code an IPython kernel ran (`%grade`, grader.magic): (module, ((label, cell source),
+    ...)) each, graded instead of that chapter's file."""
 
     root: Path
     package: str = "exercises"
+    kernel: tuple = ()
 
     def module_file(self, module: str) -> Path:
         return self.root / self.package / f"{module}.py"
 
+    def chapter_file(self, module: str) -> Path:
+        """The file a chapter is graded from: its .py, else its notebook, else (missing) its .py."""
+        python = self.module_file(module)
+        notebook = python.with_suffix(".ipynb")
+        return notebook if notebook.is_file() and not python.is_file() else python
+
     def files(self) -> dict[str, str]:
-        """The package's Python files, relative path -> base64: what the child gets in its request (it
-        never reads the submission's folder itself). Symlinks are not followed; at most MAX_FILES_BYTES."""
+        """The package's Python files, relative path -> base64: what the child gets in its request."""
+        return self.prepare().files
+
+    def prepare(self) -> Prepared:
+        """What the child gets (grader.notebook turns notebooks and kernel cells into modules) and how to
+        speak of it: the package's .py files and its notebooks as modules (a notebook only where no .py of
+        its name is), relative path -> base64, read here (the child never reads the submission's folder).
+        Symlinks are not followed; at most MAX_FILES_BYTES."""
         import base64
         import os
 
+        from grader import notebook
+
+        prepared = Prepared()
         package = Path(self.root) / self.package
-        files, total = {}, 0
+        texts: dict[str, bytes] = {}
+        notebooks: dict[str, Path] = {}
+        total = 0
         for folder, subfolders, names in os.walk(package):  # never into a symlinked folder
-            subfolders.sort()
+            subfolders[:] = sorted(n for n in subfolders if not n.startswith("."))  # .ipynb_checkpoints
             for name in sorted(names):
                 path = Path(folder) / name
-                if not name.endswith(".py") or path.is_symlink() or not path.is_file():
+                if not name.endswith((".py", ".ipynb")) or path.is_symlink() or not path.is_file():
                     continue
-                data = path.read_bytes()
-                total += len(data)
-                if total > MAX_FILES_BYTES:
-                    return files
-                files[path.relative_to(self.root).as_posix()] = base64.b64encode(data).decode()
-        return files
+                relative = path.relative_to(self.root).as_posix()
+                if name.endswith(".ipynb"):
+                    if Path(name).stem.isidentifier():
+                        notebooks[relative[: -len(".ipynb")] + ".py"] = path
+                    continue
+                texts[relative] = path.read_bytes()
+        for relative, path in notebooks.items():
+            shown = f"{relative[: -len('.py')]}.ipynb"
+            module = Path(relative).stem
+            if relative in texts:
+                prepared.notes.setdefault(module, []).append(
+                    f"both {relative} and {Path(shown).name} exist: graded {relative} (remove or rename the one "
+                    "you do not use)")
+                continue
+            try:
+                source = notebook.convert(path.read_bytes(), shown)
+            except notebook.NotebookError as exc:
+                prepared.problems[module] = f"{shown} could not be read: {exc}"
+                continue
+            texts[relative] = source.text.encode("utf-8")
+            prepared.sources[relative] = source
+            prepared.graded[module] = shown
+        for module, cells in self.kernel:
+            for relative, (text, source) in notebook.kernel_module(self.package, module, list(cells)).items():
+                texts[relative] = text.encode("utf-8")
+                if source is not None:
+                    prepared.sources[relative] = source
+            prepared.graded[module] = notebook.KERNEL
+            prepared.problems.pop(module, None)
+        for relative, data in texts.items():
+            total += len(data)
+            if total > MAX_FILES_BYTES:
+                break
+            prepared.files[relative] = base64.b64encode(data).decode()
+        return prepared
+
+
+@dataclass
+class Prepared:
+    """A submission as the child gets it (`files`: relative path -> base64) and what the messages say about
+    it: the module line maps of notebooks and kernel cells (`sources`, by the module's relative path), the
+    file each chapter module was graded from where it is not its .py (`graded`), notes (both a .py and a
+    notebook) and notebooks that could not be read (`problems`), by module name."""
+
+    files: dict[str, str] = field(default_factory=dict)
+    sources: dict = field(default_factory=dict)
+    graded: dict[str, str] = field(default_factory=dict)
+    notes: dict[str, list[str]] = field(default_factory=dict)
+    problems: dict[str, str] = field(default_factory=dict)
 
 
 class SubmissionNotFound(LookupError):
@@ -58,9 +122,9 @@ def folder_submission(directory: str | Path) -> Submission:
     root = Path(directory).resolve()
     if (root / "exercises").is_dir():
         return Submission(root, "exercises")
-    if any(root.glob("ch0[0-9]_*.py")):
+    if any(root.glob("ch0[0-9]_*.py")) or any(root.glob("ch0[0-9]_*.ipynb")):
         return Submission(root.parent, root.name)
-    raise SubmissionNotFound(f"{directory} holds neither exercises/ nor chapter files (chNN_*.py)")
+    raise SubmissionNotFound(f"{directory} holds neither exercises/ nor chapter files (chNN_*.py, chNN_*.ipynb)")
 
 
 def project_submission(start: Path | None = None) -> Submission:

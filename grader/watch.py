@@ -50,6 +50,7 @@ class Watcher:
         found = {}
         for chapter in self.chapters:
             found[package / f"{BY_ID[chapter].module}.py"] = chapter
+            found[package / f"{BY_ID[chapter].module}.ipynb"] = chapter  # a chapter kept as a notebook
             found[package / "answers" / f"{chapter}.yaml"] = chapter
         found[package / "answers" / "learner.yaml"] = "*"
         return found
@@ -67,7 +68,7 @@ class Watcher:
         modules = [BY_ID[c].module for c in direct]
         for chapter in self.chapters:
             try:
-                text = (package / f"{BY_ID[chapter].module}.py").read_text(encoding="utf-8", errors="replace")
+                text = self.submission.chapter_file(BY_ID[chapter].module).read_text(encoding="utf-8", errors="replace")
             except OSError:
                 continue
             if any(re.search(rf"\b{m}\b", text) for m in modules):
@@ -77,7 +78,8 @@ class Watcher:
     def grade(self, chapters: list[str]) -> tuple[Report, float]:
         started = time.perf_counter()
         session = Session(self.submission, self.limits, launcher=self.launcher)
-        request = Request(tuple(chapters), self.request.seed, learner=self.request.learner, quiz=self.request.quiz)
+        request = Request(tuple(chapters), self.request.seed, learner=self.request.learner, quiz=self.request.quiz,
+                          functions=self.request.functions)
         report = build_report(session, request)
         return report, time.perf_counter() - started
 

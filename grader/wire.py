@@ -331,7 +331,7 @@ class Returned:
             return f"{name} is not defined in your file (check the spelling against the stub)."
         if self.kind == RAISED:
             err = self.error or {}
-            where = f" (line {err['line']})" if err.get("line") else ""
+            where = f" ({err['where']})" if err.get("where") else f" (line {err['line']})" if err.get("line") else ""
             return f"{name} raised {err.get('exception')}: {err.get('message')}{where}"
         if self.kind == TIMEOUT:
             return f"{name} did not return in time ({self.note}): an endless loop?"

@@ -160,7 +160,7 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
     tests = []
     for chapter in report.chapters:
         info = BY_ID.get(chapter.chapter)
-        filename = f"exercises/{info.module}.py" if info else ""
+        filename = chapter.source if chapter.source.startswith("exercises/") else f"exercises/{info.module}.py" if info else ""
         for problem in chapter.problems:
             tests.append({"name": f"{chapter.chapter}: chapter message", "status": chapter_status(chapter), "score": 0,
                           "max_score": 0, "message": problem, "filename": filename, "line_no": 0})

@@ -98,6 +98,10 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
     for chapter in report.chapters:
         title = f"{chapter.chapter}  {chapter.title}"
         out.append(click.style(title, bold=True) if colour else title)
+        if chapter.source.endswith(".ipynb") or chapter.source.startswith("the code"):
+            out.append(f"  graded: {chapter.source}")
+        for note in chapter.notes:
+            out.append(f"  note: {note}")
         for problem in chapter.problems:
             out.extend(f"  {line}" for line in problem.splitlines())
         for kind, heading in (("code", "code"), ("quiz", "quiz")):

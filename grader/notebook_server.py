@@ -1,0 +1,212 @@
+"""The resident grading process behind `%grade` (grader.magic): a process of its own beside the IPython
+kernel, so that the kernel imports nothing of the grader but a small client and never runs a check.
+
+It reads one JSON request per line on stdin (the `%grade` arguments, the kernel's working folder, the
+names of functions the notebook itself defined and the cells the kernel ran) and answers one JSON line
+on its real stdout: the report as text, as an HTML fragment (grader.render.html.render_fragment, with
+plots) where the front end shows HTML, and the score. Learner code runs only in the sandboxed children
+of its resident fork server (grader.forkserver, where grader.spawn.fork_is_safe; else a fresh child per
+run), exactly as under `grade chNN`; the checks and references stay imported here between runs, so
+a second `%grade` costs the run itself. It ends when the kernel closes its stdin.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+
+class Server:
+    """One kernel's grading process: its launchers (a fork server per sandbox setting) and requests."""
+
+    def __init__(self) -> None:
+        self.servers: dict[bool, object] = {}
+
+    def launcher(self, sandboxed: bool):
+        """Children for a run: the resident fork server where forking is safe, else fresh interpreters."""
+        import functools
+
+        from grader.sandbox import learner_sandbox
+        from grader.spawn import fork_is_safe, start_child
+
+        wrap = learner_sandbox() if sandboxed else None
+        if not fork_is_safe():
+            return functools.partial(start_child, wrap=wrap)
+        if sandboxed not in self.servers:
+            from grader.forkserver import ForkServer
+
+            self.servers[sandboxed] = ForkServer(wrap)
+        return self.servers[sandboxed].start
+
+    def warm_up(self) -> None:
+        """Import what grading needs and start the fork server, before the first `%grade` asks."""
+        from grader import checks
+        from grader.chapters import CHAPTERS
+
+        for info in CHAPTERS:
+            checks.load(info.id)
+        import grader.pipeline  # noqa: F401
+        import grader.render.text  # noqa: F401
+
+        start = self.launcher(True)
+        server = getattr(start, "__self__", None)
+        if server is not None and server.process is None:
+            server._launch()
+
+    def close(self) -> None:
+        for server in self.servers.values():
+            server.close()
+
+    def handle(self, request: dict) -> dict:
+        """Grade as `grade run` would with request["args"]; {"error": why} for arguments it cannot take."""
+        import click
+
+        from grader import cli
+
+        os.chdir(request.get("cwd") or ".")
+        args = [str(a) for a in request.get("args", [])]
+        if any(a in ("-h", "--help") for a in args):
+            with cli.run_command.make_context("%grade", ["x"]) as ctx:
+                return {"text": cli.run_command.get_help(ctx)}
+        try:
+            ctx = cli.run_command.make_context("%grade", args)
+            return self._grade(ctx.params, request)
+        except click.ClickException as exc:
+            return {"error": exc.format_message()}
+
+    def _grade(self, options: dict, request: dict) -> dict:
+        import click
+
+        from grader import cli
+        from grader.pipeline import Request, build_report
+        from grader.render import text
+        from grader.runner import Session
+
+        if options["watch"]:
+            raise click.UsageError("%grade has no --watch: run the cell again after an edit (it stays fast)")
+        defined = set(request.get("defined", []))
+        names = options["chapters"] or tuple(_chapters_defining(defined))
+        if not names:
+            raise click.UsageError("name a chapter: %grade ch06 (or %grade all; %grade ch06 H_jacobian for one "
+                                   "function)")
+        picked, functions = cli.chapters_and_functions(names)
+        seed = cli._seed_here(options["seed"])
+        submission = self._submission(options, [c.id for c in picked], defined, request.get("cells", []))
+        html = bool(request.get("html"))
+        session = Session(submission, launcher=self.launcher(not options["no_sandbox"]))
+        report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=options["learner"],
+                                               quiz=not options["no_quiz"] and not functions,
+                                               plots=html or options["html_path"] is not None, functions=functions))
+        if options["html_path"] is not None:
+            from grader.render import html as page
+
+            cli.write_atomically(options["html_path"], page.render(report))
+        if options["output_format"] == "json":
+            from grader.render import json_report
+
+            return {"text": json_report.render(report), "html": "", "score": report.score,
+                    "max_score": report.max_score, "all_passed": report.all_passed}
+        fragment = ""
+        if html:
+            from grader.render.html import render_fragment
+
+            fragment = render_fragment(report)
+        return {"text": text.render(report, colour=False, unicode_ok=True, verbose=options["verbose"]),
+                "html": fragment, "score": report.score, "max_score": report.max_score,
+                "all_passed": report.all_passed}
+
+    def _submission(self, options: dict, chapters: list[str], defined: set[str], cells: list):
+        """What to grade: --solutions or --submission as given; else the project around the kernel's folder
+        (or the chapter files in it), with each chapter whose functions the notebook defined itself graded
+        from the cells the kernel ran, in order."""
+        import click
+
+        from grader.chapters import BY_ID
+        from grader.submission import Submission, SubmissionNotFound, folder_submission, locate
+
+        if options["use_solutions"] or options["submission_dir"] is not None:
+            return cli_submission(options)
+        from_kernel = [c for c in chapters if _functions(c) & defined]
+        try:
+            submission = locate(None, False)
+        except SubmissionNotFound:
+            try:
+                submission = folder_submission(Path.cwd())
+            except SubmissionNotFound:
+                if not from_kernel:
+                    raise click.UsageError(
+                        f"this notebook defines none of the functions of {', '.join(chapters)} and there is no "
+                        "exercises/ folder here or above: run the cells that define them first, or work in the "
+                        "lesson's project") from None
+                submission = Submission(_empty_root(), "exercises")
+        if not from_kernel:
+            return submission
+        history = tuple((str(label), str(code)) for label, code in cells)
+        return submission._replace(kernel=tuple((BY_ID[c].module, history) for c in from_kernel))
+
+
+def cli_submission(options: dict):
+    from grader import cli
+
+    return cli.find_submission(options["submission_dir"], options["use_solutions"])
+
+
+def _functions(chapter: str) -> set[str]:
+    from grader import checks
+
+    return {c.function for c in checks.load(chapter).checks}
+
+
+def _chapters_defining(defined: set[str]) -> list[str]:
+    from grader.chapters import CHAPTERS
+
+    return [c.id for c in CHAPTERS if _functions(c.id) & defined]
+
+
+_EMPTY: list[Path] = []
+
+
+def _empty_root() -> Path:
+    """A folder with an empty exercises/ for a notebook that is the whole submission (Colab)."""
+    if not _EMPTY:
+        import atexit
+        import shutil
+        import tempfile
+
+        root = Path(tempfile.mkdtemp(prefix="grade-notebook-"))
+        (root / "exercises").mkdir()
+        atexit.register(shutil.rmtree, root, True)
+        _EMPTY.append(root)
+    return _EMPTY[0]
+
+
+def main() -> None:
+    """Serve requests on stdin until it closes; answers go to the stdout this process started with (what
+    the grader itself prints goes to stderr)."""
+    answers = os.fdopen(os.dup(1), "w", encoding="utf-8", newline="\n")
+    os.dup2(2, 1)
+    sys.stdout = sys.stderr
+    server = Server()
+    try:
+        if "--warm" in sys.argv[1:]:
+            try:
+                server.warm_up()
+            except Exception:  # a warm-up that fails leaves the work to the first request
+                pass
+        for line in sys.stdin:
+            try:
+                answer = server.handle(json.loads(line))
+            except Exception as exc:  # a grader bug: said in the notebook, the process goes on
+                import traceback
+
+                answer = {"error": f"the grader failed: {type(exc).__name__}: {exc}\n{traceback.format_exc(limit=-4)}"}
+            answers.write(json.dumps(answer) + "\n")
+            answers.flush()
+    finally:
+        server.close()
+
+
+if __name__ == "__main__":
+    main()
