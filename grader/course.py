@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from dataclasses import dataclass
+from datetime import datetime
 from pathlib import Path
 
 PUBLIC_SEED = 20261122  # the seed of `grade chNN`, at home and in the project; a handout's data is recorded at it
@@ -26,6 +28,25 @@ class CourseError(ValueError):
 
 
 @dataclass(frozen=True)
+class Late:
+    """The deadline and the late penalty: `per_day` of the score (a fraction) per day or part of a day late,
+    at most `cap`, after `grace_minutes`."""
+
+    deadline: datetime
+    per_day: float
+    cap: float = 1.0
+    grace_minutes: float = 0.0
+
+    def fraction(self, submitted: datetime) -> tuple[float, float]:
+        """(the share of the score taken, days late rounded up) for a submission made at `submitted`."""
+        late = (submitted - self.deadline).total_seconds() - 60 * self.grace_minutes
+        if late <= 0:
+            return 0.0, 0
+        days = math.ceil(late / 86400)
+        return min(self.cap, self.per_day * days), days
+
+
+@dataclass(frozen=True)
 class Course:
     id: str = "jacobians-linearization"
     public_seed: int = PUBLIC_SEED
@@ -35,6 +56,9 @@ class Course:
     exact_derivatives: bool = True  # False: the exact-derivative checks are not part of this course
     handout: dict | None = None  # in a handout: its version and the hidden checks' counts per chapter
     source: str = ""  # where this came from, for messages
+    quiz_feedback_by: dict | None = None  # chapter -> "recorded" or "immediate" where it differs from quiz_feedback
+    current_handout: str | None = None  # instructor side: the id (version) of the handout learners should have
+    late: Late | None = None  # the deadline and the late penalty, where the course has them
 
     @property
     def in_handout(self) -> bool:
@@ -44,6 +68,15 @@ class Course:
     def grading_seed(self) -> int:
         """The seed submissions are graded at: the course seed, else the public one."""
         return self.public_seed if self.seed is None else self.seed
+
+    def feedback(self, chapter: str) -> str:
+        """How `chapter`'s quiz is given: "recorded" (graded on submission, counted) or "immediate" (keys of
+        the fixed questions in the handout: practice, never counted)."""
+        return (self.quiz_feedback_by or {}).get(chapter, self.quiz_feedback)
+
+    def practice(self, chapter: str) -> bool:
+        """Whether `chapter`'s quiz is practice: immediate feedback, so not counted anywhere."""
+        return self.feedback(chapter) == "immediate"
 
     def is_hidden(self, chapter: str, check_id: str) -> bool:
         return f"{chapter}/{check_id}" in self.hidden
@@ -91,12 +124,13 @@ def _from_handout(path: Path) -> Course:
         data = json.loads(path.read_text(encoding="utf-8"))
         return Course(id=str(data["course"]), public_seed=int(data["public_seed"]),
                       quiz_feedback=str(data.get("quiz_feedback", "recorded")),
+                      quiz_feedback_by=dict(data.get("quiz_feedback_by") or {}),
                       exact_derivatives=bool(data.get("exact_derivatives", True)), handout=data, source=str(path))
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CourseError(f"{path}: the handout's course data cannot be read ({exc}); reinstall the handout") from None
 
 
-_FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives"}
+_FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives", "handout", "deadline", "late_penalty"}
 
 
 def _key_lines(text: str) -> dict[str, int]:
@@ -136,9 +170,7 @@ def _from_yaml(path: Path) -> Course:
     if unknown:
         raise CourseError(f"{where(unknown[0])}: unknown setting(s) {', '.join(unknown)}; the settings are "
                           f"{', '.join(sorted(_FIELDS))}")
-    feedback = str(data.get("quiz_feedback", "recorded"))
-    if feedback not in QUIZ_FEEDBACK:
-        raise CourseError(f"{where('quiz_feedback')}: quiz_feedback is {feedback!r}; one of {', '.join(QUIZ_FEEDBACK)}")
+    feedback, feedback_by = _quiz_feedback(data.get("quiz_feedback", "recorded"), where("quiz_feedback"))
     hidden = data.get("hidden") or []
     if not isinstance(hidden, list) or not all(isinstance(h, str) and h.count("/") == 1 for h in hidden):
         raise CourseError(f"{where('hidden')}: hidden is a list of chapter/check ids, e.g. [ch06/H_rows_orthogonal]")
@@ -153,5 +185,57 @@ def _from_yaml(path: Path) -> Course:
     if seed == PUBLIC_SEED:
         raise CourseError(f"{where('seed')}: the course seed equals the public seed {PUBLIC_SEED}; hard-coded public "
                           "values would pass")
+    handout = data.get("handout")
+    if handout is not None and (not isinstance(handout, str) or not handout.strip()):
+        raise CourseError(f"{where('handout')}: handout is the id of the current handout, as `grade release` prints "
+                          "it (e.g. 0.1.0+handout.3f2a9c1b0d4e)")
     return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
-                  exact_derivatives=exact, source=str(path))
+                  exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by,
+                  current_handout=handout.strip() if handout else None,
+                  late=_late(data, where))
+
+
+def _quiz_feedback(value: object, where: str) -> tuple[str, dict]:
+    """quiz_feedback: one mode for every quiz, or a mapping `{default: recorded, ch00: immediate}`."""
+    modes = value if isinstance(value, dict) else {"default": value}
+    from grader.chapters import BY_ID
+
+    for chapter, mode in modes.items():
+        if str(mode) not in QUIZ_FEEDBACK:
+            raise CourseError(f"{where}: quiz_feedback{'' if chapter == 'default' else ' of ' + str(chapter)} is "
+                              f"{mode!r}; one of {', '.join(QUIZ_FEEDBACK)}")
+        if chapter != "default" and str(chapter) not in BY_ID:
+            raise CourseError(f"{where}: quiz_feedback names {chapter!r}, not a chapter (ch00 ... ch09, or default)")
+    default = str(modes.get("default", "recorded"))
+    return default, {str(c): str(m) for c, m in modes.items() if c != "default" and str(m) != default}
+
+
+def _late(data: dict, where) -> Late | None:
+    """deadline (with its time zone) and late_penalty `{per_day: 0.1, max: 0.5, grace_minutes: 15}`."""
+    if data.get("deadline") is None:
+        if data.get("late_penalty") is not None:
+            raise CourseError(f"{where('late_penalty')}: a late penalty needs a deadline (deadline: "
+                              "2026-05-01T23:59:00+02:00)")
+        return None
+    deadline = data["deadline"]
+    if isinstance(deadline, str):
+        try:
+            deadline = datetime.fromisoformat(deadline.strip())
+        except ValueError:
+            raise CourseError(f"{where('deadline')}: deadline is a date and time with its time zone, e.g. "
+                              "2026-05-01T23:59:00+02:00") from None
+    if not isinstance(deadline, datetime) or deadline.tzinfo is None:
+        raise CourseError(f"{where('deadline')}: deadline needs its time zone, e.g. 2026-05-01T23:59:00+02:00 "
+                          "(submission times are compared across zones)")
+    penalty = data.get("late_penalty") or {}
+    if not isinstance(penalty, dict) or set(map(str, penalty)) - {"per_day", "max", "grace_minutes"}:
+        raise CourseError(f"{where('late_penalty')}: late_penalty is {{per_day: 0.1, max: 0.5, grace_minutes: 0}} "
+                          "(shares of the score)")
+    try:
+        late = Late(deadline, float(penalty.get("per_day", 0.0)), float(penalty.get("max", 1.0)),
+                    float(penalty.get("grace_minutes", 0.0)))
+    except (TypeError, ValueError):
+        raise CourseError(f"{where('late_penalty')}: per_day, max and grace_minutes are numbers") from None
+    if not (0 <= late.per_day <= 1 and 0 <= late.cap <= 1 and late.grace_minutes >= 0):
+        raise CourseError(f"{where('late_penalty')}: per_day and max are shares of the score between 0 and 1")
+    return late

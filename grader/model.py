@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from enum import Enum
 
-SCHEMA_VERSION = "1.1"
+SCHEMA_VERSION = "1.2"
 
 
 class Status(str, Enum):
@@ -38,10 +38,12 @@ class CheckResult:
     kind: str = "code"  # "code" or "quiz"
     details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
     mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
+    practice: bool = False  # a quiz question of a practice quiz (immediate feedback): judged, never counted
 
-    def to_dict(self) -> dict:
+    def to_dict(self, chapter: str = "") -> dict:
         return {
             "id": self.id,
+            "stable_id": f"{chapter}/{self.id}" if chapter else self.id,
             "function": self.function,
             "description": self.description,
             "status": self.status.value,
@@ -52,7 +54,40 @@ class CheckResult:
             "got": jsonable(self.got),
             "kind": self.kind,
             "mistake": self.mistake or None,
+            "practice": self.practice,
         }
+
+
+@dataclass
+class Adjustment:
+    """A change of points made after grading: an instructor's override (overrides.csv) or a late penalty.
+    `target` is what it changes: a check ("ch06/H_worked_example"), a chapter ("ch06") or "total"; `points`
+    is the change it made (negative for a penalty), already kept within 0 and the check's maximum."""
+
+    target: str
+    points: float
+    reason: str
+    kind: str = "override"  # "override" or "late"
+    who: str = ""
+    source: str = ""  # where it was read, e.g. "overrides.csv, line 3"
+    check_kind: str = ""  # for a check: "code" or "quiz" (its chapter's column it changes)
+
+    @property
+    def chapter(self) -> str | None:
+        return self.target.split("/", 1)[0] if self.target.startswith("ch") else None
+
+    @property
+    def on_check(self) -> bool:
+        return "/" in self.target
+
+    def to_dict(self) -> dict:
+        return {"target": self.target, "points": _round(self.points), "reason": self.reason, "kind": self.kind,
+                "who": self.who, "source": self.source}
+
+    def describe(self) -> str:
+        """One line: '+2 on ch06/H_worked_example (regrade request; by bo, overrides.csv, line 3)'."""
+        by = ", ".join(p for p in (f"by {self.who}" if self.who else "", self.source) if p)
+        return f"{self.points:+g} on {self.target} ({self.reason}{'; ' + by if by else ''})"
 
 
 @dataclass
@@ -67,9 +102,18 @@ class ChapterResult:
     hidden_points: float = 0.0
     source: str = ""  # the file graded ("exercises/ch06_measurement.ipynb"), or the code a notebook's kernel ran
     notes: list[str] = field(default_factory=list)  # what the learner should know that is no problem of the code
+    adjustments: list[Adjustment] = field(default_factory=list)  # overrides of its checks and of the chapter
 
     def score_of(self, kind: str | None = None) -> float:
-        return _round(sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted))
+        """Points of the checks judged here (of one kind), with the overrides of those checks."""
+        checks = sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted)
+        overridden = sum(a.points for a in self.adjustments if a.on_check and kind in (None, a.check_kind))
+        return _round(checks + overridden)
+
+    @property
+    def raw_score(self) -> float:
+        """Points of the checks as graded, before any override."""
+        return _round(sum(c.points for c in self.checks if c.status.counted))
 
     def max_score_of(self, kind: str | None = None) -> float:
         return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
@@ -85,7 +129,8 @@ class ChapterResult:
 
     @property
     def score(self) -> float:
-        return self.score_of()
+        """The chapter's points: its checks', with every override of them or of the chapter."""
+        return _round(self.score_of() + sum(a.points for a in self.adjustments if not a.on_check))
 
     @property
     def max_score(self) -> float:
@@ -107,7 +152,7 @@ class ChapterResult:
             "problems": list(self.problems),
             "source": self.source or None,
             "notes": list(self.notes),
-            "checks": [c.to_dict() for c in self.checks],
+            "checks": [c.to_dict(self.chapter) for c in self.checks],
         }
 
 
@@ -119,10 +164,30 @@ class Report:
     learner: str | None = None  # whose quiz variants were graded, and where the id came from
     learner_output: str = ""  # what learner code printed while graded (capped)
     infrastructure: str = ""  # why grading failed for a reason outside the learner's code (then it is no grade)
+    # provenance: what made this report (grader.provenance), rendered by every renderer
+    grader: str = ""  # the grader's version
+    handout: str | None = None  # the handout's id (its version): the one grading here, or the course's current one
+    course: str | None = None  # the course id
+    learner_id: str | None = None  # the plain learner id whose quiz numbers were graded
+    adjustments: list[Adjustment] = field(default_factory=list)  # overrides of the total and late penalties
 
     @property
     def score(self) -> float:
-        return _round(sum(c.score for c in self.chapters))
+        """Every check's points, with every override and penalty (grade batch applies them)."""
+        return _round(sum(c.score for c in self.chapters) + sum(a.points for a in self.adjustments))
+
+    @property
+    def raw_score(self) -> float:
+        """The points of the checks as graded, before any override or penalty."""
+        return _round(sum(c.raw_score for c in self.chapters))
+
+    def all_adjustments(self) -> list[Adjustment]:
+        return [a for ch in self.chapters for a in ch.adjustments] + list(self.adjustments)
+
+    def provenance(self) -> dict:
+        """What made this report: grader version, handout id, course, seed and learner id."""
+        return {"grader": self.grader or None, "handout": self.handout, "course": self.course, "seed": self.seed,
+                "learner": self.learner_id}
 
     @property
     def max_score(self) -> float:
@@ -147,14 +212,17 @@ class Report:
             checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
-                                  kind=c.get("kind", "code"), mistake=c.get("mistake") or "")
+                                  kind=c.get("kind", "code"), mistake=c.get("mistake") or "",
+                                  practice=bool(c.get("practice")))
                       for c in ch.get("checks", [])]
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),
                                           hidden_points=float(ch.get("hidden_points", 0.0)),
                                           source=ch.get("source") or "", notes=list(ch.get("notes") or [])))
+        made = data.get("provenance") or {}
         return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
-                   infrastructure=data.get("infrastructure") or "")
+                   infrastructure=data.get("infrastructure") or "", grader=made.get("grader") or "",
+                   handout=made.get("handout"), course=made.get("course"), learner_id=made.get("learner"))
 
     def to_dict(self) -> dict:
         return {
@@ -162,9 +230,12 @@ class Report:
             "submission": self.submission,
             "seed": self.seed,
             "learner": self.learner,
+            "provenance": self.provenance(),
             "score": self.score,
             "max_score": self.max_score,
             "pending_score": self.pending_score,
+            "raw_score": self.raw_score,
+            "adjustments": [a.to_dict() for a in self.all_adjustments()],
             "infrastructure": self.infrastructure or None,
             "chapters": [c.to_dict() for c in self.chapters],
         }

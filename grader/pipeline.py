@@ -92,9 +92,25 @@ def build_report(session: Session, request: Request, course: courses.Course | No
             chapter.notes.append(notes[chapter.chapter])
     if request.functions:
         request = dataclasses.replace(request, quiz=False)
+    learner_id = request.learner
     if request.quiz:
-        from grader.quiz import add_quiz_results
+        from grader.quiz import add_quiz_results, answers_dir, learner_id as quiz_learner
 
         submission = session.submission  # the quiz gets what is left of the learner's time budget
         add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
+        learner_id = quiz_learner(answers_dir(submission.root, submission.package), request.learner)[0]
+        for chapter in report.chapters:
+            if course.practice(chapter.chapter):
+                practice(chapter)
+    from grader import provenance
+
+    provenance.stamp(report, course, learner_id)
     return report
+
+
+def practice(chapter) -> None:
+    """A practice quiz (immediate feedback: its keys are in the handout, so it can be answered by trying every
+    option): its answers are judged for the learner's sake and never counted, here or on submission."""
+    for check in chapter.checks:
+        if check.kind == "quiz":
+            check.practice, check.points, check.max_points = True, 0.0, 0.0

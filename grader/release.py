@@ -129,12 +129,19 @@ def _write_banks(stage: Path, course: courses.Course) -> None:
         source = bank.QUIZ_DIR / f"{info.id}.yaml"
         if source.is_file():
             shutil.copyfile(source, target / source.name)
-        if course.quiz_feedback == "immediate":
+        if course.practice(info.id):
             keys = bank.public_keys(info.id)
             if keys:
                 (target / "practice").mkdir(exist_ok=True)
                 (target / "practice" / f"{info.id}.yaml").write_text(
                     yaml.safe_dump(keys, sort_keys=False, allow_unicode=True), encoding="utf-8")
+
+
+def _now() -> str:
+    """The time of the release, UTC, to the second (handout.json's `released`)."""
+    from datetime import datetime, timezone
+
+    return datetime.now(timezone.utc).replace(microsecond=0).isoformat()
 
 
 def _version(stage: Path) -> str:
@@ -277,9 +284,11 @@ def build(out: Path, course: courses.Course, *, force: bool = False) -> Release:
         _write_banks(stage, course)
         version = _version(stage)
         handout = {"course": course.id, "version": version, "public_seed": course.public_seed,
-                   "quiz_feedback": course.quiz_feedback, "exact_derivatives": course.exact_derivatives,
-                   "hidden": hidden}
+                   "quiz_feedback": course.quiz_feedback, "quiz_feedback_by": course.quiz_feedback_by or {},
+                   "exact_derivatives": course.exact_derivatives, "hidden": hidden, "released": _now()}
         (data / "handout.json").write_text(json.dumps(handout, indent=1), encoding="utf-8")
+        # the same public settings beside the handout, for the instructor: `grade batch --handout OUT` reads it
+        (out / "handout.json").write_text(json.dumps(handout, indent=1) + "\n", encoding="utf-8")
         (stage / "README.md").write_text(f"The handout grader of the course {course.id}.\n", encoding="utf-8")
         (stage / "pyproject.toml").write_text(_PYPROJECT.format(
             name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES)), encoding="utf-8")

@@ -143,8 +143,10 @@ def test_a_learner_grades_the_stubs_in_an_empty_folder(handout, learner_grade, t
     assert listed.returncode == 0 and listed.stdout.count("exercises/ch0") == 10
     assert "+ 1 in hidden checks" in listed.stdout
     graded = _learner(learner_grade, "all", cwd=tmp_path)
-    assert graded.returncode == 1 and "not implemented yet" in graded.stdout and "Total: 0/" in graded.stdout
-    assert "1 hidden check (1 point) run when you submit" in graded.stdout
+    assert graded.returncode == 1 and "not implemented yet" in graded.stdout
+    assert "Total of the public checks: 0/" in graded.stdout  # at home the total says what it is
+    assert "ch06 public checks: 0/" in graded.stdout and "1 hidden check (1 point) runs when you submit" in graded.stdout
+    assert "Graded by grader 0.1.0+handout." in graded.stdout and "handout 0.1.0+handout." in graded.stdout
     shown = _learner(learner_grade, "quiz", "ch06", "--show", cwd=tmp_path)
     assert shown.returncode == 0 and "[H_at_point]" in shown.stdout
     other_seed = _learner(learner_grade, "ch06", "--seed", "3", cwd=tmp_path)

@@ -81,6 +81,7 @@ MARKS = {"pass": "\u2713", "fail": "\u2717", "error": "!", "skip": "\u2013", "re
 BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="en">
 <h{{ h }} class="title" id="{{ pid }}title">Jacobians &amp; Linearization: grading report</h{{ h }}>
 <p class="note">Submission {{ report.submission }} &middot; seed {{ report.seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
+<p class="note" id="{{ pid }}provenance">{{ footer }}</p>
 <section id="{{ pid }}summary"{{ landmark("summary") }}><h{{ h + 1 }} class="summary-title" id="{{ pid }}summary-title">Summary</h{{ h + 1 }}>
 <table class="summary"><caption>Points by chapter</caption>
 <thead><tr><th scope="col">chapter</th><th scope="col">title</th><th scope="col" class="num">code</th><th scope="col" class="num">quiz</th><th scope="col" class="num">total</th></tr></thead>
@@ -89,6 +90,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 <td class="num" data-quiz="{{ ch.chapter }}">{{ num(ch.score_of('quiz')) }} / {{ num(ch.max_score_of('quiz')) }}</td>
 <td class="num" data-total="{{ ch.chapter }}">{{ num(ch.score) }} / {{ num(ch.max_score) }}</td></tr>{% endfor %}</tbody>
 <tfoot><tr><th scope="row" colspan="4">Total</th><td class="num" id="{{ pid }}total">{{ num(report.score) }} / {{ num(report.max_score) }}</td></tr></tfoot></table>
+{% if adjustments %}<ul id="{{ pid }}adjustments">{% for a in adjustments %}<li>{{ "late penalty" if a.kind == "late" else "override" }}: {{ a.describe() }}</li>{% endfor %}</ul>{% endif %}
 <p id="{{ pid }}verdict">{{ verdict }}</p>
 </section>
 {% for ch in report.chapters %}
@@ -102,7 +104,8 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 {% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
 {% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
 {% for c in checks %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
-<span class="points">{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span></span>
+<span class="points">{% if c.practice %}practice, not counted{% else %}{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span>{% endif %}</span>
+<span class="note"> &middot; {{ ch.chapter }}/{{ c.id }}</span>
 {% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
 {% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
 {% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
@@ -543,7 +546,7 @@ def _verdict(report: Report, verdict_line) -> str:
 def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int) -> str:
     from markupsafe import Markup
 
-    from grader import safe_text
+    from grader import provenance, safe_text
     from grader.render.text import verdict_line
 
     report = safe_text.clean_report(report, safe_text.for_html)
@@ -556,7 +559,8 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
 
     return _template(source).render(report=report, figures=_all_figures(report), num=_num, values=_values,
                                     verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid,
-                                    root=root, kind=kind, h=heading, landmark=landmark)
+                                    root=root, kind=kind, h=heading, landmark=landmark,
+                                    footer=provenance.footer(report), adjustments=report.all_adjustments())
 
 
 def render(report: Report) -> str:

@@ -14,6 +14,7 @@ from collections.abc import Collection, Iterable
 from pathlib import Path
 from xml.etree import ElementTree
 
+from grader import provenance
 from grader.chapters import BY_ID
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.render import plural
@@ -64,8 +65,15 @@ def check_key(chapter: str, check: CheckResult) -> str:
 
 # ------------------------------------------------------------------------------------ Gradescope
 
+def counted_quiz(check: CheckResult) -> bool:
+    """A quiz question that counts: its verdict is shown only once grades are published, so that trying
+    every option and submitting again tells nothing (a practice question's verdict is shown at once)."""
+    return check.kind == "quiz" and not check.practice
+
+
 def summary_lines(report: Report) -> list[str]:
-    """Score per chapter and what stopped a chapter being graded: the top of every results file."""
+    """Score per chapter, what stopped a chapter being graded, and overrides and penalties: the top of every
+    results file."""
     lines = []
     for chapter in report.chapters:
         parts = [f"code {chapter.score_of('code'):g}/{chapter.max_score_of('code'):g}"]
@@ -73,6 +81,7 @@ def summary_lines(report: Report) -> list[str]:
             parts.append(f"quiz {chapter.score_of('quiz'):g}/{chapter.max_score_of('quiz'):g}")
         lines.append(f"{chapter.chapter} {chapter.title}: {chapter.score:g}/{chapter.max_score:g} ({', '.join(parts)})")
         lines += [f"  {chapter.chapter}: {problem.splitlines()[0] if problem else ''}" for problem in chapter.problems]
+    lines += [f"{'late penalty' if a.kind == 'late' else 'override'}: {a.describe()}" for a in report.all_adjustments()]
     errors = sum(c.status == Status.ERROR for ch in report.chapters for c in ch.checks)
     if errors:
         lines.append(f"{plural(errors, 'check')} could not be graded (status error: the file did not import, hung, "
@@ -104,7 +113,8 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
                 "score": check.points, "max_score": check.max_points if check.status.counted else 0,
                 "output": _explained(check, chapter), "output_format": "text",
                 "tags": [chapter.chapter, check.kind, check.function, check.status.value],
-                "visibility": "after_published" if check_key(chapter.chapter, check) in hidden else "visible",
+                "visibility": "after_published" if check_key(chapter.chapter, check) in hidden or counted_quiz(check)
+                else "visible",
                 "extra_data": {"id": check_key(chapter.chapter, check), "status": check.status.value},
             }
             if check.status != Status.RECORDED:
@@ -113,9 +123,12 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     output = [*heading, *summary_lines(report), *notes]
     if isolation:
         output.append(isolation)
+    output.append(provenance.footer(report))
     data = {"score": report.score, "output": "\n".join(output), "output_format": "simple_format",
             "test_output_format": "text", "stdout_visibility": "hidden",
-            "extra_data": {"max_score": report.max_score, "learner": report.learner}, "tests": tests}
+            "extra_data": {"max_score": report.max_score, "learner": report.learner,
+                           "provenance": report.provenance(), "raw_score": report.raw_score,
+                           "adjustments": [a.to_dict() for a in report.all_adjustments()]}, "tests": tests}
     if execution_time is not None:
         data["execution_time"] = round(max(0.0, execution_time), 2)
     return data
@@ -182,6 +195,7 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
                     f"{'is' if pending == 1 else 'are'} graded when you submit")
     if message:
         said.append(message)
+    said.append(provenance.footer(report))
     return {"version": 1, "status": status, "max_score": report.max_score, "message": "; ".join(said),
             "tests": tests}
 
@@ -225,6 +239,9 @@ def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = No
         suite = ElementTree.SubElement(suites, "testsuite", name=name, tests=str(len(cases)),
                                        failures=str(counts["failure"]), errors=str(counts["error"]),
                                        skipped=str(counts["skipped"]), time=_time(seconds))
+        properties = ElementTree.SubElement(suite, "properties")
+        for key, value in report.provenance().items():
+            ElementTree.SubElement(properties, "property", name=key, value=for_xml("" if value is None else str(value)))
         for classname, case_name, tag, text, kind in cases:
             case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
             if tag:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from grader import safe_text
+from grader import provenance, safe_text
 from grader.model import CheckResult, Report, Status
 from grader.render import plural
 
@@ -23,13 +23,16 @@ def _mark(status: Status, unicode_ok: bool) -> str:
     return symbol if unicode_ok else word
 
 
-def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose: bool) -> list[str]:
+def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose: bool, chapter: str = "") -> list[str]:
+    """The check's line (a check that did not pass ends with its stable id, chNN/check_id) and its message."""
     mark = click.style(_mark(check.status, unicode_ok), fg=_COLOURS[check.status], bold=True) if colour \
         else _mark(check.status, unicode_ok)
     label = "quiz " if check.kind == "quiz" else ""
-    points = f"{_points(check.max_points)} pending" if check.status == Status.RECORDED else \
-        f"{_points(check.points)}/{_points(check.max_points)}"
+    points = "practice" if check.practice else f"{_points(check.max_points)} pending" \
+        if check.status == Status.RECORDED else f"{_points(check.points)}/{_points(check.max_points)}"
     line = f"  {mark} [{points}] {label}{check.description}"
+    if chapter and check.status not in (Status.PASS, Status.RECORDED):
+        line += f"  ({chapter}/{check.id})"
     lines = [line]
     if check.status not in (Status.PASS, Status.RECORDED) and check.message:
         for text in check.message.splitlines():
@@ -75,6 +78,30 @@ def _pending_note(points: float, what: str) -> str:
     return f" (+{plural(points, 'point')} {what})" if points > 0 else ""
 
 
+def total_line(name: str, score: float, max_score: float, hidden_checks: int, hidden_points: float,
+               recorded: float) -> str:
+    """"ch06 total: 22/22" where everything was checked here; else what it is: "ch06 public checks: 22/22; 2
+    hidden checks (3 points) run when you submit; 4 points of recorded quiz answers are graded when you
+    submit". Without a `name` (all chapters): "Total: ..." and "Total of the public checks: ..."."""
+    if not hidden_checks and recorded <= 0:
+        return f"{name} total: {_points(score)}/{_points(max_score)}" if name else \
+            f"Total: {_points(score)}/{_points(max_score)}"
+    parts = [f"{name} public checks: {_points(score)}/{_points(max_score)}" if name else
+             f"Total of the public checks: {_points(score)}/{_points(max_score)}"]
+    if hidden_checks:
+        parts.append(f"{plural(hidden_checks, 'hidden check')} ({plural(hidden_points, 'point')}) "
+                     f"{'runs' if hidden_checks == 1 else 'run'} when you submit")
+    if recorded > 0:
+        parts.append(f"{plural(recorded, 'point')} of recorded quiz answers {'is' if recorded == 1 else 'are'} "
+                     "graded when you submit")
+    return "; ".join(parts)
+
+
+def adjustment_lines(adjustments) -> list[str]:
+    """Overrides and late penalties, one line each."""
+    return [f"{'late penalty' if a.kind == 'late' else 'override'}: {a.describe()}" for a in adjustments]
+
+
 def verdict_line(report: Report) -> str:
     """One line that claims no more than was checked: with hidden checks or recorded answers, only
     the public checks can be said to pass."""
@@ -108,7 +135,10 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
             checks = [c for c in chapter.checks if c.kind == kind]
             if not checks:
                 continue
-            if any(c.kind == "quiz" for c in chapter.checks):
+            if kind == "quiz" and all(c.practice for c in checks):
+                right = sum(c.status == Status.PASS for c in checks)
+                out.append(f"  quiz (practice, not counted): {right} of {len(checks)} right")
+            elif any(c.kind == "quiz" for c in chapter.checks):
                 out.append(f"  {heading}: {_points(chapter.score_of(kind))}/{_points(chapter.max_score_of(kind))}"
                            + _pending_note(chapter.recorded_score_of(kind), "recorded, graded when you submit"))
             if kind == "code" and len(checks) > 1 and all(c.status == Status.ERROR for c in checks) \
@@ -121,19 +151,22 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
             folded = _untouched(checks) if kind == "code" and not verbose else {}
             for check in checks:
                 if check.function not in folded:
-                    out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose))
+                    out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose,
+                                            chapter=chapter.chapter))
                 elif check is folded[check.function][0]:  # one line for a function not written yet
                     out.append(_folded_line(check.function, folded[check.function], colour, unicode_ok))
-        if chapter.hidden_checks:
-            out.append(f"  + {plural(chapter.hidden_checks, 'hidden check')} ({plural(chapter.hidden_points, 'point')}) "
-                       "run when you submit")
-        out.append(f"  {chapter.chapter} total: {_points(chapter.score)}/{_points(chapter.max_score)}"
-                   + _pending_note(chapter.pending_score, "graded when you submit"))
+        out.append("  " + total_line(chapter.chapter, chapter.score, chapter.max_score, chapter.hidden_checks,
+                                     chapter.hidden_points, chapter.recorded_score_of()))
+        out.extend(f"  {line}" for line in adjustment_lines(chapter.adjustments))
         out.append("")
     if len(report.chapters) > 1:
-        out.append(f"Total: {_points(report.score)}/{_points(report.max_score)}"
-                   + _pending_note(report.pending_score, "graded when you submit"))
+        out.append(total_line("", report.score, report.max_score,
+                                         sum(ch.hidden_checks for ch in report.chapters),
+                                         sum(ch.hidden_points for ch in report.chapters),
+                                         sum(ch.recorded_score_of() for ch in report.chapters)))
+    out.extend(adjustment_lines(report.adjustments))
     out.append(verdict_line(report))
+    out.append(provenance.footer(report))
     if verbose and report.learner_output.strip():
         out.append("What your code printed while it was graded:")
         out.extend(f"  | {line}" for line in report.learner_output.splitlines()[:50])
