@@ -45,3 +45,16 @@ def mean_shift(mean, sigma, n, seed):
     Example: mean_shift((3, 4), 1.0, 100000, seed) -> about 0.10
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch00_range_sensor.py: the worked example with your functions
+    for shown, call in [
+        ('range_reading(3, 4)', lambda: range_reading(3, 4)),
+        ('superposition_gap((3, 0), (0, 4))', lambda: superposition_gap((3, 0), (0, 4))),
+        ('mean_shift((3, 4), 1.0, 100000, 0)', lambda: mean_shift((3, 4), 1.0, 100000, 0)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch00` grades the chapter.")

@@ -43,3 +43,19 @@ def taylor_error_estimate(fsecond, a, delta):
     Example: f = sqrt (the grader passes its second derivative as fsecond), a = 4, delta = 1 -> 0.015625
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch01_tangent_line.py: the worked example with your functions
+    for shown, call in [
+        ('tangent_line(np.sqrt, lambda x: 0.5 / np.sqrt(x), 4.0, 5.0)',
+         lambda: tangent_line(np.sqrt, lambda x: 0.5 / np.sqrt(x), 4.0, 5.0)),
+        ('linearization_error(np.sqrt, lambda x: 0.5 / np.sqrt(x), 4.0, np.array([4.5, 5, 6, 8]))',
+         lambda: linearization_error(np.sqrt, lambda x: 0.5 / np.sqrt(x), 4.0, np.array([4.5, 5, 6, 8]))),
+        ('taylor_error_estimate(lambda x: -0.25 * x ** -1.5, 4.0, 1.0)',
+         lambda: taylor_error_estimate(lambda x: -0.25 * x ** -1.5, 4.0, 1.0)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch01` grades the chapter.")

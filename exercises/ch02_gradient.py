@@ -97,3 +97,16 @@ def planner_cost_gradient(x, y, obstacle):
     Example: planner_cost_gradient(0, 1, (2, 1)) -> array([0.25, 2.])
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch02_gradient.py: the worked example with your functions
+    for shown, call in [
+        ('example_f(1, 2)', lambda: example_f(1, 2)),
+        ('example_gradient(1, 2)', lambda: example_gradient(1, 2)),
+        ('planner_cost(0, 1, (2, 1))', lambda: planner_cost(0, 1, (2, 1))),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch02` grades the chapter.")

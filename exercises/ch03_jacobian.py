@@ -80,3 +80,17 @@ def volume_scale(r, azimuth, elevation):
     Example: volume_scale(2, 0, 0) -> 4.0
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch03_jacobian.py: the worked example with your functions
+    for shown, call in [
+        ('polar_to_cartesian(4, np.pi / 3)', lambda: polar_to_cartesian(4, np.pi / 3)),
+        ('polar_to_cartesian_jacobian(4, np.pi / 3)', lambda: polar_to_cartesian_jacobian(4, np.pi / 3)),
+        ('area_scale(4, np.pi / 3)', lambda: area_scale(4, np.pi / 3)),
+        ('spherical_to_cartesian_jacobian(2, 0, 0)', lambda: spherical_to_cartesian_jacobian(2, 0, 0)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch03` grades the chapter.")

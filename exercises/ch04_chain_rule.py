@@ -8,12 +8,17 @@ The lidar functions come from the lesson's lidar-to-world pipeline (chapter 4, "
 it"): a lidar return (r, theta) in the robot's frame becomes a point in the world frame. The lesson
 does not work out its Jacobians: build them with the chain rule.
 
-You may use your chapter 3 functions:
-    from .ch03_jacobian import polar_to_cartesian, polar_to_cartesian_jacobian
+You may use your chapter 3 functions (polar_to_cartesian, polar_to_cartesian_jacobian): they are imported below,
+in a form that works when graded, when run as a script and from a notebook in exercises/.
 Run `grade ch04` to check your work.
 """
 
 import numpy as np  # noqa: F401  (for you to use)
+
+try:  # your chapter 3 functions; the three import forms grade alike
+    from .ch03_jacobian import polar_to_cartesian, polar_to_cartesian_jacobian  # noqa: F401
+except ImportError:  # run as a script, or imported from a notebook in exercises/
+    from ch03_jacobian import polar_to_cartesian, polar_to_cartesian_jacobian  # noqa: F401
 
 
 def g_stage(u):
@@ -99,3 +104,16 @@ def lidar_pose_jacobian(r, theta, pose):
     Example: lidar_pose_jacobian(1, 0, (1, 2, pi/2)) -> [[1, 0, -1], [0, 1, 0]]
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch04_chain_rule.py: the worked example with your functions
+    for shown, call in [
+        ('g_jacobian((2, 3.4641))', lambda: g_jacobian((2, 3.4641))),
+        ('pipeline_jacobian(4, np.pi / 3)', lambda: pipeline_jacobian(4, np.pi / 3)),
+        ('lidar_to_world(1, 0, (1, 2, np.pi / 2))', lambda: lidar_to_world(1, 0, (1, 2, np.pi / 2))),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch04` grades the chapter.")

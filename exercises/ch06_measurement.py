@@ -74,3 +74,16 @@ def H3_jacobian(x, y, z):
     Example: H3_jacobian(1, 0, 1) -> [[0.7071, 0, 0.7071], [0, 1, 0], [-0.5, 0, 0.5]]
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch06_measurement.py: the worked example with your functions
+    for shown, call in [
+        ('range_bearing(3, 4)', lambda: range_bearing(3, 4)),
+        ('H_jacobian(3, 4)', lambda: H_jacobian(3, 4)),
+        ('measurement_covariance(3, 4, 1.0)', lambda: measurement_covariance(3, 4, 1.0)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch06` grades the chapter.")

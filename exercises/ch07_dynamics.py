@@ -86,3 +86,18 @@ def control_noise_covariance(state, v, steer, wheelbase, dt, sigma_v, sigma_stee
     sigma_steer = 0.1, only the entries [0, 0] and [2, 2] are nonzero.
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch07_dynamics.py: the worked example with your functions
+    for shown, call in [
+        ('motion_model((0, 0, np.pi / 6), 2, 0.5, 0.1)',
+         lambda: motion_model((0, 0, np.pi / 6), 2, 0.5, 0.1)),
+        ('F_jacobian((0, 0, np.pi / 6), 2, 0.5, 0.1)', lambda: F_jacobian((0, 0, np.pi / 6), 2, 0.5, 0.1)),
+        ('bicycle_control_jacobian((0, 0, 0), 2, 0, 1, 0.1)',
+         lambda: bicycle_control_jacobian((0, 0, 0), 2, 0, 1, 0.1)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch07` grades the chapter.")

@@ -4,12 +4,17 @@ Push a Monte Carlo cloud of positions through the range-bearing sensor and compa
 covariance with the linearized ellipse H (sigma^2 I) H^T. Far from the dish they agree; close to
 it the bearing is too nonlinear and the linearization fails. Then use H for one EKF update.
 
-You may use your chapter 6 functions:
-    from exercises.ch06_measurement import range_bearing, H_jacobian
+You may use your chapter 6 functions (range_bearing, H_jacobian): they are imported below,
+in a form that works when graded, when run as a script and from a notebook in exercises/.
 Run `grade ch08` to check your work.
 """
 
 import numpy as np  # noqa: F401  (for you to use)
+
+try:  # your chapter 6 functions; the three import forms grade alike
+    from .ch06_measurement import range_bearing, H_jacobian  # noqa: F401
+except ImportError:  # run as a script, or imported from a notebook in exercises/
+    from ch06_measurement import range_bearing, H_jacobian  # noqa: F401
 
 
 def sample_positions(mean, sigma, n, rng):
@@ -84,3 +89,15 @@ def ekf_update(x, P, z, R):
              -> x_new = (3.0459, 4.0792), P_new = [[0.01607, -0.00524], [-0.00524, 0.01302]]
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch08_lab.py: the worked example with your functions
+    for shown, call in [
+        ('linearized_measurement_cov(3, 4, 0.8)', lambda: linearized_measurement_cov(3, 4, 0.8)),
+        ('linearization_mismatch(3, 4, 0.8, 5000, 0)', lambda: linearization_mismatch(3, 4, 0.8, 5000, 0)),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch08` grades the chapter.")

@@ -4,12 +4,17 @@ One output and many inputs: the gradient. Many outputs: the Jacobian. Curvature 
 function: the Hessian (the Jacobian of the gradient), whose eigenvalues classify a critical point.
 No formula at hand, or checking a hand-derived one: finite differences.
 
-You may use your chapter 5 functions:
-    from exercises.ch05_finite_differences import jacobian_fd
+You may use your chapter 5 functions (jacobian_fd): they are imported below,
+in a form that works when graded, when run as a script and from a notebook in exercises/.
 Run `grade ch09` to check your work.
 """
 
 import numpy as np  # noqa: F401  (for you to use)
+
+try:  # your chapter 5 functions; the three import forms grade alike
+    from .ch05_finite_differences import jacobian_fd  # noqa: F401
+except ImportError:  # run as a script, or imported from a notebook in exercises/
+    from ch05_finite_differences import jacobian_fd  # noqa: F401
 
 
 def gradient_fd(f, x, h=1e-5):
@@ -47,3 +52,17 @@ def classify_critical_point(hessian):
     Example: classify_critical_point([[2, 1], [1, 0]]) -> "saddle"
     """
     raise NotImplementedError
+
+
+if __name__ == "__main__":  # python exercises/ch09_choose_your_tool.py: the worked example with your functions
+    for shown, call in [
+        ('hessian_fd(lambda v: v[0] ** 2 + v[0] * v[1], (1, 2))',
+         lambda: hessian_fd(lambda v: v[0] ** 2 + v[0] * v[1], (1, 2))),
+        ('classify_critical_point(np.array([[2.0, 1.0], [1.0, 0.0]]))',
+         lambda: classify_critical_point(np.array([[2.0, 1.0], [1.0, 0.0]]))),
+    ]:
+        try:
+            print(shown, "=", call())
+        except NotImplementedError:
+            print(shown, "= not written yet (it raises NotImplementedError)")
+    print("Then `grade ch09` grades the chapter.")

@@ -373,7 +373,14 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
 @click.option("--force", is_flag=True, help="Replace what OUT holds.")
 @click.option("--no-classroom", is_flag=True,
               help="Leave out the GitHub Classroom workflow (.github/workflows/classroom.yml).")
-def release_command(out: str, course_file: str | None, force: bool, no_classroom: bool) -> None:
+@click.option("--notebooks", is_flag=True,
+              help="Each chapter's stub as a Jupyter notebook (exercises/chNN_*.ipynb, for Jupyter and Colab) "
+                   "instead of a .py: install cell, text as markdown, a cell per function, %grade last.")
+@click.option("--pip-source", default=None, metavar="SPEC",
+              help="What the notebooks' first cell installs where the grader is missing, e.g. the wheel's URL "
+                   "for Colab (default: the wheel beside exercises/).")
+def release_command(out: str, course_file: str | None, force: bool, no_classroom: bool, notebooks: bool,
+                    pip_source: str | None) -> None:
     """Build the learners' handout in OUT: stubs, answer templates, the grader as a wheel, a README and a
     GitHub Classroom workflow; no reference solution, quiz key or reference answer in any of it."""
     from pathlib import Path
@@ -382,7 +389,7 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
 
     the_course = _instructor_course(course_file, "grade release")
     try:
-        built = release.build(Path(out), the_course, force=force)
+        built = release.build(Path(out), the_course, force=force, notebooks=notebooks, pip_source=pip_source)
     except release.ReleaseError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(release.describe(built))
@@ -557,13 +564,15 @@ def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use
 
 EXAMPLES = {
     "run": ["grade ch06                      grade chapter 6 (code and quiz)",
+            "grade ch06 H_jacobian           only that function's checks",
             "grade all --html report.html    every chapter, and a report with plots",
             "grade 6 --format json -v        machine-readable; -v adds tracebacks"],
     "list": ["grade list", "grade list --checks            also every check's id and points"],
     "quiz": ["grade quiz ch06", "grade quiz ch06 --show          the questions with your numbers and letters"],
     "classroom": ["grade classroom all --github-output \"$GITHUB_OUTPUT\"   in a GitHub Actions step",
                   "grade classroom ch06 --output results.json"],
-    "release": ["grade release handout/", "grade release handout/ --course my-course.yaml --force"],
+    "release": ["grade release handout/", "grade release handout/ --course my-course.yaml --force",
+                "grade release handout/ --notebooks   stubs as notebooks (Jupyter, Colab)"],
     "batch": ["grade batch submissions/ --out graded/",
               "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas"],
     "gradescope": ["grade gradescope autograder.zip",

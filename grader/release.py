@@ -171,6 +171,9 @@ readme = "README.md"
 requires-python = ">=3.10"
 dependencies = {dependencies}
 
+[project.optional-dependencies]
+notebook = ["ipython>=8", "nbformat>=5"]
+
 [project.scripts]
 grade = "grader.launch:main"
 
@@ -267,8 +270,11 @@ def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict) 
     (out / "README.md").write_text(text, encoding="utf-8")
 
 
-def build(out: Path, course: courses.Course, *, force: bool = False) -> Release:
-    """Build the handout into `out` (which must be empty or new, or is cleared with force)."""
+def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: bool = False,
+          pip_source: str | None = None) -> Release:
+    """Build the handout into `out` (which must be empty or new, or is cleared with force); with `notebooks`,
+    each chapter's stub is a notebook (write_notebooks) whose first cell installs the grader from
+    `pip_source` (default: the wheel beside exercises/)."""
     if out.exists() and any(out.iterdir()):
         if not force:
             raise ReleaseError(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
@@ -294,11 +300,88 @@ def build(out: Path, course: courses.Course, *, force: bool = False) -> Release:
             name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES)), encoding="utf-8")
         wheel = _build_wheel(stage, out)
     _copy_exercises(out)
+    if notebooks:
+        write_notebooks(out / "exercises", pip_source or f"../{wheel.name}")
     _write_readme(out, wheel, course, hidden)
     leaks = scan(out)
     if leaks:
         raise ReleaseError("the handout would hold answers; nothing should be handed out:\n  " + "\n  ".join(leaks[:20]))
     return Release(out, wheel, version, hidden)
+
+
+# ------------------------------------------------------------------------------ the notebook handout
+
+INSTALL_CELL = """# Installs the course's grader where it is missing (Colab, a new environment); elsewhere it does nothing.
+from importlib import metadata
+
+try:
+    metadata.version("{distribution}")
+except metadata.PackageNotFoundError:
+    %pip install --quiet "{source}[notebook]"
+%load_ext grader"""
+
+
+def _cell(kind: str, source: str) -> dict:
+    cell = {"cell_type": kind, "metadata": {}, "source": source.strip("\n")}
+    if kind == "code":
+        cell.update(execution_count=None, outputs=[])
+    return cell
+
+
+def stub_notebook(stub: str, chapter: str, pip_source: str) -> dict:
+    """A chapter's stub as a notebook (nbformat 4): a cell installing the grader where it is missing, the
+    stub's text as markdown, its other module code (imports) in one cell, each function's docstring as
+    markdown and the function in a code cell of its own, a cell that tries the worked example (the stub's
+    `if __name__ == "__main__":` block) and a last cell `%grade chNN`."""
+    tree = ast.parse(stub)
+    lines = stub.splitlines()
+    cells = [_cell("code", INSTALL_CELL.format(distribution=DISTRIBUTION, source=pip_source))]
+    doc = ast.get_docstring(tree) or ""
+    title, _, rest = doc.partition("\n")
+    cells.append(_cell("markdown", f"# {title}\n\n{rest.strip()}\n\nRun each cell, fill in the functions, then "
+                                   f"run the last cell: `%grade {chapter}` grades them (`%grade {chapter} NAME` one "
+                                   "function)."))
+    module_code, tail = [], None
+    for node in tree.body:
+        segment = "\n".join(lines[node.lineno - 1 - len(getattr(node, "decorator_list", [])):node.end_lineno])
+        if node is tree.body[0] and isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            continue
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            if module_code:
+                cells.append(_cell("code", "\n\n".join(module_code)))
+                module_code = []
+            docstring = ast.get_docstring(node) or ""
+            signature = f"{node.name}({ast.unparse(node.args)})"
+            cells.append(_cell("markdown", f"## `{signature}`\n\n" + "\n".join(
+                f"    {line}" if line.strip() else "" for line in docstring.splitlines())))
+            cells.append(_cell("code", segment))
+        elif isinstance(node, ast.If) and "__main__" in ast.unparse(node.test):
+            tail = segment  # kept under its `if`: it runs in the kernel, never when the notebook is graded
+        else:
+            module_code.append(segment)
+    if module_code:
+        cells.append(_cell("code", "\n\n".join(module_code)))
+    if tail:
+        cells.append(_cell("markdown", "Try it: the lesson's worked example with your functions."))
+        cells.append(_cell("code", tail))
+    cells.append(_cell("code", f"%grade {chapter}"))
+    return {"cells": cells, "metadata": {"kernelspec": {"display_name": "Python 3", "language": "python",
+                                                         "name": "python3"},
+                                          "language_info": {"name": "python"}},
+            "nbformat": 4, "nbformat_minor": 5}
+
+
+def write_notebooks(exercises: Path, pip_source: str) -> None:
+    """Each chapter's stub in `exercises` as a notebook of the same name instead (stub_notebook): a
+    notebook is graded where there is no .py of its name."""
+    for info in CHAPTERS:
+        stub = exercises / f"{info.module}.py"
+        notebook = stub_notebook(stub.read_text(encoding="utf-8"), info.id, pip_source)
+        for index, cell in enumerate(notebook["cells"]):
+            cell["id"] = f"{info.id}-{index:02d}"
+        (exercises / f"{info.module}.ipynb").write_text(json.dumps(notebook, indent=1, ensure_ascii=False) + "\n",
+                                                       encoding="utf-8")
+        stub.unlink()
 
 
 # ------------------------------------------------------------------------------ no answer in it
@@ -382,6 +465,24 @@ def _members(folder: Path):
             yield name, path.read_bytes()
 
 
+def _notebook_text(data: bytes) -> tuple[str, str | None]:
+    """A notebook's text to scan: every string in it (cells' sources, markdown and code, outputs, metadata)
+    unescaped, and its code cells as the module the grader makes of them (None if it is not a notebook)."""
+    from grader import notebook
+
+    def strings(value: object) -> list[str]:
+        if isinstance(value, str):
+            return [value]
+        items = value.values() if isinstance(value, dict) else value if isinstance(value, list) else []
+        return [text for item in items for text in strings(item)]
+
+    try:
+        everything = "".join(strings(json.loads(data.decode("utf-8-sig"))))
+        return everything, notebook.convert(data, "notebook").text
+    except (ValueError, RecursionError, notebook.NotebookError):
+        return data.decode("utf-8", "replace"), None
+
+
 def scan(folder: Path, secrets: Secrets | None = None, allow_practice_keys: bool = True) -> list[str]:
     """Every place in `folder` (wheel members included) that holds reference or key text, or bytecode."""
     secrets = secrets or reference_secrets()
@@ -391,12 +492,16 @@ def scan(folder: Path, secrets: Secrets | None = None, allow_practice_keys: bool
         if any(part in lowered for part in secrets.names) or lowered.endswith((".pyc", ".pyo")):
             found.append(f"{name}: must not be in a handout")
             continue
-        text = data.decode("utf-8", "replace")
+        text, code = data.decode("utf-8", "replace"), None
+        if name.endswith(".ipynb"):  # cells are JSON strings: scan their sources, and the code as a module
+            text, code = _notebook_text(data)
+        elif name.endswith(".py"):
+            code = text
         squeezed = _squeeze(text)
         found += [f"{name}: reference code `{line[:60]}`" for line in secrets.code_lines if line in squeezed]
-        if name.endswith(".py"):
+        if code is not None:
             try:
-                tree = ast.parse(text)
+                tree = ast.parse(code)
             except SyntaxError:
                 tree = None
             if tree is not None:
