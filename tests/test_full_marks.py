@@ -38,10 +38,11 @@ def _results(report) -> list:
     return [(ch.chapter, c.id, c.status, c.points, c.message) for ch in report.chapters for c in ch.checks]
 
 
-@pytest.mark.parametrize("form", ["relative", "qualified", "plain"])
+@pytest.mark.parametrize("form", ["relative", "qualified", "plain", "stub"])
 def test_solution_files_copied_into_exercises_grade_as_the_references(repo_root, tmp_path, form):
     """The three import forms of an earlier chapter the contract allows: from .ch03_jacobian,
-    from exercises.ch03_jacobian and the plain from ch03_jacobian."""
+    from exercises.ch03_jacobian and the plain from ch03_jacobian; and the stubs' own form (relative,
+    else plain: it also runs as a script)."""
     import re
     import shutil
 
@@ -49,9 +50,11 @@ def test_solution_files_copied_into_exercises_grade_as_the_references(repo_root,
     package.mkdir()
     for source in (repo_root / "solutions").glob("ch*.py"):
         text = source.read_text(encoding="utf-8")
-        replacement = {"relative": r"from .\1 import", "qualified": r"from exercises.\1 import",
-                       "plain": r"from \1 import"}[form]
-        (package / source.name).write_text(re.sub(r"from \.(ch0\d_\w+) import", replacement, text), encoding="utf-8")
+        replacement = {"relative": r"from .\1 import\2", "qualified": r"from exercises.\1 import\2",
+                       "plain": r"from \1 import\2",
+                       "stub": r"try:\n    from .\1 import\2\nexcept ImportError:\n    from \1 import\2"}[form]
+        (package / source.name).write_text(re.sub(r"from \.(ch0\d_\w+) import(.*)", replacement, text),
+                                           encoding="utf-8")
     shutil.copyfile(repo_root / "exercises" / "__init__.py", package / "__init__.py")
     copied = grade(Session(Submission(tmp_path, "exercises")), ALL)
     references = grade(Session(Submission(repo_root, "solutions")), ALL)
