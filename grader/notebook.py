@@ -7,16 +7,13 @@ IPython. Each left-out line becomes `pass` (or an empty line) so every other lin
 `ModuleSource.where` turns a line of the module back into "cell N, line M". The same conversion
 serves the cells an IPython kernel ran (`%grade`, grader.magic), labelled "In [N]".
 
-Only json, re and tokenize here: this runs in the parent on every `grade chNN` that meets a notebook,
+Only json, re and tokenize here (the first two loaded when needed): this runs in the parent on every `grade chNN` that meets a notebook,
 and the child never sees a notebook, only the module made from it.
 """
 
 from __future__ import annotations
 
-import io
-import json
 import re
-import tokenize
 from dataclasses import dataclass
 
 # A line IPython reads as one of its own commands, when it starts a logical line: a magic (%), a shell
@@ -57,6 +54,8 @@ class ModuleSource:
 def code_cells(data: bytes) -> list[tuple[int, str]]:
     """(cell number, counting every cell from 1; its source) of each code cell of a notebook file.
     NotebookError when the bytes are not a notebook of nbformat 4."""
+    import json
+
     try:
         notebook = json.loads(data.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
@@ -118,6 +117,9 @@ def _replace(lines: list[str], dropped: set[int], final: bool = False) -> list[s
 
 def _logical_starts(lines: list[str]) -> set[int] | None:
     """The (0-based) lines on which a logical line of Python starts; None if they cannot be tokenized."""
+    import io
+    import tokenize
+
     text = "\n".join(lines) + "\n"
     starts: set[int] = set()
     expect = True
@@ -169,6 +171,8 @@ def convert(data: bytes, shown: str) -> ModuleSource:
 def without_outputs(data: bytes) -> bytes:
     """A notebook file without its cells' outputs (images can make it large; grading reads only sources);
     bytes that are not a notebook come back as they are, to be reported when it is graded."""
+    import json
+
     try:
         notebook = json.loads(data.decode("utf-8-sig"))
         for cell in notebook["cells"]:
