@@ -70,7 +70,9 @@ def start_here(report: Report) -> list[str]:
     function, checks = next(iter(untouched.items()))
     from grader.chapters import BY_ID
 
-    return [f"Start here: write {function} in exercises/{BY_ID[chapter.chapter].module}.py (its docstring says what it "
+    where = "your notebook" if chapter.source.startswith("the code") else \
+        chapter.source or f"exercises/{BY_ID[chapter.chapter].module}.py"  # the file graded: maybe a notebook
+    return [f"Start here: write {function} in {where} (its docstring says what it "
             f"computes); the first check is: {checks[0].description}. Then run `grade {chapter.chapter}` again.", ""]
 
 
