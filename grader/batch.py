@@ -17,10 +17,8 @@ graded again by the next run.
 
 from __future__ import annotations
 
-import csv
 import functools
 import hashlib
-import io
 import json
 import os
 import re
@@ -36,6 +34,7 @@ from typing import TYPE_CHECKING
 from grader.chapters import CHAPTERS
 from grader.render import plural
 from grader.safe_text import for_json, unicode_clean
+from grader.submit import MANIFEST
 
 if TYPE_CHECKING:
     from grader.course import Course
@@ -47,7 +46,8 @@ MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged wit
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
-CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv")
+CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
+                 "changes.csv", "summary.json", "gradebook.db", "overrides.csv", "similarity")
 _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
 _MAX_FOLDER = 160
 _BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
@@ -75,6 +75,7 @@ class Entry:
     learner: str
     source: Path
     origin: str = ""  # where the id comes from, for messages: "its name" or "roster.csv, line 3"
+    submitted: str = ""  # when it was submitted, from the roster's `submitted` column (for late penalties)
 
 
 @dataclass
@@ -119,28 +120,18 @@ def id_problem(learner: str) -> str | None:
     return None
 
 
-def read_roster(roster: Path) -> dict[str, tuple[str, int]]:
-    """The roster CSV as {submission: (learner id, line)}: columns `submission` and `learner` in any
-    order and case, separated by ',' or ';' (or a tab), UTF-8 with or without a byte-order mark."""
+def read_roster(roster: Path) -> dict[str, tuple[str, int, str]]:
+    """The roster CSV as {submission: (learner id, line, submitted)}: columns `submission` and `learner` (and
+    optionally `submitted`, the time of submission as the LMS gives it, ISO 8601) in any order and case,
+    separated by ',' or ';' (or a tab), UTF-8 with or without a byte-order mark (grader.csvtable)."""
+    from grader.csvtable import TableError, read_table
+
     try:
-        text = roster.read_bytes().decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise RosterError(f"{roster}: not UTF-8 text (byte {exc.start}); save it as CSV in UTF-8") from None
-    except OSError as exc:
-        raise RosterError(f"{roster}: {exc.strerror}") from None
-    header = re.sub(r'"[^"]*"', "", text.splitlines()[0]) if text.strip() else ""  # separators in quotes do not count
-    rows = csv.reader(io.StringIO(text, newline=""), delimiter=max(",;\t", key=header.count))
-    columns = [column.strip().lower() for column in next(rows, [])]
-    if "submission" not in columns or "learner" not in columns:
-        raise RosterError(f"{roster}, line 1: the header must name the columns submission and learner "
-                          f"(it has: {', '.join(map(repr, columns)) or 'nothing'})")
-    at_submission, at_learner = columns.index("submission"), columns.index("learner")
-    names: dict[str, tuple[str, int]] = {}
-    for row in rows:
-        if not any(cell.strip() for cell in row) or len(row) <= at_submission:
-            continue
-        names[row[at_submission].strip()] = (row[at_learner].strip() if len(row) > at_learner else "", rows.line_num)
-    return names
+        rows = read_table(roster, ("submission", "learner"))
+    except TableError as exc:
+        raise RosterError(str(exc)) from None
+    return {row["submission"]: (row["learner"], line, row.get("submitted", "")) for line, row in rows
+            if row["submission"]}
 
 
 def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[Skipped]]:
@@ -164,7 +155,7 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
                                           "._name); to grade it, rename it or name it in a roster (--roster)"))
             continue
         if named is not None:
-            learner, line = named
+            learner, line, _ = named
             problem = id_problem(learner)
             why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
             origin = f"the roster {roster.name}, line {line}"
@@ -180,7 +171,8 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
         while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
             unique, n = f"{learner}-{n}", n + 1
         taken.add(unique)
-        entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique"))
+        entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique",
+                             named[2] if named is not None else ""))
     return entries, skipped
 
 
@@ -197,6 +189,8 @@ def _wanted(relative: str) -> str | None:
         return name
     if ANSWER_FILE.match(name) and len(parts) >= 2 and parts[-2] == "answers":
         return f"answers/{name}"
+    if name == MANIFEST:  # written by grade submit (grader.submit): checked, never graded
+        return name
     return None
 
 
@@ -281,22 +275,21 @@ def stage(entry: Entry, staging: Path) -> Path:
     return root
 
 
-def content_hash(root: Path, chapters: list[str], seed: int) -> str:
-    digest = hashlib.sha256(f"{chapters}|{seed}|{_grader_version()}".encode())
+def content_hash(root: Path, chapters: list[str], seed: int, settings: str = "") -> str:
+    """What a learner's outputs depend on: the staged files, the chapters, the seed, the grader, and
+    `settings` (the learner's overrides, the late penalty, the course's current handout)."""
+    digest = hashlib.sha256(f"{chapters}|{seed}|{_grader_version()}|{settings}".encode())
     for path in sorted((root / "exercises").rglob("*")):
         if path.is_file():
             digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
 
 
-@functools.lru_cache(maxsize=1)
 def _grader_version() -> str:
-    """Changes when the grader's own checks change, so a re-run re-grades after an update."""
-    digest = hashlib.sha256()
-    base = Path(__file__).resolve().parent
-    for path in sorted(base.rglob("*.py")):
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:16]
+    """Changes when the grader's checks, references or keys change, so a re-run re-grades after an update."""
+    from grader import provenance
+
+    return provenance.code_digest()[:16]
 
 
 def write_atomically(path: Path, text: str) -> None:
@@ -358,7 +351,7 @@ def _drop_launcher() -> None:
 
 
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
-                  sandboxed: bool, course: Course | None = None):
+                  sandboxed: bool, course: Course | None = None, other_ids: tuple[str, ...] = ()):
     """One learner's report, as `course` has it (grader.pipeline.build_report); tried a second time, with a new
     fork server, when the first attempt failed for a reason outside the learner's code (Report.infrastructure,
     or no process could be started at all: an OSError, raised again if the second attempt meets it too)."""
@@ -374,7 +367,7 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
                 raise
         else:
             report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots,
-                                                   label=learner), course)
+                                                   label=learner, other_ids=other_ids), course)
             if not report.infrastructure:
                 break
         _drop_launcher()
@@ -400,13 +393,18 @@ def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[st
 
 def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
                limits: dict, sandboxed: bool = True, hidden: frozenset[str] = frozenset(),
-               course: Course | None = None) -> tuple[str, str, str]:
+               course: Course | None = None, overrides: tuple = ()) -> tuple[str, str, str]:
     """Stage and grade one submission (in a worker process); returns (learner, status, message).
 
-    A submission whose staged files hash as at its last grading is not graded again. One whose child
-    could not start, twice, is `error`: its report.json keeps why (and no hash, so the next run grades
-    it again), and no results.json or report.html stays to look like a grade. `hidden` (the course's
-    hidden check ids) are shown in results.json only after grades are published."""
+    A submission whose staged files hash as at its last grading, with the same overrides, late penalty
+    and current handout, is not graded again. One whose child could not start, twice, is `error`: its
+    report.json keeps why (and no hash, so the next run grades it again), and no results.json or
+    report.html stays to look like a grade. `hidden` (the course's hidden check ids) are shown in
+    results.json only after grades are published. `overrides` (grader.overrides.Override, this learner's)
+    and the course's late penalty are applied to the report before anything is written; the manifest of
+    an archive made by `grade submit` is checked (grader.submit.check) and what it says is flagged."""
+    from grader import overrides as adjusting
+    from grader import submit
     from grader.render import lms
 
     started = time.monotonic()
@@ -415,17 +413,29 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         root = stage(entry, Path(out) / STAGING)
     except StagingError as exc:
         return learner, "unreadable", f"{entry.source.name}: {exc}"
-    digest = content_hash(root, chapters, seed)
+    course_id, handout = (course.id, course.current_handout) if course else (None, None)
+    manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
+    submitted = entry.submitted or submit.packed_time(manifest) or ""
+    late = course.late if course else None
+    settings = json.dumps([[o.key() for o in overrides], repr(late), submitted, handout, course_id], default=str)
+    digest = content_hash(root, chapters, seed, settings)
     folder = Path(out) / folder_name(learner)
     if _previous_hash(folder) == digest:
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
-    warnings = learner_yaml_warnings(root, learner, entry.origin)
-    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed, course)
+    warnings = learner_yaml_warnings(root, learner, entry.origin) + manifest_flags
+    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed, course,
+                           other_ids=(str(manifest.get("learner")),) if manifest else ())
+    warnings += report.flags
+    warnings += adjusting.apply(report, list(overrides), late, adjusting.parse_time(submitted))
+    if late is not None and not submitted:
+        warnings.append("no submission time (no `submitted` column in the roster, no manifest from grade submit): "
+                        "no late penalty applied")
     seconds = time.monotonic() - started
     data = report.to_dict()
     data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
-                     "warnings": warnings}
+                     "warnings": warnings, "files_hash": submit.files_hash(root / "exercises"),
+                     "submitted": submitted or None, "manifest": _manifest_summary(manifest)}
     if report.infrastructure:
         for name in ("results.json", "report.html"):
             (folder / name).unlink(missing_ok=True)
@@ -443,6 +453,22 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     problems = sum(bool(c.problems) for c in report.chapters)
     with_problems = f", {plural(problems, 'chapter')} with problems" if problems else ""
     return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
+
+
+def _manifest_summary(manifest: dict | None) -> dict | None:
+    """What report.json keeps of a grade submit manifest: who packed it, with which handout and grader,
+    when, and the score the packed archive had at home."""
+    if manifest is None:
+        return None
+
+    def text(value: object) -> str | None:
+        return None if value is None else str(value)[:200]
+
+    local = manifest.get("local") if isinstance(manifest.get("local"), dict) else {}
+    return {**{key: text(manifest.get(key)) for key in ("learner", "course", "handout", "handout_released", "grader",
+                                                        "packed")},
+            "local": {key: local[key] for key in ("seed", "score", "max_score", "pending_score")
+                      if isinstance(local.get(key), (int, float)) and not isinstance(local.get(key), bool)}}
 
 
 def _load(folder: Path) -> dict | None:
@@ -477,14 +503,21 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
               limits: dict | None = None, progress=None, sandboxed: bool = True,
               hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = (),
-              course: Course | None = None) -> dict:
+              course: Course | None = None, overrides: Path | None = None, similarity: bool = False) -> dict:
     """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
-    learner, what was skipped, what was flagged and the isolation line, for the end summary.
+    learner, what was skipped, what was flagged, the isolation line, the changes since the last run and
+    the problems of overrides.csv, for the end summary.
     NoSubmissions (and nothing written) when the folder holds nothing to grade; InfrastructureError when a
-    child interpreter does not start here; RosterError for a roster that cannot be read.
+    child interpreter does not start here; RosterError for a roster or overrides file that cannot be read.
     `sandboxed=False` grades without bubblewrap (--no-sandbox); `hidden` are the course's hidden check ids
     (results.json shows them after grades are published); `lms_layouts` ("canvas", "moodle") adds those
-    gradebooks; `course` (grader.course.Course) leaves out the checks it switches off."""
+    gradebooks; `course` (grader.course.Course) leaves out the checks it switches off and gives the late
+    penalty and the current handout; `overrides` is the overrides file (default OUT/overrides.csv);
+    `similarity` ranks pairs of learners by the similarity of their code (grader.similarity).
+    Every learner's result goes into OUT/gradebook.db (grader.history) as soon as it is graded."""
+    from grader import history as histories
+    from grader import provenance
+
     chapters = chapters or [c.id for c in CHAPTERS]
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be at least 1, not {jobs}")
@@ -493,6 +526,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
         what = "; ".join(f"{s.name}: {s.reason}" for s in skipped[:5])
         raise NoSubmissions(f"{submissions} holds no submission to grade (a folder or .zip file per learner)"
                             + (f"; it holds only what is skipped: {what}" if what else ": it is empty"))
+    rows, override_problems = read_overrides(overrides or out / "overrides.csv", [e.learner for e in entries],
+                                             chapters)
     check_infrastructure(sandboxed)
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
@@ -501,82 +536,150 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     started = time.monotonic()
     done = 0
     limits = limits or {}
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
-                               frozenset(hidden), course): entry.learner for entry in entries}
-        for future in as_completed(futures):
-            learner = futures[future]
-            try:
-                _, statuses[learner], messages[learner] = future.result()
-            except Exception as exc:  # one broken submission never stops the batch
-                statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
-            done += 1
-            if progress:
-                progress(done, len(entries), time.monotonic() - started)
-    isolation = isolation_line(sandboxed)
-    flagged = write_summaries(out, [e.learner for e in entries], chapters, statuses, messages, skipped, isolation,
-                              lms_layouts)
+    history = histories.History(out / histories.FILE_NAME)
+    run = history.start(provenance.grader_version(), course.current_handout if course else None,
+                        course.id if course else None, seed, chapters)
+    try:
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
+                                   frozenset(hidden), course, tuple(o for o in rows if o.learner == entry.learner)):
+                       entry.learner for entry in entries}
+            for future in as_completed(futures):
+                learner = futures[future]
+                try:
+                    _, statuses[learner], messages[learner] = future.result()
+                except Exception as exc:  # one broken submission never stops the batch
+                    statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
+                history.record(run, _learner_state(out, learner, statuses[learner], messages[learner])[0])
+                done += 1
+                if progress:
+                    progress(done, len(entries), time.monotonic() - started)
+        isolation = isolation_line(sandboxed)
+        summary = rebuild(out, history, run, [e.learner for e in entries], chapters, statuses, messages, skipped,
+                          isolation, lms_layouts, rows, override_problems, similarity=similarity)
+    finally:
+        history.close()
     counts: dict[str, int] = {}
     for status in statuses.values():
         counts[status] = counts.get(status, 0) + 1
     graded_now = sum(status == "graded" for status in statuses.values())
     return {"counts": counts, "seconds": time.monotonic() - started, "graded_now": graded_now,
-            "messages": messages, "statuses": statuses, "skipped": skipped, "flagged": flagged,
-            "isolation": isolation}
+            "messages": messages, "statuses": statuses, "skipped": skipped, "flagged": summary["flagged"],
+            "isolation": isolation, "changes": summary["changes"], "override_problems": override_problems,
+            "similar": summary["similar"], "notes": summary["notes"]}
 
 
-def write_summaries(out: Path, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
-                    skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = ()
-                    ) -> dict[str, list[str]]:
-    """gradebook.csv, junit.xml and summary.html (and gradebook-canvas.csv, gradebook-moodle.csv as asked)
-    from the per-learner reports on disk. A learner who is not graded (unreadable, an error, a report
-    recording an infrastructure failure) has empty score cells and the reason in the gradebook's message
-    column, and is in no other total; a graded learner's message column holds what was flagged (a
-    learner.yaml naming someone else). Returns what was flagged, per learner."""
+def read_overrides(path: Path, learners: list[str], chapters: list[str]) -> tuple[list, list[str]]:
+    """The rows of overrides.csv that can apply in this batch, and a message (file and line) for each that
+    cannot: an unknown learner, check or chapter. RosterError for a file that cannot be read at all."""
+    from grader import checks as check_registry
+    from grader import overrides as adjusting
+
+    try:
+        rows, problems = adjusting.read(path)
+    except adjusting.TableError as exc:
+        raise RosterError(str(exc)) from None
+    known = set(learners)
+    usable = []
+    for row in rows:
+        chapter = row.target.split("/", 1)[0]
+        if row.learner not in known:
+            problems.append(f"{row.source}: no learner {row.learner!r} in this batch; row not applied")
+        elif row.level in ("check", "chapter") and chapter not in chapters:
+            problems.append(f"{row.source}: {chapter} is not graded in this batch (--chapters); row not applied")
+        elif row.level == "check" and row.target.split("/", 1)[1] not in {c.id for c in
+                                                                          check_registry.load(chapter).checks}:
+            problems.append(f"{row.source}: {row.target} is not a check of {chapter} (`grade list --checks` shows "
+                            "the ids; a quiz question is quiz_<its id>); row not applied")
+        else:
+            usable.append(row)
+    return usable, problems
+
+
+def _learner_state(out: Path, learner: str, status: str, message: str):
+    """(its grader.history.Result, its report or None, its report.json's batch data) of one learner, from
+    its report.json: a learner not graded (unreadable, an error, a report recording an infrastructure
+    failure) has no scores and says why; a graded one's flags are what its report.json says to look at."""
+    from grader.history import Result
+
+    data = _load(out / folder_name(learner))
+    batch = data.get("batch") if data is not None and isinstance(data.get("batch"), dict) else {}
+    if data is not None and data.get("infrastructure"):
+        reason = message if status == "error" else f"not graded: {data['infrastructure']}"
+        return Result(learner, "error", reason), None, batch
+    if status in ("error", "unreadable"):
+        return Result(learner, status, message), None, batch
+    report = _report(data)  # graded now, or unchanged since it was
+    if report is None:
+        return Result(learner, "error", "no readable report.json"), None, batch
+    manifest = batch.get("manifest") if isinstance(batch.get("manifest"), dict) else {}
+    return Result.of(learner, report, flags=[str(w) for w in batch.get("warnings") or []],
+                     files_hash=batch.get("files_hash"), content_hash=batch.get("hash"),
+                     manifest_handout=manifest.get("handout"), submitted=batch.get("submitted")), report, batch
+
+
+def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
+            skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(),
+            override_problems: list[str] = (), similarity: bool = False) -> dict:
+    """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
+    gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
+    and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
+    kept as gradebook.edited-<time>.csv (it is an export: changes belong in overrides.csv) and said so.
+    Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
+    from grader import history as histories
     from grader.render import lms, summary
 
-    reports = []
-    extras: dict[str, dict] = {}
-    flagged: dict[str, list[str]] = {}
-    not_graded: dict[str, str] = {}
-    rows = []
+    results, reports, extras, flagged, not_graded = [], [], {}, {}, {}
     for learner in learners:
-        status, message = statuses.get(learner, "graded"), messages.get(learner, "")
-        data = _load(out / folder_name(learner))
-        report = None
-        if data is not None and data.get("infrastructure"):
-            status = "error"
-            message = message if statuses.get(learner) == "error" else f"not graded: {data['infrastructure']}"
-        elif status not in ("error", "unreadable"):  # graded now, or unchanged since it was
-            report = _report(data)
-            if report is None:
-                status, message = "error", "no readable report.json"
-            else:
-                status = "graded"
-                batch = data.get("batch") if isinstance(data.get("batch"), dict) else {}
-                warnings = [str(w) for w in batch.get("warnings") or []]
-                message = "; ".join(warnings)
-                if warnings:
-                    flagged[learner] = warnings
-                reports.append((learner, report))
-                extras[learner] = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", "")}
-        if status != "graded":
-            not_graded[learner] = message
-        rows.append((learner, report, status, message))
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(lms.gradebook_header(chapters))
-    for learner, report, status, message in rows:
-        writer.writerow(lms.gradebook_row(learner, report, chapters, status, message))
-    write_atomically(out / "gradebook.csv", buffer.getvalue())
+        result, report, batch = _learner_state(out, learner, statuses.get(learner, "graded"), messages.get(learner, ""))
+        results.append(result)
+        if report is None:
+            not_graded[learner] = result.message
+            continue
+        if result.flags:
+            flagged[learner] = result.flags
+        reports.append((learner, report))
+        extras[learner] = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", ""),
+                           "manifest": batch.get("manifest")}
+    applied = {(r.learner, a["source"]): a for r in results for a in r.adjustments if a["kind"] == "override"}
+    override_rows = [(o.learner, o.target, o.points, o.factor, o.reason, o.who, o.source,
+                      f"{applied[(o.learner, o.source)]['points']:+g}" if (o.learner, o.source) in applied
+                      else "not applied (the learner is not graded)") for o in overrides]
+    moved = histories.changes(history, run, {r.learner: r for r in results})
+    notes = _keep_hand_edits(out, history, run)
+    gradebook = lms.gradebook(results, chapters)
+    history.finish(run, results, override_rows, moved, hashlib.sha256(gradebook.encode()).hexdigest())
+    write_atomically(out / "gradebook.csv", gradebook)
+    write_atomically(out / "changes.csv", lms.changes_csv(moved))
     if "canvas" in lms_layouts:
-        write_atomically(out / "gradebook-canvas.csv", lms.canvas_gradebook(rows, chapters))
+        write_atomically(out / "gradebook-canvas.csv", lms.canvas_gradebook(results, chapters))
     if "moodle" in lms_layouts:
-        write_atomically(out / "gradebook-moodle.csv", lms.moodle_gradebook(rows, chapters))
+        write_atomically(out / "gradebook-moodle.csv", lms.moodle_gradebook(results, chapters))
     write_atomically(out / "junit.xml", lms.junit(reports, extras))
-    write_atomically(out / "summary.html", summary.render(reports, not_graded, isolation or isolation_line(),
-                                                          [(s.name, s.reason) for s in skipped], flagged))
-    return flagged
+    similar = []
+    if similarity:
+        from grader import similarity as similarities
+
+        similar = similarities.rank(out / STAGING, [learner for learner, _ in reports])
+    view = summary.Summary(reports, not_graded, isolation or isolation_line(), [(s.name, s.reason) for s in skipped],
+                           flagged, extras, moved, list(override_problems) + notes, similar)
+    write_atomically(out / "summary.html", summary.render(view))
+    write_atomically(out / "summary.json", summary.as_json(view))
+    return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}
+
+
+def _keep_hand_edits(out: Path, history, run: int) -> list[str]:
+    """gradebook.csv as the last run exported it, or else kept under another name before it is replaced."""
+    path = out / "gradebook.csv"
+    previous = history.previous(run)
+    exported = history.run_info(previous).get("gradebook_sha") if previous else None
+    if not exported or not path.is_file() or hashlib.sha256(path.read_bytes()).hexdigest() == exported:
+        return []
+    kept = out / f"gradebook.edited-{time.strftime('%Y%m%d-%H%M%S')}.csv"
+    path.replace(kept)
+    return [f"gradebook.csv was changed by hand since the last run; it is an export of gradebook.db and is written "
+            f"anew each run: your copy is kept as {kept.name}. Put score changes in overrides.csv (learner, target, "
+            "points or factor, reason, who): they are applied on every run and kept in the history."]
 
 
 def progress_bar(stream=sys.stderr):

@@ -4,6 +4,7 @@
     grade list                             chapters, functions and points
     grade quiz ch06                        only the quiz
     grade classroom all                    GitHub Classroom's per-check results
+    grade submit                           pack exercises/ into the archive your course grades
     grade release / batch / gradescope     the instructor's side
 """
 
@@ -288,6 +289,23 @@ def _instructor_course(config: str | None, command: str):
         raise click.BadParameter(str(exc), param_hint="--course") from None
 
 
+def _handout_id(given: str) -> str:
+    """--handout: an id as it is, or the folder `grade release` wrote (or its handout.json): the id in it."""
+    import json
+    from pathlib import Path
+
+    path = Path(given)
+    if path.is_dir():
+        path = path / "handout.json"
+    if not path.is_file():
+        return given
+    try:
+        return str(json.loads(path.read_text(encoding="utf-8"))["version"])
+    except (OSError, ValueError, KeyError, TypeError):
+        raise click.BadParameter(f"{path} is not the handout.json grade release writes",
+                                 param_hint="--handout") from None
+
+
 def _preload_quiz() -> None:
     import grader.quiz.judge  # noqa: F401  (pyyaml and the quiz modules)
 
@@ -401,6 +419,70 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
                    "and reports each check's points (use OUT as the assignment's template repository).")
 
 
+@main.command("submit")
+@click.option("--learner", default=None, help="Your learner id, as your course lists you (default: "
+              "exercises/answers/learner.yaml). It must agree with learner.yaml.")
+@click.option("--submission", "submission_dir", type=click.Path(file_okay=False), default=None,
+              help="Folder holding exercises/ (default: the project around the current directory).")
+@click.option("--out", "out_file", type=click.Path(dir_okay=False), default=None,
+              help="Where to write the archive (default: <learner id>.zip beside exercises/).")
+def submit_command(learner: str | None, submission_dir: str | None, out_file: str | None) -> None:
+    """Pack your exercises/ into the archive your course grades (exactly what grade batch, the Gradescope
+    autograder and the GitHub Classroom workflow read), grade that archive again in a fresh process,
+    print its score and write a manifest into it (handout, course, file hashes, that score, the time).
+    It will not pack without your learner id: your quiz numbers are drawn from it."""
+    from pathlib import Path
+
+    from grader import submit
+    from grader.quiz import answers_dir, learner_id
+    from grader.render import text
+    from grader.safe_text import for_terminal
+
+    submission = find_submission(submission_dir, False)
+    answers = answers_dir(submission.root, submission.package)
+    written, source = learner_id(answers, None, submission.package)
+    in_file = None if source.startswith("default") else written
+    given = learner.strip() if learner else None
+    terminal = sys.stdin.isatty() and sys.stdout.isatty()
+    if given and in_file and given != in_file:
+        if not terminal:
+            raise click.UsageError(f"learner.yaml names {in_file!r} but --learner gives {given!r}: your quiz numbers "
+                                   "and option letters come from the id, so make them agree (edit "
+                                   f"{submission.package}/answers/learner.yaml) and submit again")
+        if not click.confirm(f"learner.yaml names {in_file!r}, you gave {given!r}. Your quiz answers must be worked "
+                             f"out with your own id's numbers. Use {given!r} and write it into learner.yaml?"):
+            raise click.Abort()
+    chosen = given or in_file
+    if chosen is None:
+        if not terminal:
+            raise click.UsageError(f"no learner id: {submission.package}/answers/learner.yaml names nobody, so your "
+                                   "quiz was graded with the numbers of 'anonymous'. Put `learner: your-id` in it "
+                                   "(as your course lists you), run `grade quiz chNN --show` to see your own numbers, "
+                                   "and submit again (or pass --learner your-id)")
+        chosen = click.prompt("Your learner id, as your course lists you (your quiz numbers are drawn from it)").strip()
+    if not submit.LEARNER_ID.match(chosen):
+        raise click.BadParameter(f"{chosen!r}: a learner id is letters, digits and . _ @ + - (at most 100)",
+                                 param_hint="--learner")
+    if chosen != in_file:
+        submit.write_learner_yaml(answers, chosen)
+        click.echo(f"Wrote `learner: {chosen}` into {submission.package}/answers/learner.yaml.")
+        if in_file is None:
+            click.echo("Your quiz numbers and option letters were those of 'anonymous' until now: check your answers "
+                       "with `grade quiz chNN --show` before you hand this archive in.")
+    out = Path(out_file) if out_file else Path(submission.root) / f"{chosen}.zip"
+    click.echo(f"Packing {submission.package}/ for {chosen} and grading the archive in a fresh process...")
+    try:
+        manifest = submit.pack(Path(submission.root) / submission.package, chosen, out)
+    except submit.SubmitError as exc:
+        raise click.ClickException(for_terminal(str(exc))) from None
+    local = manifest["local"]
+    click.echo("The archive, graded again: " + text.total_line("", local["score"], local["max_score"],
+                                                               local["hidden_checks"], local["hidden_points"],
+                                                               local["pending_score"] - local["hidden_points"]))
+    click.echo(f"Wrote {out} ({len(manifest['files'])} files, manifest {submit.MANIFEST}; handout "
+               f"{manifest['handout'] or 'none'}). Hand in this file, as it is.")
+
+
 @main.command("batch")
 @click.argument("submissions", type=click.Path(exists=True, file_okay=False))
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), required=True, help="Output folder.")
@@ -421,11 +503,22 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
 @click.option("--lms", "lms_layouts", type=click.Choice(["canvas", "moodle"]), multiple=True,
               help="Also write the gradebook as that system imports it: gradebook-canvas.csv, gradebook-moodle.csv "
                    "(repeat for both).")
+@click.option("--overrides", "overrides_file", type=click.Path(dir_okay=False), default=None,
+              help="Overrides (learner,target,points,factor,reason,who) applied on every run (default: "
+                   "OUT/overrides.csv where it exists).")
+@click.option("--handout", "handout", default=None,
+              help="The current handout: its id, or the folder grade release wrote (its handout.json); archives "
+                   "packed with another are flagged (default: the course config's `handout:`).")
+@click.option("--similarity", is_flag=True,
+              help="Rank pairs of learners by how alike their code is (copydetect), for a person to look at.")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
                   seed: int | None, course_file: str | None, no_html: bool, plots: bool, no_sandbox: bool,
-                  time_budget: float, lms_layouts: tuple[str, ...]) -> None:
+                  time_budget: float, lms_layouts: tuple[str, ...], overrides_file: str | None, handout: str | None,
+                  similarity: bool) -> None:
     """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
-    at the course seed, hidden checks included."""
+    at the course seed, hidden checks included; keep every run in OUT/gradebook.db and say in
+    OUT/changes.csv whose score moved and why."""
+    import dataclasses
     from pathlib import Path
 
     from grader import batch
@@ -433,6 +526,15 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
 
     picked = chapters_from(tuple(chapter_list.split(",")))
     the_course = _instructor_course(course_file, "grade batch")
+    if handout is not None:
+        the_course = dataclasses.replace(the_course, current_handout=_handout_id(handout))
+    if similarity:
+        from grader import similarity as similarities
+
+        try:
+            similarities._engine()
+        except similarities.SimilarityUnavailable as exc:
+            raise click.UsageError(str(exc)) from None
     isolation = batch.isolation_line(sandboxed=not no_sandbox)
     click.echo(isolation, err=True)
     try:
@@ -441,9 +543,11 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                  seed=the_course.grading_seed if seed is None else seed, html=not no_html,
                                  plots=plots, limits={"learner_seconds": time_budget}, sandboxed=not no_sandbox,
                                  progress=batch.progress_bar(), hidden=the_course.hidden,
-                                 lms_layouts=tuple(lms_layouts), course=the_course)
+                                 lms_layouts=tuple(lms_layouts), course=the_course,
+                                 overrides=Path(overrides_file) if overrides_file else None, similarity=similarity)
     except batch.RosterError as exc:
-        raise click.BadParameter(for_terminal(str(exc)), param_hint="--roster") from None
+        hint = "--overrides" if "overrides" in str(exc) else "--roster"
+        raise click.BadParameter(for_terminal(str(exc)), param_hint=hint) from None
     except batch.NoSubmissions as exc:
         raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="SUBMISSIONS") from None
     except batch.InfrastructureError as exc:
@@ -467,6 +571,12 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     for entry in result["skipped"]:
         click.echo(f"  skipped {for_terminal(entry.name, one_line=True)}: {for_terminal(entry.reason, one_line=True)}",
                    err=True)
+    for note in result["override_problems"] + result["notes"]:
+        click.echo(f"  {for_terminal(note, one_line=True)}", err=True)
+    click.echo(f"{plural(len(result['changes']), 'score')} moved since the last run: {Path(out_dir) / 'changes.csv'}")
+    for pair in result["similar"][:5]:
+        click.echo(f"  alike: {for_terminal(pair.first, one_line=True)} and {for_terminal(pair.second, one_line=True)} "
+                   f"({pair.score:.2f}; {', '.join(pair.functions[:3])}): for a person to look at, in summary.html")
     click.echo(result["isolation"], err=True)
     complete = all(s in ("graded", "unchanged") for s in result["statuses"].values()) and not any(
         entry.submission for entry in result["skipped"])
@@ -574,7 +684,10 @@ EXAMPLES = {
     "release": ["grade release handout/", "grade release handout/ --course my-course.yaml --force",
                 "grade release handout/ --notebooks   stubs as notebooks (Jupyter, Colab)"],
     "batch": ["grade batch submissions/ --out graded/",
-              "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas"],
+              "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas",
+              "grade batch submissions/ --out graded/ --overrides overrides.csv --handout handout/ --similarity"],
+    "submit": ["grade submit                     pack exercises/ into <your id>.zip, checked and graded",
+               "grade submit --learner ada.lovelace --out ~/handin.zip"],
     "gradescope": ["grade gradescope autograder.zip",
                    "grade gradescope autograder.zip --learner-id sid --chapters ch06,ch07"],
 }

@@ -225,6 +225,7 @@ def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
         for check in chapter.checks:
             helpers = [h for h in uses.get(check.function, ()) if h in failing and h != check.function]
             if check.status == Status.FAIL and helpers:
+                check.upstream = helpers
                 named = " and ".join(helpers)
                 check.message = (f"{check.function} usually builds on your {named}, which "
                                  f"{'fails its' if len(helpers) == 1 else 'fail their'} own checks: fix "

@@ -14,7 +14,8 @@ from grader.submission import Submission
 if TYPE_CHECKING:
     from grader.runner import Session
 
-_OTHER_COMMANDS = {"list", "quiz", "batch", "release", "gradescope", "classroom", "--help", "-h", "--version"}
+_OTHER_COMMANDS = {"list", "quiz", "batch", "release", "gradescope", "classroom", "submit", "--help", "-h",
+                   "--version"}
 _prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned, its sandbox)
 
 

@@ -39,6 +39,7 @@ class CheckResult:
     details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
     mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
     practice: bool = False  # a quiz question of a practice quiz (immediate feedback): judged, never counted
+    upstream: list[str] = field(default_factory=list)  # failing helpers this failure may come from (point_upstream)
 
     def to_dict(self, chapter: str = "") -> dict:
         return {
@@ -55,6 +56,7 @@ class CheckResult:
             "kind": self.kind,
             "mistake": self.mistake or None,
             "practice": self.practice,
+            "upstream": list(self.upstream),
         }
 
 
@@ -170,6 +172,7 @@ class Report:
     course: str | None = None  # the course id
     learner_id: str | None = None  # the plain learner id whose quiz numbers were graded
     adjustments: list[Adjustment] = field(default_factory=list)  # overrides of the total and late penalties
+    flags: list[str] = field(default_factory=list)  # for the instructor's eyes (grade batch keeps them in report.json)
 
     @property
     def score(self) -> float:
@@ -213,16 +216,28 @@ class Report:
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
                                   kind=c.get("kind", "code"), mistake=c.get("mistake") or "",
-                                  practice=bool(c.get("practice")))
+                                  practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []))
                       for c in ch.get("checks", [])]
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),
                                           hidden_points=float(ch.get("hidden_points", 0.0)),
                                           source=ch.get("source") or "", notes=list(ch.get("notes") or [])))
         made = data.get("provenance") or {}
-        return cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
-                   infrastructure=data.get("infrastructure") or "", grader=made.get("grader") or "",
-                   handout=made.get("handout"), course=made.get("course"), learner_id=made.get("learner"))
+        report = cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
+                     infrastructure=data.get("infrastructure") or "", grader=made.get("grader") or "",
+                     handout=made.get("handout"), course=made.get("course"), learner_id=made.get("learner"))
+        by_id = {c.chapter: c for c in chapters}
+        for item in data.get("adjustments") or []:
+            adjustment = Adjustment(**item)
+            chapter = by_id.get(adjustment.chapter or "")
+            if chapter is None:
+                report.adjustments.append(adjustment)
+                continue
+            if adjustment.on_check:
+                check_id = adjustment.target.split("/", 1)[1]
+                adjustment.check_kind = next((c.kind for c in chapter.checks if c.id == check_id), "code")
+            chapter.adjustments.append(adjustment)
+        return report
 
     def to_dict(self) -> dict:
         return {

@@ -29,6 +29,7 @@ class Request:
     plots: bool = False  # gather the HTML report's plot data in the same round trip
     label: str | None = None  # how the report names the submission (default: its folder)
     functions: tuple[str, ...] = ()  # grade only these functions' checks (and no quiz); () grades them all
+    other_ids: tuple[str, ...] = ()  # ids whose quiz numbers a learner may have used by mistake (e.g. a manifest's)
 
 
 def hidden_ids(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[str]:
@@ -98,7 +99,12 @@ def build_report(session: Session, request: Request, course: courses.Course | No
 
         submission = session.submission  # the quiz gets what is left of the learner's time budget
         add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
-        learner_id = quiz_learner(answers_dir(submission.root, submission.package), request.learner)[0]
+        folder = answers_dir(submission.root, submission.package)
+        learner_id = quiz_learner(folder, request.learner)[0]
+        from grader.quiz import DEFAULT_LEARNER, other_ids
+
+        report.flags += other_ids.explain(report, folder, f"{submission.package}/answers", learner_id,
+                                          [DEFAULT_LEARNER, quiz_learner(folder, None)[0], *request.other_ids])
         for chapter in report.chapters:
             if course.practice(chapter.chapter):
                 practice(chapter)

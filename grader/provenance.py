@@ -95,11 +95,18 @@ def stamp(report, the_course=None, learner_id: str | None = None) -> None:
         report.learner_id = learner_id
 
 
-def footer(report) -> str:
-    """The one line every text output ends with: what graded this, at which seed, for whom."""
+def footer(report, learner_sees: bool = False) -> str:
+    """The one line every text output ends with: what graded this, at which seed, for whom. Where the
+    learner sees it (`learner_sees`: Gradescope's output), a course seed is named, not shown: it is the
+    instructor's secret."""
+    from grader.course import PUBLIC_SEED
+
     parts = [f"grader {report.grader or 'unknown'}", f"handout {report.handout or 'none'}"]
     if report.course:
         parts.append(f"course {report.course}")
-    parts.append(f"seed {report.seed if report.seed is not None else 'none'}")
+    seed = "none" if report.seed is None else report.seed
+    if learner_sees and report.seed not in (None, PUBLIC_SEED):
+        seed = "the course seed"
+    parts.append(f"seed {seed}")
     parts.append(f"learner {report.learner_id or 'not set'}")
     return "Graded by " + ", ".join(parts) + "."

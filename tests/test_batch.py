@@ -67,7 +67,7 @@ def test_batch_outputs_every_format(submissions, tmp_path):
     by_learner = {row["learner"]: row for row in rows}
     assert set(by_learner) == {"alice", "bob", "carol", "dave"}
     assert list(rows[0]) == ["learner", "ch03_code", "ch03_quiz", "ch06_code", "ch06_quiz", "total", "max_total",
-                             "status", "message"]
+                             "status", "message", "adjustments", "grader", "handout", "seed"]
     assert by_learner["alice"]["ch06_code"] == by_learner["bob"]["ch06_code"] == code_points("ch06")
     assert float(by_learner["carol"]["ch06_code"]) < float(code_points("ch06")) and by_learner["carol"]["ch03_code"] == code_points("ch03")
     assert by_learner["dave"]["status"] == "unreadable" and by_learner["dave"]["total"] == ""

@@ -82,7 +82,8 @@ def _time_is_up(deadline: float | None) -> bool:
 
 
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
-               quiz_dir: Path | None = None, deadline: float | None = None) -> tuple[list[CheckResult], list[str]]:
+               quiz_dir: Path | None = None, deadline: float | None = None,
+               only: frozenset[str] | None = None) -> tuple[list[CheckResult], list[str]]:
     """The quiz results of one chapter, and chapter-level problems (file, line, question).
 
     A question whose key is here is judged. One whose key is not (no keys file, not in it, or
@@ -90,7 +91,8 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     without sympy and is RECORDED when well-formed: graded on submission, not in max_score.
     Whatever an answer holds, it costs only its own question: an answer that cannot be read or
     judged fails with file, line and why; one not judged by `deadline` (time.monotonic()) is SKIP
-    with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED."""
+    with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED. `only` (question
+    ids) grades those questions alone."""
     from grader.quiz.judge import fmt_value, judge, read_answer, right_answer, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
@@ -106,6 +108,8 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     problems.extend(message for qid, message in answers.unreadable.items() if qid not in known)
     results = []
     for question in questions:
+        if only is not None and question.id not in only:
+            continue
         values = question.values_for(learner, chapter)
         lettering = question.lettering(learner, chapter)
         result = CheckResult(id=f"quiz_{question.id}", function=question.id,

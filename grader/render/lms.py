@@ -16,17 +16,19 @@ from xml.etree import ElementTree
 
 from grader import provenance
 from grader.chapters import BY_ID
+from grader.history import Result
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.render import plural
 from grader.safe_text import clean_value, for_csv, for_json, for_terminal, for_xml
 
 SCHEMA_DIR = Path(__file__).resolve().parent.parent / "schemas"
-SCHEMAS = ("report", "batch-report", "gradescope-results", "classroom")
+SCHEMAS = ("report", "batch-report", "gradescope-results", "classroom", "summary")
 
 
 def schema(name: str) -> dict:
     """The JSON Schema (draft 2020-12) of one JSON output: report (grade ... --format json), batch-report
-    (grade batch's report.json), gradescope-results (results.json), classroom (grade classroom)."""
+    (grade batch's report.json), gradescope-results (results.json), classroom (grade classroom), summary
+    (grade batch's summary.json)."""
     return json.loads((SCHEMA_DIR / f"{name}.schema.json").read_text(encoding="utf-8"))
 
 
@@ -123,7 +125,7 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     output = [*heading, *summary_lines(report), *notes]
     if isolation:
         output.append(isolation)
-    output.append(provenance.footer(report))
+    output.append(provenance.footer(report, learner_sees=True))
     data = {"score": report.score, "output": "\n".join(output), "output_format": "simple_format",
             "test_output_format": "text", "stdout_visibility": "hidden",
             "extra_data": {"max_score": report.max_score, "learner": report.learner,
@@ -263,35 +265,55 @@ def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = No
 
 
 # ------------------------------------------------------------------------------------ gradebooks
+# Every gradebook is an export of grade batch's history (grader.history): one Result per learner.
+
+def _csv(rows: list[list[str]]) -> str:
+    buffer = io.StringIO()
+    csv.writer(buffer).writerows(rows)
+    return buffer.getvalue()
+
+
+def _number(value: float | None) -> str:
+    return "" if value is None else f"{value:g}"
+
 
 def gradebook_header(chapters: list[str]) -> list[str]:
     columns = ["learner"]
     for chapter in chapters:
         columns += [f"{chapter}_code", f"{chapter}_quiz"]
-    return columns + ["total", "max_total", "status", "message"]
+    return columns + ["total", "max_total", "status", "message", "adjustments", "grader", "handout", "seed"]
 
 
-def gradebook_row(learner: str, report: Report | None, chapters: list[str], status: str,
-                  message: str = "") -> list[str]:
-    """The learner's row: their id as given (a spreadsheet formula neutralised), code and quiz score
-    per chapter, total, status and why it is not graded (or what was flagged). Without a report (not
-    graded: unreadable, an infrastructure failure) every score cell is empty, never 0."""
-    row = [for_csv(learner)]
-    by_id = {c.chapter: c for c in report.chapters} if report else {}
+def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
+    """The learner's row: their id as given (a spreadsheet formula neutralised), code and quiz score per
+    chapter (overrides of a check included), the total (every override and penalty included), status, why
+    it is not graded or what was flagged, the adjustments in words, and what graded it: the grader's
+    version, the handout the archive was packed with, the seed. Not graded (unreadable, an infrastructure
+    failure): every score cell is empty, never 0."""
+    row = [for_csv(result.learner)]
     for chapter in chapters:
-        result = by_id.get(chapter)
-        row += ["", ""] if result is None else [f"{result.score_of('code'):g}", f"{result.score_of('quiz'):g}"]
-    row += ["", ""] if report is None else [f"{report.score:g}", f"{report.max_score:g}"]
-    return row + [status, for_csv(message)]
+        scores = result.chapters.get(chapter)
+        row += ["", ""] if scores is None else [_number(scores["code"]), _number(scores["quiz"])]
+    adjustments = "; ".join(f"{'late penalty' if a['kind'] == 'late' else 'override'} {a['points']:+g} on "
+                            f"{a['target']} ({a['reason']})" for a in result.adjustments)
+    return row + [_number(result.score), _number(result.max_score), result.status,
+                  for_csv("; ".join([result.message, *result.flags]).strip("; ")), for_csv(adjustments),
+                  result.grader or "", for_csv(result.manifest_handout or ""),
+                  "" if result.seed is None else str(result.seed)]
 
 
-def points_possible(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> dict[str, float]:
+def gradebook(results: list[Result], chapters: list[str]) -> str:
+    """gradebook.csv."""
+    return _csv([gradebook_header(chapters)] + [gradebook_row(r, chapters) for r in results])
+
+
+def points_possible(results: list[Result], chapters: list[str]) -> dict[str, float]:
     """Per chapter, the points a graded learner could get (every learner is graded on the same checks)."""
     possible: dict[str, float] = {}
-    for _, report, _, _ in rows:
-        for chapter in report.chapters if report else []:
-            if chapter.chapter in chapters:
-                possible[chapter.chapter] = max(possible.get(chapter.chapter, 0), chapter.max_score)
+    for result in results:
+        for chapter, scores in result.chapters.items():
+            if chapter in chapters:
+                possible[chapter] = max(possible.get(chapter, 0), scores["max"])
     return possible
 
 
@@ -300,47 +322,52 @@ def _column(chapter: str) -> str:
     return f"{chapter} {info.title}" if info else chapter
 
 
-def _score(report: Report | None, chapter: str) -> str:
-    found = [c for c in report.chapters if c.chapter == chapter] if report else []
-    return f"{found[0].score:g}" if found else ""
+def _score(result: Result, chapter: str) -> str:
+    scores = result.chapters.get(chapter)
+    return "" if scores is None else _number(scores["score"])
 
 
 LMS_LAYOUTS = ("canvas", "moodle")
 CANVAS_ID_COLUMNS = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"]
 
 
-def canvas_gradebook(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> str:
+def canvas_gradebook(results: list[Result], chapters: list[str]) -> str:
     """Canvas' gradebook import: the columns Student, ID, SIS User ID, SIS Login ID and Section (the learner
     id in Student and SIS Login ID; Canvas matches a row by ID, SIS User ID or SIS Login ID), one column per
-    chapter ("ch06 <title>", a new assignment on import) and a "Points Possible" row as Canvas' own export
-    writes it. A learner not graded has empty cells (Canvas changes nothing there). `rows` holds (learner,
-    report or None, status, message)."""
-    possible = points_possible(rows, chapters)
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(CANVAS_ID_COLUMNS + [_column(c) for c in chapters])
-    writer.writerow(["    Points Possible", "", "", "", ""] + [f"{possible[c]:g}" if c in possible else ""
-                                                                 for c in chapters])
-    for learner, report, _, _ in rows:
-        cell = for_csv(learner)
-        writer.writerow([cell, "", "", cell, ""] + [_score(report, c) for c in chapters])
-    return buffer.getvalue()
+    chapter ("ch06 <title>", a new assignment on import; overrides included) and a "Points Possible" row as
+    Canvas' own export writes it. A learner not graded has empty cells (Canvas changes nothing there)."""
+    possible = points_possible(results, chapters)
+    rows = [CANVAS_ID_COLUMNS + [_column(c) for c in chapters],
+            ["    Points Possible", "", "", "", ""] + [_number(possible.get(c)) for c in chapters]]
+    for result in results:
+        cell = for_csv(result.learner)
+        rows.append([cell, "", "", cell, ""] + [_score(result, c) for c in chapters])
+    return _csv(rows)
 
 
-def moodle_gradebook(rows: list[tuple[str, Report | None, str, str]], chapters: list[str]) -> str:
+def moodle_gradebook(results: list[Result], chapters: list[str]) -> str:
     """Moodle's "Import grades from CSV": a column identifying the learner ("Learner id": map it to the user
     field your ids are, ID number, email address or username), one grade column per chapter with the points
     possible in its name ("ch06 <title> (out of 25)": give the grade item that maximum, or map to an
-    existing one), a total and a feedback column (why a learner is not graded, or what was flagged: the
-    learner sees it). A learner not graded has empty grade cells."""
-    possible = points_possible(rows, chapters)
+    existing one), a total (with overrides and penalties) and a feedback column (why a learner is not
+    graded, what was flagged, the adjustments: the learner sees it). A learner not graded has empty grade
+    cells."""
+    possible = points_possible(results, chapters)
     total = sum(possible.values())
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(["Learner id"] + [f"{_column(c)} (out of {possible.get(c, 0):g})" for c in chapters]
-                    + [f"Total (out of {total:g})", "Feedback"])
-    for learner, report, status, message in rows:
-        feedback = message if status == "graded" else f"{status}: {message}"
-        writer.writerow([for_csv(learner)] + [_score(report, c) for c in chapters]
-                        + ["" if report is None else f"{report.score:g}", for_csv(feedback)])
-    return buffer.getvalue()
+    rows = [["Learner id"] + [f"{_column(c)} (out of {possible.get(c, 0):g})" for c in chapters]
+            + [f"Total (out of {total:g})", "Feedback"]]
+    for result in results:
+        said = [result.message, *result.flags, *(f"{a['points']:+g} on {a['target']}: {a['reason']}"
+                                                 for a in result.adjustments)]
+        feedback = "; ".join(s for s in said if s)
+        feedback = feedback if result.status == "graded" else f"{result.status}: {feedback}"
+        rows.append([for_csv(result.learner)] + [_score(result, c) for c in chapters]
+                    + [_number(result.score), for_csv(feedback)])
+    return _csv(rows)
+
+
+def changes_csv(changes: list[tuple]) -> str:
+    """changes.csv: learner, before, after, delta, why: each learner whose score moved since the last run."""
+    return _csv([["learner", "before", "after", "delta", "why"]]
+                + [[for_csv(learner), _number(before), _number(after), _number(delta), for_csv(why)]
+                   for learner, before, after, delta, why in changes])

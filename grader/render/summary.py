@@ -1,17 +1,33 @@
-"""The class summary page: score histogram, per-check failure rates (worst first), and the most
-common failure messages, so an instructor sees which idea the class missed. Self-contained HTML."""
+"""The class summary: what the class got wrong and what to re-teach, as summary.html and summary.json.
+
+From the per-learner reports of a batch: the score histogram; per check how many failed on their own
+and how many failed because a helper of theirs fails (grader.grading.point_upstream: blame once),
+worst first; per named mistake (grader.diagnose, the quiz keys' wrong answers) how many learners made
+it; per choice question how many chose each option (letters are each learner's own, so counted by
+the option, not the letter); per symbolic question each answer form; the most common failure
+messages; quiz questions shown as templates, each per-learner number as its range; and who was
+flagged, not graded or skipped, whose score moved since the last run, the overrides that could not
+apply, and the pairs of learners whose code is most alike (grader.similarity, for a person to look
+at). Self-contained HTML; learner text escaped.
+"""
 
 from __future__ import annotations
 
-from collections import Counter
+import json
+import re
+import statistics
+from collections import Counter, defaultdict
+from dataclasses import dataclass, field
 from html import escape as _escape
 
 from grader.model import Report, Status
-from grader.safe_text import for_html
+from grader.safe_text import for_html, for_json
 
 STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1000px;margin:24px auto;color:#1f2937}"
-         "table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #e5e7eb;text-align:left}"
-         ".bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}")
+         "table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #e5e7eb;text-align:left;"
+         "vertical-align:top}.bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}"
+         "pre{white-space:pre-wrap;background:#f3f4f6;padding:4px 6px;margin:2px 0;font-size:.85em}")
+VERSION = "1"
 
 
 def escape(text: str) -> str:
@@ -23,60 +39,249 @@ def _count(n: int, word: str, words: str | None = None) -> str:
     return f"{n} {word if n == 1 else (words or word + 's')}"
 
 
-def render(reports: list[tuple[str, Report]], unreadable: dict[str, str], isolation: str = "",
-           skipped: list[tuple[str, str]] = (), flagged: dict[str, list[str]] | None = None) -> str:
-    """The page; `unreadable` maps each learner not graded (unreadable submission, infrastructure
-    failure) to why, `skipped` lists (entry, why) of what in the submissions folder was not taken as a
-    submission at all, `flagged` maps graded learners to what an instructor should look at (a
-    learner.yaml naming someone else)."""
-    flagged = flagged or {}
+@dataclass
+class Summary:
+    """Everything the class summary shows, gathered by grade batch."""
+
+    reports: list[tuple[str, Report]]
+    not_graded: dict[str, str] = field(default_factory=dict)
+    isolation: str = ""
+    skipped: list[tuple[str, str]] = field(default_factory=list)
+    flagged: dict[str, list[str]] = field(default_factory=dict)
+    extras: dict[str, dict] = field(default_factory=dict)  # learner -> report.json's batch data we show
+    changes: list[tuple] = field(default_factory=list)  # (learner, before, after, delta, why)
+    notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
+    similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
+
+
+# ------------------------------------------------------------------------------------ what is counted
+
+def _question(chapter: str, question_id: str):
+    from grader.quiz import bank
+
+    try:
+        return next((q for q in bank.questions(chapter) if q.id == question_id), None)
+    except (OSError, ValueError):
+        return None
+
+
+def template(chapter: str, question_id: str, fallback: str) -> str:
+    """A quiz question as every learner has it: each per-learner number shown as its range."""
+    question = _question(chapter, question_id)
+    if question is None:
+        return fallback
+    text = question.prompt
+    for name, (low, high) in question.params.items():
+        text = text.replace("{" + name + "}", f"<{name}: {low:g} to {high:g}, per learner>")
+    return " ".join(text.split())
+
+
+def _options_chosen(chapter: str, check, learner: str) -> list[str]:
+    """The canonical options a learner's choice answer names (their letters are their own)."""
+    question = _question(chapter, check.function)
+    if question is None or not question.options or not isinstance(check.got, str):
+        return []
+    lettering = question.lettering(learner, chapter)
+    letters = [x.strip().lower().strip("()") for x in re.split(r"[,\s]+", check.got) if x.strip()]
+    return sorted({lettering[x] for x in letters if x in lettering})
+
+
+def _right_options(chapter: str, question_id: str) -> set[str]:
+    from grader.quiz import bank
+
+    try:
+        key = (bank.keys(chapter) or {}).get(question_id)
+    except (OSError, ValueError):
+        return set()
+    answer = getattr(key, "answer", None)
+    if isinstance(answer, str):
+        return {x.strip() for x in answer.split(",") if x.strip()}
+    return {str(x) for x in answer} if isinstance(answer, list) else set()
+
+
+def _form(text: str, values: dict[str, float]) -> str:
+    """An answer as written, without its spacing (x^2 and x**2 read alike), each of the learner's own numbers
+    shown as its name (-(y-2.3)/... as -(y-<b>)/...), so that answers of one form are counted together."""
+    form = re.sub(r"\s+", "", text).replace("**", "^")
+    for name, value in sorted(values.items(), key=lambda kv: -len(f"{kv[1]:g}")):
+        form = re.sub(rf"(?<![\d.^]){re.escape(f'{value:g}')}(?![\d.])", f"<{name}>", form)
+    return form
+
+
+def tally(view: Summary) -> dict:
+    """The counts summary.html and summary.json show."""
+    seen, own, upstream, errors, names, kinds = Counter(), Counter(), Counter(), Counter(), {}, {}
+    mistakes: dict[tuple, set] = defaultdict(set)
+    messages: Counter = Counter()
+    chosen: Counter = Counter()
+    forms: dict[tuple, dict] = {}
+    for learner, report in view.reports:
+        who = report.learner_id or learner
+        for chapter in report.chapters:
+            for check in chapter.checks:
+                key = f"{chapter.chapter}/{check.id}"
+                kinds[key] = check.kind
+                names[key] = template(chapter.chapter, check.function, check.description) if check.kind == "quiz" \
+                    else check.description
+                seen[key] += 1
+                caused_upstream = bool(check.upstream) or (check.status == Status.SKIP
+                                                           and check.points < check.max_points)
+                if check.status == Status.ERROR:
+                    errors[key] += 1
+                elif caused_upstream:
+                    upstream[key] += 1
+                elif check.status == Status.FAIL:
+                    own[key] += 1
+                    if check.mistake:
+                        mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
+                    if check.message:
+                        messages[(chapter.chapter, check.message.splitlines()[0][:160])] += 1
+                if check.kind == "quiz" and check.got is not None and check.status in (Status.PASS, Status.FAIL):
+                    for option in _options_chosen(chapter.chapter, check, who):
+                        chosen[(chapter.chapter, check.function, option)] += 1
+                    question = _question(chapter.chapter, check.function)
+                    if question is not None and question.kind == "symbolic" and isinstance(check.got, str):
+                        form = _form(check.got, question.values_for(who, chapter.chapter))
+                        entry = forms.setdefault((chapter.chapter, check.function, form, check.status.value),
+                                                 {"learners": 0, "verdict": check.status.value,
+                                                  "mistake": check.mistake or None})
+                        entry["learners"] += 1
+    options = []
+    for (chapter, question_id, option), count in sorted(chosen.items()):
+        question = _question(chapter, question_id)
+        options.append({"question": f"{chapter}/quiz_{question_id}", "option": option,
+                        "text": question.options.get(option, "") if question else "",
+                        "right": option in _right_options(chapter, question_id), "chosen": count})
+    return {
+        "checks": [{"id": key, "description": names[key], "kind": kinds[key], "seen": seen[key],
+                    "failed": own[key], "failed_upstream": upstream[key], "errors": errors[key]}
+                   for key in sorted(seen, key=lambda k: (-own[k] / seen[k], -(upstream[k] + errors[k]) / seen[k], k))],
+        "mistakes": [{"chapter": c, "function": f, "kind": k, "mistake": m, "learners": len(who)}
+                     for (c, f, k, m), who in sorted(mistakes.items(), key=lambda kv: (-len(kv[1]), kv[0]))],
+        "options": options,
+        "answer_forms": [{"question": f"{c}/quiz_{q}", "form": form, **entry}
+                         for (c, q, form, _), entry in sorted(forms.items(),
+                                                               key=lambda kv: (kv[0][:2], -kv[1]["learners"], kv[0]))],
+        "messages": [{"chapter": c, "message": m, "count": n} for (c, m), n in messages.most_common(25)],
+    }
+
+
+def _handouts(view: Summary) -> dict[str, int]:
+    """How many archives were packed with each handout (grade submit's manifests); "none": no manifest."""
+    seen: Counter = Counter()
+    for learner, _ in view.reports:
+        manifest = view.extras.get(learner, {}).get("manifest")
+        seen[(manifest or {}).get("handout") or ("none" if manifest is None else "the project")] += 1
+    return dict(seen)
+
+
+# ------------------------------------------------------------------------------------ JSON
+
+def as_json(view: Summary) -> str:
+    """summary.json (grader/schemas/summary.schema.json)."""
+    counts = tally(view)
+    scores = [r.score for _, r in view.reports]
+    first = view.reports[0][1] if view.reports else None
+    data = {
+        "version": VERSION,
+        "provenance": {"grader": first.grader or None, "handout": first.handout, "course": first.course,
+                       "seed": first.seed} if first else None,
+        "learners": {"graded": len(view.reports), "not_graded": len(view.not_graded), "skipped": len(view.skipped),
+                     "flagged": len(view.flagged)},
+        "scores": {"mean": round(statistics.fmean(scores), 3) if scores else None,
+                   "median": round(statistics.median(scores), 3) if scores else None,
+                   "max_score": max((r.max_score for _, r in view.reports), default=None)},
+        **counts,
+        "handouts": _handouts(view),
+        "flagged": view.flagged,
+        "not_graded": view.not_graded,
+        "skipped": [{"name": n, "reason": r} for n, r in view.skipped],
+        "changes": [{"learner": c[0], "before": c[1], "after": c[2], "delta": c[3], "why": c[4]} for c in view.changes],
+        "similar": [pair.to_dict() for pair in view.similar],
+        "notes": list(view.notes),
+        "isolation": view.isolation,
+    }
+    return json.dumps(for_json(data), indent=1, allow_nan=False) + "\n"
+
+
+# ------------------------------------------------------------------------------------ HTML
+
+def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]],
+           numeric: set[int] = frozenset()) -> str:
+    """A titled table; `rows` hold HTML already escaped; columns in `numeric` are right-aligned."""
+    def cell(tag: str, i: int, content: str) -> str:
+        return f"<{tag}{' class=num' if i in numeric else ''}>{content}</{tag}>"
+
+    head = "".join(cell("th", i, escape(h)) for i, h in enumerate(header))
+    body = "".join("<tr>" + "".join(cell("td", i, c) for i, c in enumerate(row)) + "</tr>" for row in rows)
+    return f"<h2 id='{caption_id}'>{escape(title)}</h2><table><tr>{head}</tr>{body}</table>"
+
+
+def render(view: Summary) -> str:
+    """summary.html."""
+    counts = tally(view)
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
-             f"<p>{_count(len(reports), 'learner')} graded; {len(unreadable)} could not be graded; "
-             f"{len(skipped)} skipped; {len(flagged)} flagged.</p>",
-             f"<p id='isolation'>{escape(isolation)}</p>" if isolation else ""]
-    if reports:
-        top = max(r.max_score for _, r in reports) or 1
-        bins = Counter(min(9, int(10 * r.score / top)) for _, r in reports)
+             f"<p>{_count(len(view.reports), 'learner')} graded; {len(view.not_graded)} could not be graded; "
+             f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
+             f"{_count(len(view.changes), 'score')} moved since the last run.</p>",
+             f"<p id='isolation'>{escape(view.isolation)}</p>" if view.isolation else ""]
+    if view.reports:
+        first = view.reports[0][1]
+        parts.append(f"<p id='provenance'>Graded by grader {escape(first.grader or 'unknown')}, course "
+                     f"{escape(first.course or 'none')}, current handout {escape(first.handout or 'not set')}, seed "
+                     f"{escape(first.seed)}.</p>")
+        top = max(r.max_score for _, r in view.reports) or 1
+        bins = Counter(min(9, int(10 * r.score / top)) for _, r in view.reports)
         parts.append("<h2 id='histogram'>Scores</h2><table>")
         for b in range(10):
             count = bins.get(b, 0)
             parts.append(f"<tr><td>{10 * b}-{10 * b + 10}%</td><td class='num'>{count}</td>"
                          f"<td><span class='bar' style='width:{8 * count}px'></span></td></tr>")
         parts.append("</table>")
-        failures: Counter = Counter()
-        seen: Counter = Counter()
-        messages: Counter = Counter()
-        names = {}
-        for _, report in reports:
-            for chapter in report.chapters:
-                for check in chapter.checks:
-                    key = f"{chapter.chapter}/{check.id}"
-                    names[key] = check.description
-                    seen[key] += 1
-                    if check.status != Status.PASS:
-                        failures[key] += 1
-                        if check.message:
-                            messages[(chapter.chapter, check.message.splitlines()[0][:160])] += 1
-        parts.append("<h2 id='failure-rates'>Checks by failure rate</h2><table><tr><th>check</th><th>failed</th>"
-                     "<th class='num'>rate</th></tr>")
-        for key, count in sorted(failures.items(), key=lambda kv: (-kv[1] / seen[kv[0]], kv[0]))[:60]:
-            parts.append(f"<tr><td>{escape(key)}<br><small>{escape(names[key])}</small></td><td class='num'>"
-                         f"{count}/{seen[key]}</td><td class='num'>{100 * count / seen[key]:.0f}%</td></tr>")
-        parts.append("</table><h2 id='messages'>Most common failure messages</h2><table>")
-        for (chapter, message), count in messages.most_common(25):
-            parts.append(f"<tr><td class='num'>{count}</td><td>{escape(chapter)}</td><td>{escape(message)}</td></tr>")
-        parts.append("</table>")
-    if flagged:
-        parts.append("<h2 id='flagged'>Flagged (graded; look at these)</h2><ul>")
-        parts.extend(f"<li>{escape(k)}: {escape('; '.join(v))}</li>" for k, v in sorted(flagged.items()))
+        parts.append(_table("mistakes", "Named mistakes (learners who made each; failures of their own)",
+                            ["check", "mistake", "learners"],
+                            [[escape(f"{m['chapter']}/{m['function']}") + f" <small>{m['kind']}</small>",
+                              escape(m["mistake"]), str(m["learners"])] for m in counts["mistakes"]], {2}))
+        failing = [c for c in counts["checks"] if c["failed"] + c["failed_upstream"] + c["errors"]][:60]
+        parts.append(_table("failure-rates", "Checks by failure rate (a helper's failure counted apart)",
+                            ["check", "failed", "rate", "because a helper fails", "could not be graded"],
+                            [[f"{escape(c['id'])}<br><small>{escape(c['description'])}</small>",
+                              f"{c['failed']}/{c['seen']}", f"{100 * c['failed'] / c['seen']:.0f}%",
+                              str(c["failed_upstream"]), str(c["errors"])] for c in failing], {1, 2, 3, 4}))
+        parts.append(_table("options", "Options chosen (by option: each learner has their own letters)",
+                            ["question", "option", "right", "chosen by"],
+                            [[escape(o["question"]), f"{escape(o['option'])}) {escape(o['text'])}",
+                              "yes" if o["right"] else "no", str(o["chosen"])] for o in counts["options"]], {3}))
+        parts.append(_table("answer-forms", "Symbolic answers by form", ["question", "answer", "verdict", "learners"],
+                            [[escape(f["question"]), f"<code>{escape(f['form'])}</code>",
+                              escape(f["verdict"] + (f" ({f['mistake']})" if f["mistake"] else "")),
+                              str(f["learners"])] for f in counts["answer_forms"]], {3}))
+        parts.append(_table("messages", "Most common failure messages", ["count", "chapter", "message"],
+                            [[str(m["count"]), escape(m["chapter"]), escape(m["message"])] for m in counts["messages"]],
+                            {0}))
+    if view.similar:
+        rows = []
+        for pair in view.similar:
+            shared = "".join(f"<pre>{escape(block)}</pre>" for block in pair.shared[:3])
+            rows.append([escape(f"{pair.first} and {pair.second}"), f"{pair.score:.2f}",
+                         escape(", ".join(pair.functions[:6])), shared])
+        parts.append(_table("similar", "Most similar submissions (for a person to look at; not an accusation)",
+                            ["learners", "similarity", "functions most alike", "shared lines"], rows, {1}))
+    handouts = _handouts(view)
+    if handouts:
+        parts.append("<h2 id='handouts'>Archives by handout</h2><ul>")
+        parts.extend(f"<li>{escape(h)}: {n}</li>" for h, n in sorted(handouts.items()))
         parts.append("</ul>")
-    if unreadable:
-        parts.append("<h2 id='not-graded'>Not graded</h2><ul>")
-        parts.extend(f"<li>{escape(k)}: {escape(v)}</li>" for k, v in sorted(unreadable.items()))
-        parts.append("</ul>")
-    if skipped:
-        parts.append("<h2 id='skipped'>Skipped (not taken as submissions)</h2><ul>")
-        parts.extend(f"<li>{escape(k)}: {escape(v)}</li>" for k, v in skipped)
-        parts.append("</ul>")
+    for section, title, items in (("flagged", "Flagged (graded; look at these)",
+                                   [(k, "; ".join(v)) for k, v in sorted(view.flagged.items())]),
+                                  ("changes", "Scores that moved since the last run",
+                                   [(c[0], f"{c[1]} -> {c[2]}: {c[4]}") for c in view.changes]),
+                                  ("notes", "For the instructor", [("", n) for n in view.notes]),
+                                  ("not-graded", "Not graded", sorted(view.not_graded.items())),
+                                  ("skipped", "Skipped (not taken as submissions)", list(view.skipped))):
+        if items:
+            parts.append(f"<h2 id='{section}'>{title}</h2><ul>")
+            parts.extend(f"<li>{escape(k) + ': ' if k else ''}{escape(v)}</li>" for k, v in items)
+            parts.append("</ul>")
     return "".join(parts) + "</body></html>\n"
