@@ -428,9 +428,6 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
                            other_ids=(str(manifest.get("learner")),) if manifest else ())
     warnings += report.flags
     warnings += adjusting.apply(report, list(overrides), late, adjusting.parse_time(submitted))
-    if late is not None and not submitted:
-        warnings.append("no submission time (no `submitted` column in the roster, no manifest from grade submit): "
-                        "no late penalty applied")
     seconds = time.monotonic() - started
     data = report.to_dict()
     data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
@@ -556,7 +553,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                     progress(done, len(entries), time.monotonic() - started)
         isolation = isolation_line(sandboxed)
         summary = rebuild(out, history, run, [e.learner for e in entries], chapters, statuses, messages, skipped,
-                          isolation, lms_layouts, rows, override_problems, similarity=similarity)
+                          isolation, lms_layouts, rows, override_problems, similarity=similarity,
+                          deadline=bool(course and course.late))
     finally:
         history.close()
     counts: dict[str, int] = {}
@@ -620,7 +618,7 @@ def _learner_state(out: Path, learner: str, status: str, message: str):
 
 def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
             skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(),
-            override_problems: list[str] = (), similarity: bool = False) -> dict:
+            override_problems: list[str] = (), similarity: bool = False, deadline: bool = False) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
     and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
@@ -640,13 +638,18 @@ def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[st
             flagged[learner] = result.flags
         reports.append((learner, report))
         extras[learner] = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", ""),
-                           "manifest": batch.get("manifest")}
+                           "manifest": batch.get("manifest"), "submitted": batch.get("submitted")}
     applied = {(r.learner, a["source"]): a for r in results for a in r.adjustments if a["kind"] == "override"}
     override_rows = [(o.learner, o.target, o.points, o.factor, o.reason, o.who, o.source,
                       f"{applied[(o.learner, o.source)]['points']:+g}" if (o.learner, o.source) in applied
                       else "not applied (the learner is not graded)") for o in overrides]
     moved = histories.changes(history, run, {r.learner: r for r in results})
     notes = _keep_hand_edits(out, history, run)
+    untimed = [learner for learner, _ in reports if not extras[learner].get("submitted")]
+    if deadline and untimed:
+        notes.append(f"no submission time for {len(untimed)} of {len(reports)} graded (no `submitted` column in the "
+                     f"roster for them, no grade submit manifest): no late penalty applied to {', '.join(untimed[:20])}"
+                     + (" ..." if len(untimed) > 20 else ""))
     gradebook = lms.gradebook(results, chapters)
     history.finish(run, results, override_rows, moved, hashlib.sha256(gradebook.encode()).hexdigest())
     write_atomically(out / "gradebook.csv", gradebook)

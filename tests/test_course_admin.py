@@ -1,0 +1,272 @@
+"""Running a course: a test course of right, buggy, unset-id, stale-handout, edited and copied submissions
+graded end to end through the real CLI (`grade submit`, `grade batch`) four times over.
+
+- the unset-id learner (learner.yaml empty, quiz worked out at home as 'anonymous') and the archives packed
+  with an older handout or edited after packing are flagged with their reason, in the learner's report
+  and the summary; the unset-id learner's report says whose numbers the answers fit;
+- the copied pair (one function, variables renamed) tops the similarity list, with the lines it shares;
+- an override applies and survives two more rebuilds; a late penalty follows the roster's time;
+- changes.csv names exactly the learners whose score moved, and why;
+- the named-mistake counts of summary.json match the corpus (benchmarks/misconceptions.py);
+- every JSON written validates against its schema; the history holds every run, score and override.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import sqlite3
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from benchmarks.misconceptions import CODE
+from grader.quiz.templates import reference_answers
+from tests.conftest import REPO, build_submission, replace_function
+
+CHAPTER = "ch06"
+CURRENT, OLDER = "0.1.0+handout.c0ffee000001", "0.1.0+handout.0bad00000000"
+COURSE = (f"course: admin-course\nseed: 424242\nquiz_feedback: recorded\nhandout: {CURRENT}\n"
+          "deadline: 2026-05-01T23:59:00+00:00\nlate_penalty: {per_day: 0.1, max: 0.5}\n")
+# one-bug submissions of the misconception corpus: learner -> its entry
+CORPUS = {"carol": "bearing row sign", "hank": "H transposed", "jo": "covariance with sigma"}
+IVY_TRANSPOSED = """
+def H_jacobian(x, y):
+    x, y = float(x), float(y)
+    if x == 0 and y == 0:
+        raise ValueError("no H at the dish")
+    rows = [[x, y], [-y, x]]
+    scale = [np.hypot(x, y), x * x + y * y]
+    return np.array([[rows[0][0] / scale[0], rows[1][0] / scale[1]], [rows[0][1] / scale[0], rows[1][1] / scale[1]]])
+"""
+GINA_COVARIANCE = """
+def measurement_covariance(x, y, sigma):
+    # the covariance of range and bearing, one entry at a time
+    distance_squared = float(x) * float(x) + float(y) * float(y)
+    if distance_squared == 0.0:
+        raise ValueError("the dish itself: no bearing")
+    variance = float(sigma) * float(sigma)
+    covariance = np.zeros((2, 2), dtype=float)
+    covariance[0, 0] = variance
+    covariance[1, 1] = variance / distance_squared
+    for index in range(2):
+        covariance[index, 1 - index] = 0.0
+    return covariance
+"""
+FRANK_COVARIANCE = """
+def measurement_covariance(x, y, sigma):
+    d2 = float(x) * float(x) + float(y) * float(y)
+    if d2 == 0.0:
+        raise ValueError("the dish itself: no bearing")
+    var = float(sigma) * float(sigma)
+    cov = np.zeros((2, 2), dtype=float)
+    cov[0, 0] = var
+    cov[1, 1] = var / d2
+    for i in range(2):
+        cov[i, 1 - i] = 0.0
+    return cov
+"""  # gina's, its names changed and its comment gone
+
+
+def _grade(*args: str, cwd: Path = REPO, timeout: float = 600) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+def _learner(root: Path, learner: str, replacements: dict | None = None, answers_for: str | None = None,
+             learner_yaml: str | None = None) -> Path:
+    """A submission folder: the references but `replacements`, quiz answers worked out for `answers_for`."""
+    build_submission(root, replacements)
+    answers = root / "exercises" / "answers"
+    answers.mkdir(parents=True, exist_ok=True)
+    (answers / f"{CHAPTER}.yaml").write_text(reference_answers(CHAPTER, answers_for or learner), encoding="utf-8")
+    (answers / "learner.yaml").write_text(learner_yaml if learner_yaml is not None else f"learner: {learner}\n",
+                                          encoding="utf-8")
+    return root
+
+
+def _corpus(entry: str) -> dict:
+    module, function, source, _ = CODE[entry]
+    return {module: replace_function(module, function, source)}
+
+
+def _rewrite(archive: Path, change) -> None:
+    """Rewrite a zip's members through change(name, bytes) -> bytes."""
+    with zipfile.ZipFile(archive) as old:
+        members = [(name, old.read(name)) for name in old.namelist()]
+    with zipfile.ZipFile(archive, "w") as new:
+        for name, data in members:
+            new.writestr(name, change(name, data))
+
+
+def _rows(path: Path) -> dict[str, dict]:
+    with path.open(newline="", encoding="utf-8") as handle:
+        return {row["learner"]: row for row in csv.DictReader(handle)}
+
+
+@pytest.fixture(scope="module")
+def course(tmp_path_factory):
+    base = tmp_path_factory.mktemp("course")
+    work, submissions = base / "work", base / "submissions"
+    submissions.mkdir()
+    for name in ("alice", "bob"):
+        _learner(submissions / name, name)
+    for name, entry in CORPUS.items():
+        _learner(submissions / name, name, _corpus(entry))
+    _learner(submissions / "ivy", "ivy", {"ch06_measurement": replace_function("ch06_measurement", "H_jacobian",
+                                                                                IVY_TRANSPOSED)})
+    _learner(submissions / "gina", "gina", {"ch06_measurement": replace_function(
+        "ch06_measurement", "measurement_covariance", GINA_COVARIANCE)})
+    _learner(submissions / "frank", "frank", {"ch06_measurement": replace_function(
+        "ch06_measurement", "measurement_covariance", FRANK_COVARIANCE)})
+    _learner(submissions / "dave", "dave", answers_for="anonymous", learner_yaml="learner:\n")  # never set an id
+    for name in ("stan", "eve"):  # they pack with grade submit
+        packed = _grade("submit", "--out", str(submissions / f"{name}.zip"), cwd=_learner(work / name, name))
+        assert packed.returncode == 0, packed.stderr
+        assert "The archive, graded again: " in packed.stdout and f"{name}.zip" in packed.stdout
+    manifest = "exercises/submission-manifest.json"
+    _rewrite(submissions / "stan.zip", lambda name, data: data if name != manifest else json.dumps(
+        {**json.loads(data), "handout": OLDER, "handout_released": "2026-03-01T09:00:00+00:00"}).encode())
+    _rewrite(submissions / "eve.zip", lambda name, data: data + b"\n# changed after packing\n"
+             if name.endswith("ch06_measurement.py") else data)
+    (base / "course.yaml").write_text(COURSE, encoding="utf-8")
+    (base / "roster.csv").write_text("submission,learner,submitted\njo,jo,2026-05-03T10:00:00+00:00\n"
+                                     "alice,alice,2026-05-01T20:00:00+00:00\n", encoding="utf-8")
+    out = base / "out"
+
+    def batch(*extra: str) -> subprocess.CompletedProcess:
+        done = _grade("batch", str(submissions), "--out", str(out), "--chapters", CHAPTER, "--course",
+                      str(base / "course.yaml"), "--roster", str(base / "roster.csv"), "--no-html", "--jobs", "2",
+                      *extra)
+        assert done.returncode == 0, done.stdout + done.stderr
+        return done
+
+    runs = [batch("--similarity")]
+    snapshots = [(out / "changes.csv").read_text(encoding="utf-8")]
+    first_summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    (out / "overrides.csv").write_text("learner,target,points,factor,reason,who\n"
+                                       "hank,ch06/H_worked_example,2,,regrade request: the row order was unclear,bo\n"
+                                       "nobody,total,1,,a learner not in this batch,bo\n", encoding="utf-8")
+    fixed = submissions / "carol" / "exercises" / "ch06_measurement.py"
+    fixed.write_text((REPO / "solutions" / "ch06_measurement.py").read_text(encoding="utf-8")
+                     .replace("solutions.", "exercises."), encoding="utf-8")  # carol resubmits
+    for _ in range(3):  # the override's run, then two rebuilds with nothing new
+        runs.append(batch())
+        snapshots.append((out / "changes.csv").read_text(encoding="utf-8"))
+    return {"out": out, "runs": runs, "changes": snapshots, "submissions": submissions, "first": first_summary}
+
+
+def _report(course, learner: str) -> dict:
+    return json.loads((course["out"] / learner / "report.json").read_text(encoding="utf-8"))
+
+
+def test_the_unset_id_learner_is_flagged_and_told_whose_numbers_the_answers_fit(course):
+    report = _report(course, "dave")
+    quiz = [c for c in report["chapters"][0]["checks"] if c["kind"] == "quiz" and c["status"] == "fail"]
+    assert quiz and all("the right answer for the numbers of learner 'anonymous'" in c["message"] for c in quiz)
+    assert not any("not within the tolerance" in c["message"] for c in quiz)
+    assert any("numbers of 'anonymous'" in w for w in report["batch"]["warnings"])
+    assert "numbers of 'anonymous'" in _rows(course["out"] / "gradebook.csv")["dave"]["message"]
+
+
+def test_stale_and_edited_archives_are_flagged_with_their_reason(course):
+    stan, eve = _report(course, "stan"), _report(course, "eve")
+    assert any(f"packed with an older or other handout ({OLDER}, released 2026-03-01" in w and CURRENT in w
+               for w in stan["batch"]["warnings"]), stan["batch"]["warnings"]
+    assert stan["batch"]["manifest"]["learner"] == "stan" and stan["batch"]["manifest"]["local"]["score"] > 0
+    assert any("edited after packing" in w and "ch06_measurement.py changed" in w for w in eve["batch"]["warnings"])
+    summary = json.loads((course["out"] / "summary.json").read_text(encoding="utf-8"))
+    assert {"dave", "stan", "eve"} <= set(summary["flagged"]) and "alice" not in summary["flagged"]
+    assert summary["handouts"][OLDER] == 1
+    page = (course["out"] / "summary.html").read_text(encoding="utf-8")
+    assert "edited after packing" in page and OLDER in page
+
+
+def test_the_copied_pair_tops_the_similarity_list(course):
+    similar = course["first"]["similar"]
+    assert similar and similar[0]["learners"] == ["frank", "gina"], similar
+    assert "ch06_measurement.measurement_covariance" in similar[0]["functions"]
+    assert any("[1, 1] = var / d2" in block for block in similar[0]["shared"])  # frank's lines
+    assert all(pair["score"] < similar[0]["score"] for pair in similar[1:])
+    assert [line.strip() for line in course["runs"][0].stdout.splitlines() if "alike:" in line][0].startswith(
+        "alike: frank and gina")
+
+
+def test_an_override_survives_two_rebuilds_and_a_late_penalty_follows_the_roster(course):
+    out = course["out"]
+    hank = _report(course, "hank")
+    assert [a["target"] for a in hank["adjustments"]] == ["ch06/H_worked_example"]
+    assert hank["score"] == hank["raw_score"] + 2
+    row = _rows(out / "gradebook.csv")["hank"]
+    assert float(row["total"]) == hank["score"] and "regrade request" in row["adjustments"]
+    jo = _report(course, "jo")
+    late = [a for a in jo["adjustments"] if a["kind"] == "late"]
+    assert late and "2 days late" in late[0]["reason"] and jo["score"] == pytest.approx(0.8 * jo["raw_score"])
+    assert not [a for a in _report(course, "alice")["adjustments"] if a["kind"] == "late"]  # in time
+    with sqlite3.connect(out / "gradebook.db") as db:
+        runs = db.execute("SELECT id FROM runs WHERE finished IS NOT NULL ORDER BY id").fetchall()
+        assert len(runs) == 4
+        applied = db.execute("SELECT run, applied FROM overrides WHERE learner = 'hank' ORDER BY run").fetchall()
+        assert applied == [(2, "+2"), (3, "+2"), (4, "+2")]
+        scores = db.execute("SELECT run, score FROM results WHERE learner = 'hank' ORDER BY run").fetchall()
+        assert [s for _, s in scores] == [hank["raw_score"]] + [hank["score"]] * 3
+        assert db.execute("SELECT count(*) FROM results").fetchone()[0] == 4 * 11
+    assert any("overrides.csv, line 3: no learner 'nobody'" in line for line in course["runs"][1].stderr.splitlines())
+
+
+def test_changes_csv_names_exactly_the_learners_whose_score_moved(course):
+    first, second, third, fourth = (list(csv.DictReader(text.splitlines())) for text in course["changes"])
+    assert {r["learner"] for r in first} == {"alice", "bob", "carol", "dave", "eve", "frank", "gina", "hank", "ivy",
+                                             "jo", "stan"} and {r["why"] for r in first} == {"first graded"}
+    moved = {r["learner"]: r for r in second}
+    assert set(moved) == {"carol", "hank"}
+    assert moved["hank"]["why"].startswith("override +2 on ch06/H_worked_example") and moved["hank"]["delta"] == "2"
+    assert moved["carol"]["why"].startswith("resubmission") and float(moved["carol"]["delta"]) > 0
+    assert third == [] and fourth == []
+    assert "2 scores moved" in course["runs"][1].stdout and "0 scores moved" in course["runs"][3].stdout
+
+
+def test_the_named_mistake_counts_match_the_corpus(course):
+    summary = json.loads((course["out"] / "summary.json").read_text(encoding="utf-8"))
+    counted = {(m["chapter"], m["function"], m["mistake"]): m["learners"] for m in summary["mistakes"]
+               if m["kind"] == "code"}
+    expected: dict = {}
+    for learner, entry in {**{k: v for k, v in CORPUS.items() if k != "carol"}, "ivy": "H transposed"}.items():
+        module, function, _, name = CODE[entry]
+        key = (module[:4], function, name)
+        expected[key] = expected.get(key, 0) + 1
+    assert counted == expected  # carol fixed hers; ivy's other code makes the same mistake
+    upstream = {c["id"]: c for c in summary["checks"]}
+    assert any(c["failed_upstream"] for c in upstream.values())  # H's failures make covariance fail, apart
+
+
+def test_every_json_validates_against_its_schema(course):
+    jsonschema = pytest.importorskip("jsonschema")
+    from referencing import Registry, Resource
+
+    from grader.render import lms
+
+    registry = Registry().with_resources((lms.schema(n)["$id"], Resource.from_contents(lms.schema(n)))
+                                         for n in lms.SCHEMAS)
+
+    def valid(name: str, path: Path) -> None:
+        jsonschema.Draft202012Validator(lms.schema(name), registry=registry).validate(
+            json.loads(path.read_text(encoding="utf-8")))
+
+    valid("summary", course["out"] / "summary.json")
+    for folder in course["out"].iterdir():
+        if (folder / "report.json").is_file():
+            valid("batch-report", folder / "report.json")
+            valid("gradescope-results", folder / "results.json")
+
+
+def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
+    unset = _learner(tmp_path / "unset", "x", learner_yaml="learner:\n")
+    refused = _grade("submit", cwd=unset)
+    assert refused.returncode == 2 and "no learner id" in refused.stderr and not list(unset.glob("*.zip"))
+    other = _learner(tmp_path / "other", "ann")
+    refused = _grade("submit", "--learner", "bea", cwd=other)
+    assert refused.returncode == 2 and "learner.yaml names 'ann' but --learner gives 'bea'" in refused.stderr
