@@ -254,8 +254,15 @@ This handout holds no reference solution and no quiz key: it grades from recorde
 
 ## Submit
 
-Hand in your `exercises/` folder (zipped, or as your course asks): every `chNN_*.py` you wrote and
-the files in `exercises/answers/`.
+```sh
+grade submit
+```
+
+packs your `exercises/` into `<your id>.zip`, the archive your course grades: every `chNN_*.py` and
+the files in `exercises/answers/`, and a manifest (this handout's version, a hash of each file, your
+score at home, the time). It will not pack without your learner id (it asks for one on a terminal),
+and it grades the packed archive again, so the score it prints is that of what you hand in. Hand in
+that file as it is: a file changed after packing is noticed.
 """
 
 
@@ -263,9 +270,12 @@ def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict) 
     checks = sum(h["checks"] for h in hidden.values())
     points = sum(h["points"] for h in hidden.values())
     hidden_text = (f", plus {checks} hidden check{'s' * (checks != 1)} worth {points:g} points" if checks else "")
-    quiz = ("read and format-checked here, and graded when you submit" if course.quiz_feedback == "recorded" else
-            "graded here where the question is the same for everyone (practice); questions with your own numbers "
-            "are recorded here and graded when you submit")
+    practice = [info.id for info in CHAPTERS if course.practice(info.id)]
+    recorded = "read and format-checked here, and graded when you submit"
+    quiz = (recorded if not practice else
+            f"{recorded}, but those of {', '.join(practice)}: practice, graded here where the question is the same "
+            "for everyone and never counted" if len(practice) < len(CHAPTERS) else
+            "practice: graded here where the question is the same for everyone, and never counted")
     text = LEARNER_README.format(wheel=wheel.name, hidden=hidden_text, quiz=quiz)
     (out / "README.md").write_text(text, encoding="utf-8")
 
@@ -521,5 +531,6 @@ def describe(release: Release) -> str:
     hidden = sum(h["checks"] for h in release.hidden.values())
     return (f"Handout {release.version} in {release.folder}: {files} files, the grader {release.wheel.name} "
             f"({size / 1024:.0f} KiB); {plural(hidden, 'hidden check')}. Checked: no reference code, quiz key or reference "
-            "answer in any file or wheel member.")
+            f"answer in any file or wheel member.\nPut `handout: {release.version}` in the course config (or pass "
+            f"--handout {release.folder} to grade batch): archives packed with another handout are then flagged.")
 

@@ -339,3 +339,35 @@ def test_the_project_installs_from_its_wheel_and_grades_in_an_empty_folder(tmp_p
     assert shown.returncode == 0 and "[dbearing_dx]" in shown.stdout
     references = json.loads(_learner(grade, "all", "--solutions", "--format", "json", cwd=folder).stdout)
     assert references["score"] == references["max_score"] == project["max_score"]
+
+
+# ------------------------------------------------------------------------------ grade submit from the handout
+
+def test_a_learner_submits_from_the_handout_and_batch_knows_the_handout(handout, learner_grade, tmp_path):
+    base = _readable_folder("submit-")
+    try:
+        folder = base / "ann"
+        shutil.copytree(handout / "exercises", folder / "exercises")
+        subprocess.run(["chmod", "-R", "a+rwX", str(base)], check=True)
+        packed = _learner(learner_grade, "submit", "--learner", "ann", cwd=folder)
+        assert packed.returncode == 0, packed.stdout + packed.stderr
+        assert "Total of the public checks: 0/" in packed.stdout  # the stubs, graded again from the archive
+        assert "learner: ann" in (folder / "exercises" / "answers" / "learner.yaml").read_text(encoding="utf-8")
+        with zipfile.ZipFile(folder / "ann.zip") as archive:
+            manifest = json.loads(archive.read("exercises/submission-manifest.json"))
+        version = json.loads((handout / "handout.json").read_text(encoding="utf-8"))["version"]
+        assert manifest["handout"] == version == manifest["grader"] and manifest["course"] == "test-course"
+        assert manifest["local"]["hidden_checks"] == 1 and manifest["learner"] == "ann"
+        submissions = tmp_path / "submissions"
+        submissions.mkdir()
+        shutil.copy(folder / "ann.zip", submissions / "ann.zip")
+        (tmp_path / "course.yaml").write_text(COURSE, encoding="utf-8")
+        for given, stale in ((str(handout), False), ("0.0.1+handout.000000000000", True)):
+            out = tmp_path / f"out-{stale}"
+            done = _project("batch", str(submissions), "--out", str(out), "--chapters", "ch06", "--course",
+                            str(tmp_path / "course.yaml"), "--no-html", "--handout", given)
+            assert done.returncode == 0, done.stderr
+            warnings = json.loads((out / "ann" / "report.json").read_text(encoding="utf-8"))["batch"]["warnings"]
+            assert any("packed with an older or other handout" in w for w in warnings) == stale, warnings
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
