@@ -270,3 +270,106 @@ def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
     other = _learner(tmp_path / "other", "ann")
     refused = _grade("submit", "--learner", "bea", cwd=other)
     assert refused.returncode == 2 and "learner.yaml names 'ann' but --learner gives 'bea'" in refused.stderr
+
+
+# ------------------------------------------------------------------------------ the pieces, one at a time
+
+@pytest.fixture(scope="module")
+def solutions_report():
+    """ch05 and ch06 of the references, graded once in a course whose ch06 quiz is practice."""
+    from grader.course import Course
+    from grader.pipeline import Request, build_report
+    from grader.runner import Session
+    from grader.submission import solutions_submission
+
+    course = Course(id="practice-course", quiz_feedback="recorded", quiz_feedback_by={"ch06": "immediate"})
+    return build_report(Session(solutions_submission()), Request(("ch05", "ch06"), 20261122), course)
+
+
+def test_a_practice_quiz_is_judged_never_counted_and_a_counted_one_never_shown_at_once(solutions_report):
+    from grader.render import lms
+
+    ch05, ch06 = solutions_report.chapters
+    practice = [c for c in ch06.checks if c.kind == "quiz"]
+    assert practice and all(c.practice and c.max_points == 0 and c.status.value == "pass" for c in practice)
+    assert ch06.max_score_of("quiz") == 0 and ch05.max_score_of("quiz") > 0
+    tests = {t["extra_data"]["id"]: t for t in lms.gradescope_data(solutions_report)["tests"]}
+    assert {tests[f"ch06/{c.id}"]["visibility"] for c in practice} == {"visible"}
+    assert {t["visibility"] for i, t in tests.items() if i.startswith("ch05/quiz_")} == {"after_published"}
+
+
+def test_every_output_says_what_made_it(solutions_report, tmp_path):
+    from grader.render import html, json_report, lms, text
+
+    made = solutions_report.provenance()
+    assert made["grader"].startswith("0.1.0+g") and made["seed"] == 20261122 and made["learner"] == "reference"
+    assert made["course"] == "practice-course"
+    footer = text.render(solutions_report).rstrip().splitlines()[-1]
+    assert footer == (f"Graded by grader {made['grader']}, handout none, course practice-course, seed 20261122, "
+                      "learner reference.")
+    data = json.loads(json_report.render(solutions_report))
+    assert data["provenance"] == made and data["version"] == "1.2"
+    assert all(c["stable_id"] == f"{ch['chapter']}/{c['id']}" for ch in data["chapters"] for c in ch["checks"])
+    assert footer in html.render(solutions_report)
+    assert json.loads(lms.gradescope(solutions_report))["extra_data"]["provenance"] == made
+    assert made["grader"] in lms.junit([("x", solutions_report)])
+
+
+def test_overrides_stay_within_the_points_and_apply_in_order(solutions_report):
+    import copy
+    from datetime import datetime, timezone
+
+    from grader import overrides
+    from grader.course import Late
+
+    report = copy.deepcopy(solutions_report)
+    ch06 = report.chapters[1]
+    check = next(c for c in ch06.checks if c.kind == "code")
+    rows = [overrides.Override("x", f"ch06/{check.id}", 5.0, None, "more than its points", "bo", "o.csv, line 2"),
+            overrides.Override("x", "ch06", None, 0.5, "half the chapter", "bo", "o.csv, line 3"),
+            overrides.Override("x", "total", -1000.0, None, "everything", "bo", "o.csv, line 4"),
+            overrides.Override("x", "ch06/nope", 1.0, None, "no such check", "bo", "o.csv, line 5")]
+    problems = overrides.apply(report, rows)
+    assert problems == ["o.csv, line 5: ch06/nope is not a check graded for x (`grade list --checks` shows the ids); "
+                        "row not applied"]
+    assert ch06.adjustments[0].points == 0  # already at its maximum
+    assert ch06.score == ch06.raw_score / 2 and report.score == 0 and report.raw_score > 0
+    late = Late(datetime(2026, 5, 1, tzinfo=timezone.utc), per_day=0.1, cap=0.25)
+    fresh = copy.deepcopy(solutions_report)
+    overrides.apply(fresh, [], late, datetime(2026, 5, 9, tzinfo=timezone.utc))
+    assert fresh.score == pytest.approx(0.75 * fresh.raw_score)  # capped
+    waived = copy.deepcopy(solutions_report)
+    overrides.apply(waived, [overrides.Override("x", "late", None, 0.0, "extension", "bo", "o.csv, line 6")], late,
+                    datetime(2026, 5, 9, tzinfo=timezone.utc))
+    assert waived.score == waived.raw_score
+
+
+@pytest.mark.parametrize("text, says", [
+    ("quiz_feedback: {default: recorded, ch42: immediate}\n", "line 1: quiz_feedback names 'ch42'"),
+    ("seed: 5\ndeadline: 2026-05-01T23:59:00\n", "line 2: deadline needs its time zone"),
+    ("late_penalty: {per_day: 0.1}\n", "line 1: a late penalty needs a deadline"),
+    ("deadline: 2026-05-01T23:59:00+02:00\nlate_penalty: {per_day: 2}\n", "line 2: per_day and max are shares"),
+    ("handout: 7\n", "line 1: handout is the id of the current handout"),
+])
+def test_a_course_config_that_cannot_be_used_names_its_file_and_line(tmp_path, text, says):
+    from grader import course
+
+    path = tmp_path / "course.yaml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(course.CourseError, match=says):
+        course._from_yaml(path)
+
+
+def test_a_course_config_gives_quiz_feedback_per_chapter_and_the_deadline(tmp_path):
+    from grader import course
+
+    path = tmp_path / "course.yaml"
+    path.write_text("quiz_feedback: {default: immediate, ch06: recorded}\nhandout: 0.1.0+handout.abc\n"
+                    "deadline: 2026-05-01T23:59:00+02:00\nlate_penalty: {per_day: 0.1, max: 0.3, grace_minutes: 10}\n",
+                    encoding="utf-8")
+    loaded = course._from_yaml(path)
+    assert loaded.practice("ch05") and not loaded.practice("ch06") and loaded.current_handout == "0.1.0+handout.abc"
+    at = course.datetime.fromisoformat
+    assert loaded.late.fraction(at("2026-05-02T00:05:00+02:00")) == (0.0, 0)  # within the grace minutes
+    assert loaded.late.fraction(at("2026-05-02T00:10:00+02:00")) == (0.1, 1)  # 11 minutes late, 1 after the grace
+    assert loaded.late.fraction(at("2026-05-05T00:00:00+02:00")) == (0.3, 3)  # capped at max
