@@ -101,12 +101,12 @@ def wrong_answer_text(question, key, wrong, learner, chapter):
     """(the answer text a learner making this known mistake writes, their numbers, the right value);
     None where the mistake makes no difference for this learner."""
     from grader.quiz.judge import right_numbers
-    from grader.quiz.mistakes import learner_names, wrong_value
+    from grader.quiz.mistakes import learner_names, wrong_expression, wrong_value
 
     values = question.values_for(learner, chapter)
     right = key.value_for(chapter, values)
-    if question.kind == "symbolic":
-        return str(wrong["answer"]), values, right
+    if question.kind == "symbolic":  # with this learner's numbers, as they would write it
+        return wrong_expression(question, wrong, values), values, right
     want = right_numbers(right, key, values)
     candidate = wrong_value(wrong, want, learner_names(key, values))
     if candidate is None or np.allclose(candidate, want, rtol=key.rtol, atol=key.atol):

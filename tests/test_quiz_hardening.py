@@ -130,13 +130,19 @@ def _sympy_workers() -> list[int]:
 def test_symbolic_keys_and_known_wrong_answers_agree_with_sympy(chapter, question):
     import sympy
 
+    from grader.quiz.judge import right_answer
+    from grader.quiz.mistakes import wrong_expression
+
     key = bank.keys(chapter)[question.id]
-    right = parse(str(key.answer), question.symbols)
-    for wrong in key.wrong:
-        assert sympy.simplify(parse(str(wrong["answer"]), question.symbols, question.derived) - right) != 0
-        assert not equivalent(str(wrong["answer"]), str(key.answer), question.symbols, question.domain,
-                              derived=question.derived)
-    assert equivalent(str(key.answer), str(right), question.symbols, question.domain)
+    for learner in ("reference", "alice", "bob") if question.params else ("reference",):
+        values = question.values_for(learner, chapter)  # a per-learner key and its mistakes with their numbers
+        answer = right_answer(question, key, key.value_for(chapter, values), values)
+        right = parse(answer, question.symbols)
+        for wrong in key.wrong:
+            mistake = wrong_expression(question, wrong, values)
+            assert sympy.simplify(parse(mistake, question.symbols, question.derived) - right) != 0
+            assert not equivalent(mistake, answer, question.symbols, question.domain, derived=question.derived)
+        assert equivalent(answer, str(right), question.symbols, question.domain)
 
 
 def test_vector_answers_go_through_the_same_whitelist(tmp_path):

@@ -1,5 +1,5 @@
 """bank.public_keys: the keys an immediate-feedback handout may ship (none computed by the
-references), as plain data that bank.keys reads back and grades with."""
+references, none of a per-learner question), as plain data that bank.keys reads back and grades with."""
 
 from __future__ import annotations
 
@@ -32,12 +32,22 @@ def immediate(tmp_path):
 @pytest.mark.parametrize("chapter", ALL)
 def test_public_keys_are_the_stored_keys_and_read_back_unchanged(immediate, chapter):
     every = bank.keys(chapter)
-    stored = {qid for qid, key in every.items() if key.compute is None}
+    fixed = {q.id for q in bank.questions(chapter) if not q.params}
+    stored = {qid for qid, key in every.items() if key.compute is None and qid in fixed}
     assert stored and stored != set(every)  # each chapter has both kinds
     public = bank.public_keys(chapter)
     assert set(public) == stored
     assert not any("compute" in raw for raw in public.values())
     assert bank.keys(chapter, immediate) == {qid: every[qid] for qid in stored}
+
+
+@pytest.mark.parametrize("chapter", ["ch02", "ch03", "ch04", "ch06", "ch07"])
+def test_a_per_learner_symbolic_key_stays_with_the_instructor(chapter):
+    """Written in the question's parameters it is everyone's answer at once: never a practice key."""
+    per_learner = [q.id for q in bank.questions(chapter) if q.kind == "symbolic" and q.params]
+    keys = bank.keys(chapter)
+    assert per_learner and all(keys[qid].compute is None for qid in per_learner)
+    assert not set(per_learner) & set(bank.public_keys(chapter))
 
 
 @pytest.mark.parametrize("chapter", ALL)
@@ -71,7 +81,7 @@ def test_cli_in_an_immediate_handout_judges_public_keys_and_records_the_rest(tmp
     chapter = json.loads(proc.stdout)["chapters"][0]
     statuses = {c["function"]: c["status"] for c in chapter["checks"]}
     assert statuses == {"bearing_near_dish": "pass", "H_at_point": "recorded", "dbearing_dx": "pass",
-                        "bearing_variance": "recorded", "H_facts": "pass"}
+                        "bearing_variance": "recorded", "H_facts": "pass", "dish_dbearing_dx": "recorded"}
     points = {q.id: q.points for q in bank.questions("ch06")}
     assert chapter["score"] == chapter["max_score"] == points["bearing_near_dish"] + points["dbearing_dx"] + 1
-    assert chapter["pending_score"] == points["H_at_point"] + points["bearing_variance"]
+    assert chapter["pending_score"] == points["H_at_point"] + points["bearing_variance"] + points["dish_dbearing_dx"]

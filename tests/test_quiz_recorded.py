@@ -25,6 +25,7 @@ WELL_FORMED = {
     "dbearing_dx": "x*sqrt(y^2 + 1)",
     "bearing_variance": "sqrt(2)/4",
     "H_facts": "b, d",
+    "dish_dbearing_dx": "(x - 1)/((x - 2)^2 + y^2)",
 }
 
 

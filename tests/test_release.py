@@ -309,8 +309,11 @@ def test_an_immediate_feedback_course_ships_practice_keys_of_fixed_questions_onl
         practice = {n: yaml.safe_load(wheel.read(n)) for n in wheel.namelist() if "/practice/" in n}
         assert not [n for n in wheel.namelist() if "/keys/" in n]
     keys = yaml.safe_load((REPO / "quizzes" / "keys" / "ch06.yaml").read_text(encoding="utf-8"))
+    questions = yaml.safe_load((REPO / "quizzes" / "ch06.yaml").read_text(encoding="utf-8"))["questions"]
+    fixed = {q["id"] for q in questions if not q.get("params")}
     shipped = practice["grader/quizzes/practice/ch06.yaml"]
-    assert set(shipped) == {q for q, key in keys.items() if "compute" not in key} and "H_at_point" not in shipped
+    assert set(shipped) == {q for q, key in keys.items() if "compute" not in key and q in fixed}
+    assert "H_at_point" not in shipped and "dish_dbearing_dx" not in shipped  # computed; per learner
     assert release.scan(tmp_path / "out") == []  # practice keys are allowed; nothing else is
 
 
