@@ -219,6 +219,8 @@ def test_the_corpus_is_realistic_in_size_and_spread():
     assert kinds == {"numeric", "vector", "matrix", "symbolic"}
     for chapter, qid, _, learner, _ in QUIZ:
         assert (learner is not None) == bool(_question(chapter, qid).params), (chapter, qid)
+    derivations = {(c.id, q.id) for c in CHAPTERS for q in bank.questions(c.id) if q.kind == "symbolic" and q.params}
+    assert len(derivations) >= 5 and derivations <= {(chapter, qid) for chapter, qid, *_ in QUIZ}
 
 
 @pytest.mark.parametrize("chapter, question, text, learner, wanted", QUIZ,
