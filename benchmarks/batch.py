@@ -63,9 +63,10 @@ def busy_cpu_seconds() -> float | None:
     return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
 
 
-def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict) -> tuple[float, float | None, str]:
-    """(wall seconds, busy CPU seconds, first output lines) of one `grade batch` run."""
-    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out)]  # HTML reports too
+def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict,
+              extra: tuple[str, ...] = ()) -> tuple[float, float | None, str]:
+    """(wall seconds, busy CPU seconds, first output lines) of one `grade batch` run (`extra`: more options)."""
+    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out), *extra]  # HTML too
     command += ["--jobs", str(jobs)] if jobs else []
     cpu_before, started = busy_cpu_seconds(), time.perf_counter()
     proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False, env=env)

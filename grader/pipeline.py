@@ -104,7 +104,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
         from grader.quiz import DEFAULT_LEARNER, other_ids
 
         report.flags += other_ids.explain(report, folder, f"{submission.package}/answers", learner_id,
-                                          [DEFAULT_LEARNER, quiz_learner(folder, None)[0], *request.other_ids])
+                                          [*request.other_ids, quiz_learner(folder, None)[0], DEFAULT_LEARNER])
         for chapter in report.chapters:
             if course.practice(chapter.chapter):
                 practice(chapter)

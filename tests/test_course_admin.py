@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import sqlite3
 import subprocess
 import sys
@@ -56,19 +57,10 @@ def measurement_covariance(x, y, sigma):
         covariance[index, 1 - index] = 0.0
     return covariance
 """
-FRANK_COVARIANCE = """
-def measurement_covariance(x, y, sigma):
-    d2 = float(x) * float(x) + float(y) * float(y)
-    if d2 == 0.0:
-        raise ValueError("the dish itself: no bearing")
-    var = float(sigma) * float(sigma)
-    cov = np.zeros((2, 2), dtype=float)
-    cov[0, 0] = var
-    cov[1, 1] = var / d2
-    for i in range(2):
-        cov[i, 1 - i] = 0.0
-    return cov
-"""  # gina's, its names changed and its comment gone
+RENAMED = {"distance_squared": "d2", "variance": "var", "covariance": "cov", "index": "i"}
+FRANK_COVARIANCE = re.sub(  # gina's, with every name in the body changed and its comment gone
+    r"\b(distance_squared|variance|covariance|index)\b(?!\()", lambda m: RENAMED[m.group(1)],
+    GINA_COVARIANCE.replace("    # the covariance of range and bearing, one entry at a time\n", ""))
 
 
 def _grade(*args: str, cwd: Path = REPO, timeout: float = 600) -> subprocess.CompletedProcess:
