@@ -15,7 +15,8 @@ writes /autograder/results/results.json: a submission without chapter files gets
 a failure outside the learner's code gets score 0 with "NOT GRADED", the reason, and a non-zero exit so
 the instructor sees the run failed. The learner id (their quiz numbers) comes from
 /autograder/submission_metadata.json (the field chosen at build time, email by default); a learner.yaml
-in the submission naming someone else is flagged in the output.
+in the submission naming someone else, quiz answers that fit another id's numbers and what the archive's
+manifest (`grade submit`) says to look at (another handout, edited after packing) are flagged in the output.
 """
 
 from __future__ import annotations
@@ -297,12 +298,17 @@ def run(root: Path) -> int:
                 _write(results, _not_graded(f"the sandbox does not start here: {reason}", started, heading, isolation))
                 print(f"NOT GRADED: the sandbox is required and does not start: {for_terminal(reason)}", flush=True)
                 return 1
-            warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata")
+            from grader import submit
+
+            manifest, packed = submit.check(staged / "exercises", learner, course.id, course.current_handout)
+            warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
             try:
                 report = batch._grade_report(staged, learner, list(settings.chapters), course.grading_seed, False,
-                                             {"learner_seconds": settings.time_budget}, sandboxed, course)
+                                             {"learner_seconds": settings.time_budget}, sandboxed, course,
+                                             other_ids=(str(manifest.get("learner")),) if manifest else ())
             finally:
                 batch._drop_launcher()
+            warnings += report.flags
         if report.infrastructure:
             _write(results, _not_graded(report.infrastructure, started, heading, isolation))
             print(f"NOT GRADED: {for_terminal(report.infrastructure)}", flush=True)

@@ -7,6 +7,7 @@ import html
 import json
 import os
 import signal
+import sqlite3
 import subprocess
 import sys
 import time
@@ -182,10 +183,16 @@ def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissio
     for path in done:
         json.loads(path.read_text())  # every written report is whole
     assert not (out / "gradebook.csv").exists() or _rows(out / "gradebook.csv") is not None
+    with sqlite3.connect(out / "gradebook.db") as db:  # the history kept each learner graded before the kill
+        assert db.execute("SELECT finished FROM runs").fetchall() == [(None,)]
+        recorded = db.execute("SELECT count(*) FROM results WHERE status = 'graded'").fetchone()[0]
+        assert recorded >= len(done) - 1  # the last one may have been killed between its report and its row
     result = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
     assert f"{len(done)} unchanged" in result.output
     rows = _rows(out / "gradebook.csv")
     assert len(rows) == 10 and all(r["status"] in ("graded", "unreadable") for r in rows)
+    with sqlite3.connect(out / "gradebook.db") as db:
+        assert [f is not None for (f,) in db.execute("SELECT finished FROM runs ORDER BY id")] == [False, True]
 
 
 def test_two_submissions_with_the_same_id_keep_both(tmp_path):

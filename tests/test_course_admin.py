@@ -255,6 +255,34 @@ def test_every_json_validates_against_its_schema(course):
             valid("gradescope-results", folder / "results.json")
 
 
+def test_submit_asks_for_the_id_on_a_terminal_and_writes_it_into_learner_yaml(tmp_path):
+    import os
+    import pty
+
+    folder = _learner(tmp_path / "asked", "x", learner_yaml="# your id\nlearner:\n")
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "grader", "submit"], cwd=folder, stdin=slave, stdout=slave,
+                            stderr=slave)
+    os.close(slave)
+    said = b""
+    while b"Your learner id" not in said:
+        said += os.read(master, 4096)
+    os.write(master, b"ada.lovelace\n")
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the terminal closed: the process has ended
+            break
+        if not chunk:
+            break
+        said += chunk
+    assert proc.wait(timeout=300) == 0, said.decode(errors="replace")
+    os.close(master)
+    assert (folder / "exercises" / "answers" / "learner.yaml").read_text(encoding="utf-8") == \
+        "# your id\nlearner: ada.lovelace\n"
+    assert (folder / "ada.lovelace.zip").is_file() and b"check your answers" in said
+
+
 def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
     unset = _learner(tmp_path / "unset", "x", learner_yaml="learner:\n")
     refused = _grade("submit", cwd=unset)

@@ -82,7 +82,7 @@ def _options_chosen(chapter: str, check, learner: str) -> list[str]:
     if question is None or not question.options or not isinstance(check.got, str):
         return []
     lettering = question.lettering(learner, chapter)
-    letters = [x.strip().lower().strip("()") for x in re.split(r"[,\s]+", check.got) if x.strip()]
+    letters = re.findall(r"(?<![a-z])[a-z](?![a-z])", check.got.lower())  # "a, c", "[a, c]", "(b)"
     return sorted({lettering[x] for x in letters if x in lettering})
 
 
