@@ -56,14 +56,17 @@ def replace_functions(module: str, replacements: dict[str, str]) -> str:
     return text
 
 
-def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, timeout: float = 120) -> tuple[int, str]:
-    """Run `command` with stdout and stderr on a pseudo-terminal; (exit status, everything it wrote)."""
+def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, timeout: float = 120,
+                    reply: tuple[bytes, bytes] | None = None) -> tuple[int, str]:
+    """Run `command` with stdout and stderr on a pseudo-terminal; (exit status, everything it wrote). With
+    `reply` (prompt, answer) its standard input is the terminal too, and the answer is typed once the prompt
+    shows."""
     import os
     import pty
     import subprocess
 
     master, slave = pty.openpty()
-    proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=slave, stderr=slave)
+    proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=slave, stderr=slave, stdin=slave if reply else None)
     os.close(slave)
     chunks = []
     while True:
@@ -74,6 +77,9 @@ def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, time
         if not chunk:
             break
         chunks.append(chunk)
+        if reply and reply[0] in b"".join(chunks):
+            os.write(master, reply[1])
+            reply = None
     proc.wait(timeout=timeout)
     os.close(master)
     return proc.returncode, b"".join(chunks).decode(errors="replace")

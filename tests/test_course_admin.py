@@ -26,7 +26,7 @@ import pytest
 
 from benchmarks.misconceptions import CODE
 from grader.quiz.templates import reference_answers
-from tests.conftest import REPO, build_submission, replace_function
+from tests.conftest import REPO, build_submission, replace_function, run_on_terminal
 
 CHAPTER = "ch06"
 CURRENT, OLDER = "0.1.0+handout.c0ffee000001", "0.1.0+handout.0bad00000000"
@@ -256,31 +256,13 @@ def test_every_json_validates_against_its_schema(course):
 
 
 def test_submit_asks_for_the_id_on_a_terminal_and_writes_it_into_learner_yaml(tmp_path):
-    import os
-    import pty
-
     folder = _learner(tmp_path / "asked", "x", learner_yaml="# your id\nlearner:\n")
-    master, slave = pty.openpty()
-    proc = subprocess.Popen([sys.executable, "-m", "grader", "submit"], cwd=folder, stdin=slave, stdout=slave,
-                            stderr=slave)
-    os.close(slave)
-    said = b""
-    while b"Your learner id" not in said:
-        said += os.read(master, 4096)
-    os.write(master, b"ada.lovelace\n")
-    while True:
-        try:
-            chunk = os.read(master, 4096)
-        except OSError:  # the terminal closed: the process has ended
-            break
-        if not chunk:
-            break
-        said += chunk
-    assert proc.wait(timeout=300) == 0, said.decode(errors="replace")
-    os.close(master)
+    status, said = run_on_terminal([sys.executable, "-m", "grader", "submit"], folder, timeout=300,
+                                   reply=(b"Your learner id", b"ada.lovelace\n"))
+    assert status == 0, said
     assert (folder / "exercises" / "answers" / "learner.yaml").read_text(encoding="utf-8") == \
         "# your id\nlearner: ada.lovelace\n"
-    assert (folder / "ada.lovelace.zip").is_file() and b"check your answers" in said
+    assert (folder / "ada.lovelace.zip").is_file() and "check your answers" in said
 
 
 def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
