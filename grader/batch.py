@@ -534,6 +534,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     done = 0
     limits = limits or {}
     history = histories.History(out / histories.FILE_NAME)
+    states: dict[str, tuple] = {}  # learner -> _learner_state, read once
     run = history.start(provenance.grader_version(), course.current_handout if course else None,
                         course.id if course else None, seed, chapters)
     try:
@@ -547,14 +548,15 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                     _, statuses[learner], messages[learner] = future.result()
                 except Exception as exc:  # one broken submission never stops the batch
                     statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
-                history.record(run, _learner_state(out, learner, statuses[learner], messages[learner])[0])
+                states[learner] = _learner_state(out, learner, statuses[learner], messages[learner])
+                history.record(run, states[learner][0])
                 done += 1
                 if progress:
                     progress(done, len(entries), time.monotonic() - started)
         isolation = isolation_line(sandboxed)
         summary = rebuild(out, history, run, [e.learner for e in entries], chapters, statuses, messages, skipped,
                           isolation, lms_layouts, rows, override_problems, similarity=similarity,
-                          deadline=bool(course and course.late))
+                          deadline=bool(course and course.late), states=states)
     finally:
         history.close()
     counts: dict[str, int] = {}
@@ -618,18 +620,21 @@ def _learner_state(out: Path, learner: str, status: str, message: str):
 
 def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
             skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(),
-            override_problems: list[str] = (), similarity: bool = False, deadline: bool = False) -> dict:
+            override_problems: list[str] = (), similarity: bool = False, deadline: bool = False,
+            states: dict | None = None) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
     and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
     kept as gradebook.edited-<time>.csv (it is an export: changes belong in overrides.csv) and said so.
-    Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
+    `states` holds what _learner_state read already, by learner. Returns what was flagged per learner, the
+    changes, the similar pairs and notes for the instructor."""
     from grader import history as histories
     from grader.render import lms, summary
 
     results, reports, extras, flagged, not_graded = [], [], {}, {}, {}
     for learner in learners:
-        result, report, batch = _learner_state(out, learner, statuses.get(learner, "graded"), messages.get(learner, ""))
+        result, report, batch = (states or {}).get(learner) or _learner_state(
+            out, learner, statuses.get(learner, "graded"), messages.get(learner, ""))
         results.append(result)
         if report is None:
             not_graded[learner] = result.message

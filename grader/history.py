@@ -85,6 +85,10 @@ class History:
         self.path = path
         self.db = sqlite3.connect(path, timeout=30)
         self.db.row_factory = sqlite3.Row
+        # write-ahead log: a commit survives the grader being killed without waiting for the disk each time
+        # (only a power cut may lose the last commits; report.json has them too)
+        self.db.execute("PRAGMA journal_mode=WAL")
+        self.db.execute("PRAGMA synchronous=NORMAL")
         with self.db:
             self.db.executescript(SCHEMA)
 

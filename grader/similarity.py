@@ -7,9 +7,11 @@ top-level function and whole. What everyone shares counts for nothing:
 - the public stubs (signatures, docstrings, the lines handed out) are copydetect's boilerplate;
 - a fingerprint that more than half the class has (a three-line H_jacobian written the one way it can
   be written) is discounted as well, since it tells nothing about any pair.
-A pair's score is the share of their remaining code they have in common, summed over the functions both
-wrote and weighed by each function's size: a long function shared counts for much, a short one little.
-The whole files' share is given beside it. The top pairs come with the lines they share.
+A pair's score is the share of their remaining fingerprints they have in common, summed over the
+functions both wrote, so that each function weighs by its size: a long function shared counts for much,
+a short one little. The whole files' share is given beside it. Only pairs that share a distinctive
+fingerprint are scored (an inverted index, as MOSS does); the top pairs come with the lines they share,
+found by copydetect's comparison.
 
 Needs the `similarity` extra (`pip install "jacobians-grader[similarity]"`, i.e. copydetect).
 """
@@ -17,6 +19,7 @@ Needs the `similarity` extra (`pip install "jacobians-grader[similarity]"`, i.e.
 from __future__ import annotations
 
 import ast
+import functools
 import io
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
@@ -36,7 +39,7 @@ class SimilarityUnavailable(RuntimeError):
 class Pair:
     first: str
     second: str
-    score: float  # size-weighted share of their distinctive code in common, 0..1
+    score: float  # share of their distinctive fingerprints in common, functions weighed by size, 0..1
     files_score: float  # the same for their whole files
     functions: list[str] = field(default_factory=list)  # the functions most alike, most first
     shared: list[str] = field(default_factory=list)  # blocks of lines they share (the first learner's text)
@@ -64,13 +67,22 @@ def _functions(source: str) -> dict[str, str]:
         tree = ast.parse(source)
     except (SyntaxError, ValueError):
         return {}
-    return {node.name: ast.get_source_segment(source, node) or "" for node in tree.body
+    lines = source.splitlines()
+    return {node.name: "\n".join(lines[node.lineno - 1:node.end_lineno]) for node in tree.body
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))}
 
 
-def _fingerprint(text: str, boilerplate):
+def _fingerprinter(boilerplate):
+    """A function text -> copydetect fingerprint, each distinct text tokenized once (a function written the
+    same way by many learners, an untouched stub file)."""
     CodeFingerprint, _ = _engine()
-    return CodeFingerprint("code.py", NOISE, GUARANTEE - NOISE + 1, boilerplate=boilerplate, fp=io.StringIO(text))
+
+    @functools.lru_cache(maxsize=None)
+    def fingerprint(text: str):
+        return CodeFingerprint("code.py", NOISE, GUARANTEE - NOISE + 1, boilerplate=boilerplate,
+                               fp=io.StringIO(text), language="python")
+
+    return fingerprint
 
 
 def _stub_hashes(stubs: Path | None) -> list:
@@ -80,7 +92,8 @@ def _stub_hashes(stubs: Path | None) -> list:
     CodeFingerprint, _ = _engine()
     hashes: set = set()
     for path in sorted(stubs.glob("ch0*.py")) if stubs else []:
-        hashes |= CodeFingerprint(str(path), NOISE, 1, fp=io.StringIO(path.read_text(encoding="utf-8"))).hashes
+        hashes |= CodeFingerprint(str(path), NOISE, 1, fp=io.StringIO(path.read_text(encoding="utf-8")),
+                                  language="python").hashes
     return np.array(sorted(hashes))
 
 
@@ -92,6 +105,11 @@ def _without(fingerprint, common: set) -> None:
     fingerprint.hash_idx = {h: i for h, i in fingerprint.hash_idx.items() if h not in common}
     fingerprint.token_coverage = get_token_coverage(fingerprint.hash_idx, fingerprint.k,
                                                     len(fingerprint.filtered_code))
+
+
+def _shared(one, two) -> tuple[int, int]:
+    """(fingerprints two parts share, the fingerprints of the smaller): a long part weighs more than a short one."""
+    return len(one.hashes & two.hashes), min(len(one.hashes), len(two.hashes))
 
 
 def _shared_lines(fingerprint, slices, limit: int = 3) -> list[str]:
@@ -119,56 +137,46 @@ def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int
             stubs = _project_exercises()
         except ReleaseError:
             stubs = None
-    boilerplate = _stub_hashes(stubs)
+    fingerprint = _fingerprinter(_stub_hashes(stubs))
     prints: dict[str, dict[str, object]] = {}  # learner -> "chNN_module.function" (and "chNN_module" whole) -> fp
     for learner in learners:
         package = staging / folder_name(learner) / "exercises"
         mine: dict[str, object] = {}
         for path in sorted(package.glob("ch0*.py")):
             source = path.read_text(encoding="utf-8", errors="replace")
-            mine[path.stem] = _fingerprint(source, boilerplate)
+            mine[path.stem] = fingerprint(source)
             for name, text in _functions(source).items():
-                mine[f"{path.stem}.{name}"] = _fingerprint(text, boilerplate)
+                mine[f"{path.stem}.{name}"] = fingerprint(text)
         prints[learner] = mine
     holders: Counter = Counter()
     for mine in prints.values():
         holders.update(set().union(*(fp.hashes for part, fp in mine.items() if "." in part)) if mine else set())
     common = {h for h, n in holders.items() if n > max(2, COMMON_SHARE * len(prints))}
-    candidates: dict[tuple[str, str], int] = Counter()
+    candidates: set[tuple[str, str]] = set()
     by_hash: dict = defaultdict(set)
+    filtered: set[int] = set()
     for learner, mine in prints.items():
         for fp in mine.values():
-            _without(fp, common)
+            if id(fp) not in filtered:  # one fingerprint may serve many learners
+                _without(fp, common)
+                filtered.add(id(fp))
             for h in fp.hashes:
                 by_hash[h].add(learner)
     for owners in by_hash.values():
         if 1 < len(owners) <= max(2, COMMON_SHARE * len(prints)):
-            for a in owners:
-                for b in owners:
-                    if a < b:
-                        candidates[(a, b)] += 1
+            candidates.update((a, b) for a in owners for b in owners if a < b)
     pairs = []
-    for a, b in candidates:
-        shared_tokens = possible = 0.0
-        alike = []
-        for part in sorted(set(prints[a]) & set(prints[b])):
-            if "." not in part:
-                continue
-            one, two = prints[a][part], prints[b][part]
-            size = min(one.token_coverage, two.token_coverage)
-            if size <= 0:
-                continue
-            overlap, (share_one, share_two), _ = compare_files(one, two)
-            shared_tokens += size * (share_one + share_two) / 2
-            possible += size
-            if overlap:
-                alike.append(((share_one + share_two) / 2 * size, part))
+    for a, b in candidates:  # ranked by shared fingerprints (as MOSS ranks), lines by copydetect for the top
+        both = set(prints[a]) & set(prints[b])
+        functions = [(_shared(prints[a][part], prints[b][part]), part) for part in sorted(both) if "." in part]
+        files = [_shared(prints[a][part], prints[b][part]) for part in both if "." not in part]
+        possible = sum(size for (_, size), _ in functions)
         if not possible:
             continue
-        files = [(prints[a][m], prints[b][m]) for m in set(prints[a]) & set(prints[b]) if "." not in m]
-        file_shares = [compare_files(x, y)[1] for x, y in files if x.token_coverage and y.token_coverage]
-        files_score = sum((s1 + s2) / 2 for s1, s2 in file_shares) / len(file_shares) if file_shares else 0.0
-        pairs.append(Pair(a, b, shared_tokens / possible, files_score, [p for _, p in sorted(alike, reverse=True)]))
+        files_possible = sum(size for _, size in files)
+        pairs.append(Pair(a, b, sum(shared for (shared, _), _ in functions) / possible,
+                          sum(shared for shared, _ in files) / files_possible if files_possible else 0.0,
+                          [part for (shared, _), part in sorted(functions, key=lambda f: (-f[0][0], f[1])) if shared]))
     pairs.sort(key=lambda p: (-p.score, -p.files_score, p.first, p.second))
     for pair in pairs[:top]:
         for part in pair.functions[:3]:

@@ -13,6 +13,7 @@ at). Self-contained HTML; learner text escaped.
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 import statistics
@@ -52,6 +53,10 @@ class Summary:
     changes: list[tuple] = field(default_factory=list)  # (learner, before, after, delta, why)
     notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
     similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
+
+    @functools.cached_property
+    def counts(self) -> dict:
+        return tally(self)
 
 
 # ------------------------------------------------------------------------------------ what is counted
@@ -179,7 +184,7 @@ def _handouts(view: Summary) -> dict[str, int]:
 
 def as_json(view: Summary) -> str:
     """summary.json (grader/schemas/summary.schema.json)."""
-    counts = tally(view)
+    counts = view.counts
     scores = [r.score for _, r in view.reports]
     first = view.reports[0][1] if view.reports else None
     data = {
@@ -219,7 +224,7 @@ def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]]
 
 def render(view: Summary) -> str:
     """summary.html."""
-    counts = tally(view)
+    counts = view.counts
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
              f"<p>{_count(len(view.reports), 'learner')} graded; {len(view.not_graded)} could not be graded; "
