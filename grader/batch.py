@@ -47,7 +47,7 @@ MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
 CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
-                 "changes.csv", "summary.json", "gradebook.db", "overrides.csv", "similarity")
+                 "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
 _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
 _MAX_FOLDER = 160
 _BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
