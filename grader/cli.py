@@ -381,6 +381,15 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
         return
     report, _ = quiz_report([c.id for c in picked], submission.root, submission.package,
                             str(submission.root), learner)
+    from grader import course, provenance
+    from grader.pipeline import practice
+    from grader.quiz import answers_dir, learner_id
+
+    the_course = course.current() if course.in_handout() else course.Course()
+    for chapter in report.chapters:
+        if the_course.practice(chapter.chapter):
+            practice(chapter)
+    provenance.stamp(report, the_course, learner_id(answers_dir(submission.root, submission.package), learner)[0])
     _emit(report, output_format, verbose=False)
 
 
