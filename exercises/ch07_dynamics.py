@@ -77,9 +77,9 @@ def bicycle_control_jacobian(state, v, steer, wheelbase, dt):
 def control_noise_covariance(state, v, steer, wheelbase, dt, sigma_v, sigma_steer):
     """The process noise Q that noisy controls add in one step.
 
-    Formula: V diag(sigma_v^2, sigma_steer^2) V^T, V = bicycle_control_jacobian(state, v, steer,
-    wheelbase, dt): independent noise of standard deviation sigma_v on the speed and sigma_steer on
-    the steering angle, carried into the state.
+    Formula: V diag(sigma_v^2, sigma_steer^2) V^T, with V the control Jacobian at these arguments (as
+    bicycle_control_jacobian gives it): independent noise of standard deviation sigma_v on the speed
+    and sigma_steer on the steering angle, carried into the state.
     Arguments: as bicycle_model, plus sigma_v, sigma_steer >= 0.
     Returns: a numpy array of shape (3, 3), symmetric positive semi-definite.
     Example: at the point of bicycle_control_jacobian's example with sigma_v = 0.5 and

@@ -55,7 +55,7 @@ def sample_covariance(z):
 
     Arguments: z an n x 2 array.
     Returns: a numpy array of shape (2, 2), equal to np.cov(z.T).
-    Example: sample_covariance([[0, 0], [2, 2]]) -> [[2, 2], [2, 2]]
+    Example: sample_covariance([[0, 0], [1, 3], [2, 0]]) -> [[1, 0], [0, 3]]
     """
     raise NotImplementedError
 

@@ -59,7 +59,7 @@ def g_stage_random_points(ctx):
 
 
 def _u_point(rng: np.random.Generator) -> np.ndarray:
-    """A planar point with u2 at least 0.1 from 1, where Jg = [[2u1, 1], [u2, u1]] would be symmetric."""
+    """A planar point with u2 at least 0.1 from 1, where g's Jacobian would be symmetric."""
     while True:
         u = planar_point(rng)
         if abs(u[1] - 1.0) >= 0.1:

@@ -167,8 +167,8 @@ H3_SLIPS = {
                           "lowers the elevation of a point above the plane.",
     "bearing over r^2": "the bearing row is divided by the 3-D r^2: the bearing sees only the horizontal distance, "
                         "x^2 + y^2.",
-    "elevation over rho^2": "the elevation row is divided by x^2 + y^2: differentiating atan2(z, rho) gives "
-                            "1 / (rho^2 + z^2) = 1 / r^2 as its outer factor.",
+    "elevation over rho^2": "the elevation row is divided by x^2 + y^2: the outer derivative of atan2(z, rho) "
+                            "divides by rho^2 + z^2, the 3-D range squared.",
 }
 
 

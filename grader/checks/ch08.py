@@ -204,7 +204,7 @@ def linearized_cov_worked_example(ctx):
 
 @CHECKS.check("linearized_measurement_cov", points=1)
 def linearized_cov_random_points(ctx):
-    """linearized_measurement_cov = H (sigma^2 I) H^T = sigma^2 diag(1, 1/r^2) at random points and sigmas"""
+    """linearized_measurement_cov = H (sigma^2 I) H^T at random points and sigmas"""
     rng = ctx.rng
     cases = [(float(x), float(y), _sigma(rng)) for x, y in (planar_point(rng) for _ in range(5))]
     cases.append((-2, 5, 1.5))
