@@ -80,6 +80,32 @@ def ch04_pipeline(ctx):
             "image": image, "center": center}
 
 
+LIDAR_POSE = (5.0, 3.0, 0.6)  # px, py, phi of the robot that scans the room (apart from the scan as seen)
+ROOM = (-1.5, 3.0, -1.0, 2.0)  # the room's walls in the robot's frame: x from -1.5 to 3, y from -1 to 2
+
+
+def _room_range(theta: float) -> float:
+    """The range at which a ray from the lidar at angle theta meets the room's walls (the scan's input)."""
+    c, s = np.cos(theta), np.sin(theta)
+    x_low, x_high, y_low, y_high = ROOM
+    hits = [wall / c for wall in (x_low, x_high) if c and wall / c > 0] + \
+           [wall / s for wall in (y_low, y_high) if s and wall / s > 0]
+    return float(min(hits))
+
+
+def ch04_lidar_world(ctx):
+    """A lidar scan of a room, as the lidar sees it, and moved into the world frame by the learner's lidar_to_world
+    (the reference's in its place where the learner's gives nothing usable)."""
+    ref = reference("ch04")
+    scan = [(_room_range(t), float(t)) for t in np.linspace(-np.pi, np.pi, 48, endpoint=False)]
+    local = [_list(ref.polar_to_cartesian(r, t)) for r, t in scan]
+    world = [_list(ref.lidar_to_world(r, t, LIDAR_POSE)) for r, t in scan]
+    got = yield [call("lidar_to_world", r, t, LIDAR_POSE) for r, t in scan]
+    learner = [_value(g, (2,)) for g in got]
+    return {"plot": "lidar_world", "pose": list(LIDAR_POSE), "local": local,
+            "learner": None if any(v is None for v in learner) else learner, "reference": world}
+
+
 def ch05_error_vs_h(ctx):
     ref = reference("ch05")
     hs = np.geomspace(1e-13, 1e-1, 25)
@@ -161,7 +187,7 @@ PLOTS = {
     "ch01": [("tangent", ch01_tangent)],
     "ch02": [("gradients", ch02_gradients)],
     "ch03": [("circle", ch03_circle)],
-    "ch04": [("pipeline", ch04_pipeline)],
+    "ch04": [("pipeline", ch04_pipeline), ("lidar_world", ch04_lidar_world)],
     "ch05": [("error_vs_h", ch05_error_vs_h)],
     "ch06": [("bearing_sensitivity", ch06_bearing_sensitivity)],
     "ch07": [("ellipse", ch07_ellipse)],

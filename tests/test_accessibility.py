@@ -235,8 +235,11 @@ def test_differing_matrix_entries_are_said_in_words(reports):
 
 
 def _alts(path: Path) -> dict[str, str]:
-    """The plots' alt texts by chapter."""
-    return {image["alt"].split(" ", 1)[0]: image["alt"] for image in _parts(path.read_text(encoding="utf-8")).images}
+    """The plots' alt texts by chapter (a chapter's several plots' joined by ' | ')."""
+    alts: dict[str, list[str]] = {}
+    for image in _parts(path.read_text(encoding="utf-8")).images:
+        alts.setdefault(image["alt"].split(" ", 1)[0], []).append(image["alt"])
+    return {chapter: " | ".join(texts) for chapter, texts in alts.items()}
 
 
 def test_plots_say_in_numbers_what_the_learners_functions_gave(reports):

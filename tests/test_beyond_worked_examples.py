@@ -21,7 +21,12 @@ from grader.model import Status
 from grader.runner import Session
 from grader.submission import Submission
 from grader.wire import Array
-from tests.conftest import BEYOND_THE_WORKED_EXAMPLES, REPO, build_submission, replace_function
+from tests.conftest import (
+    BEYOND_THE_WORKED_EXAMPLES,
+    REPO,
+    build_submission,
+    replace_function,
+)
 
 sys.path.insert(0, str(REPO / "benchmarks"))
 from misconceptions import CODE  # noqa: E402
@@ -115,3 +120,29 @@ def test_graded_inputs_keep_away_from_the_singular_points(seed):
                     continue
                 for c in calls:
                     assert not _outside(c.function, c.args), (check.id, c.label, _outside(c.function, c.args))
+
+
+def test_the_lidar_scan_is_drawn_in_the_world_frame_from_the_learners_lidar_to_world(tmp_path):
+    """ch04's second plot: the learner's lidar_to_world moves a scan into the world (a point not rotated by the
+    heading lands elsewhere, and the text says where); without a usable function the reference is drawn."""
+    from grader.render.html import figures
+
+    module, function, source, _ = CODE["lidar point not rotated"]
+    unrotated = build_submission(tmp_path / "bug", {module: replace_function(module, function, source)})
+    for root, package, whose in ((REPO, "solutions", "drawn from your lidar_to_world"),
+                                 (unrotated, "exercises", "drawn from your lidar_to_world"),
+                                 (REPO, "exercises", "shows the reference only")):
+        chapter = grade(Session(Submission(root, package)), ["ch04"], with_plots=True).chapters[0]
+        data = chapter.plots["lidar_world"]
+        drawn = [f for f in figures(chapter) if "lidar scan" in f.caption]
+        assert len(drawn) == 1 and drawn[0].uri.startswith("data:image/svg+xml;base64,") and whose in drawn[0].caption
+        if package == "solutions":
+            assert np.allclose(data["learner"], data["reference"])
+        elif root == unrotated:
+            learner, reference = np.asarray(data["learner"]), np.asarray(data["reference"])
+            assert not np.allclose(learner, reference) and np.allclose(learner.mean(0), np.asarray(data["local"]).mean(0)
+                                                                       + np.asarray(data["pose"][:2]))
+            x, y = learner.mean(0)
+            assert f"your lidar_to_world put the 48 returns around [{x:.4g}, {y:.4g}] (reference: [" in drawn[0].gave
+        else:
+            assert data["learner"] is None

@@ -271,6 +271,24 @@ def _draw_ch04(ax, d):
                "Jacobian (dashed); " + _whose(ok, "pipeline_jacobian")
 
 
+def _draw_lidar_world(ax, d):
+    """ch04's second plot (grader.plots.ch04_lidar_world): a lidar scan moved into the world frame."""
+    ok = d["learner"] is not None
+    local, world = np.asarray(d["local"], dtype=float), np.asarray(d["learner"] if ok else d["reference"], dtype=float)
+    px, py, phi = d["pose"]
+    ax.plot(local[:, 0], local[:, 1], "+", color=GUIDE, ms=4, linestyle="none", label="the scan, as the lidar sees it")
+    ax.plot(world[:, 0], world[:, 1], "o" if ok else "x", color=LEARNER if ok else REFERENCE, ms=3, linestyle="none",
+            label="in the world, by your lidar_to_world" if ok else "in the world, by the reference")
+    ax.plot([px], [py], "^", color="black", linestyle="none", label="the robot (arrow: its heading)")
+    ax.annotate("", xy=(px + np.cos(phi), py + np.sin(phi)), xytext=(px, py),
+                arrowprops={"arrowstyle": "->", "color": "black"})
+    ax.set(aspect="equal", xlabel="x", ylabel="y", title="A lidar scan moved into the world frame")
+    ax.legend(fontsize=7, loc="upper left")
+    return ok, (f"A lidar scan of a room (crosses, in the lidar's own frame) moved into the world frame for the robot "
+                f"at ({px:g}, {py:g}) heading {phi:g} rad: the room turns by the heading and moves to the robot; "
+                + _whose(ok, "lidar_to_world"))
+
+
 def _draw_ch05(ax, d):
     h = np.array(d["h"])
     ok = d["forward"] is not None and d["central"] is not None
@@ -405,6 +423,15 @@ def _gave_ch04(d) -> str:
     return f"your pipeline_jacobian({_g(r)}, {_g(theta)}) gave {_g(d['learner'])} (reference: {_g(d['reference'])})"
 
 
+def _gave_lidar_world(d) -> str:
+    def centre(points):
+        return None if points is None else np.asarray(points, dtype=float).mean(axis=0).tolist()
+
+    return (f"your lidar_to_world put the {len(d['reference'])} returns around {_g(centre(d['learner']))} "
+            f"(reference: {_g(centre(d['reference']))}); the first at {_g(_at(d['learner'], 0))} "
+            f"(reference: {_g(d['reference'][0])})")
+
+
 def _gave_ch05(d) -> str:
     return (_curve("forward_difference's error", "h", d["h"], d["forward"], d["forward_ref"]) + "; " +
             _curve("central_difference's error", "h", d["h"], d["central"], d["central_ref"]))
@@ -449,12 +476,14 @@ def _gave_any(d) -> str:
 
 _GAVE = {"ch00": _gave_ch00, "ch01": _gave_ch01, "ch02": _gave_ch02, "ch03": _gave_ch03, "ch04": _gave_ch04,
          "ch05": _gave_ch05, "ch06": _gave_ch06, "ch07": _gave_ch07, "ch08": _gave_ch08, "ch09": _gave_ch09}
+# a chapter's further plots, by the "plot" their data names (drawer, describer)
+_NAMED = {"lidar_world": (_draw_lidar_world, _gave_lidar_world)}
 
 
 def gave(chapter: str, data: dict) -> str:
     """What the learner's own functions gave for one plot, in numbers ('' if that cannot be said)."""
     try:
-        said = _GAVE.get(chapter, _gave_any)(data)
+        said = (_NAMED[data["plot"]][1] if "plot" in data else _GAVE.get(chapter, _gave_any))(data)
     except (KeyError, IndexError, TypeError, ValueError):
         return ""
     return f"In numbers: {said}." if said else ""
@@ -491,7 +520,7 @@ def draw(chapter_id: str, data: dict):
     fig = plt.figure(figsize=(9, 3.4) if chapter_id in _TWO_PANELS else (6, 3.6))
     try:
         target = fig if chapter_id in _TWO_PANELS else fig.add_subplot()
-        _, caption = _DRAW[chapter_id](target, data)
+        _, caption = (_NAMED[data["plot"]][0] if "plot" in data else _DRAW[chapter_id])(target, data)
         _plain_log_labels(fig)
         fig.subplots_adjust(left=0.1, right=0.97, bottom=0.15, top=0.9, wspace=0.28)
     except BaseException:
