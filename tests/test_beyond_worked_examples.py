@@ -146,3 +146,28 @@ def test_the_lidar_scan_is_drawn_in_the_world_frame_from_the_learners_lidar_to_w
             assert f"your lidar_to_world put the 48 returns around [{x:.4g}, {y:.4g}] (reference: [" in drawn[0].gave
         else:
             assert data["learner"] is None
+
+
+def test_the_readme_lists_every_function_with_its_points():
+    """README's table of chapters says what the registry grades: each function's points, the exact-derivative
+    ones starred, the maps beyond the worked examples in italics, and each chapter's total."""
+    import re
+
+    rows = {}
+    for line in (REPO / "README.md").read_text(encoding="utf-8").splitlines():
+        match = re.match(r"\| (ch\d\d) [^|]+\| (.+) \| (\d+) \|$", line)
+        if match:
+            rows[match[1]] = (match[2], float(match[3]))
+    assert sorted(rows) == sorted(BY_ID)
+    for chapter_id, (functions, total) in rows.items():
+        chapter = check_registry.load(chapter_id)
+        assert total == chapter.max_score, chapter_id
+        listed = {}
+        for name, points, star in re.findall(r"\*?(\w+)\*? \((\d+)(\*?)\)", functions):
+            listed[name] = (float(points), star == "*", f"*{name}*" in functions)
+        expected = {}
+        for check in chapter.checks:
+            points, exact, _ = expected.get(check.function, (0.0, False, False))
+            expected[check.function] = (points + check.points, exact or check.exact_derivative,
+                                        check.function in BEYOND_THE_WORKED_EXAMPLES.get(chapter_id, ()))
+        assert listed == expected, chapter_id
