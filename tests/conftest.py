@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib.util
+import os
 import re
 import sys
 import textwrap
@@ -12,6 +14,11 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
+
+HAVE_JAX = importlib.util.find_spec("jax") is not None  # found, not imported: importing it takes a second
+# the autograd route's tests need jax (CI installs it with the test extras)
+needs_jax = pytest.mark.skipif(not HAVE_JAX and not os.environ.get("CI"),
+                               reason="jax is not installed here (CI installs it with the test extras)")
 
 # the contract's "Beyond the worked examples": per chapter, the maps the lesson does not work out
 BEYOND_THE_WORKED_EXAMPLES = {

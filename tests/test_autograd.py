@@ -7,24 +7,13 @@ what cannot be converted gets a message that says how. Real subprocesses, the re
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, build_submission, replace_function
-
-try:
-    import jax  # noqa: F401
-
-    HAVE_JAX = True
-except ImportError:
-    HAVE_JAX = False
-
-needs_jax = pytest.mark.skipif(not HAVE_JAX and not os.environ.get("CI"),
-                               reason="jax is not installed here (CI installs it with the test extras)")
+from tests.conftest import HAVE_JAX, REPO, build_submission, needs_jax, replace_function
 
 
 def _jax_module(module: str, function: str, body: str, x64: bool) -> str:

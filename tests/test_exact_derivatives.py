@@ -7,7 +7,6 @@ recorded in its handout. Real child processes, real files."""
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import pytest
@@ -20,17 +19,13 @@ from grader.model import Status
 from grader.pipeline import Request, build_report
 from grader.runner import Session
 from grader.submission import Submission
-from tests.conftest import build_submission, replace_function, replace_functions
-
-try:
-    import jax  # noqa: F401
-
-    HAVE_JAX = True
-except ImportError:
-    HAVE_JAX = False
-
-needs_jax = pytest.mark.skipif(not HAVE_JAX and not os.environ.get("CI"),
-                               reason="jax is not installed here (CI installs it with the test extras)")
+from tests.conftest import (
+    HAVE_JAX,
+    build_submission,
+    needs_jax,
+    replace_function,
+    replace_functions,
+)
 
 DERIVATIVE_CHAPTERS = ("ch02", "ch03", "ch04", "ch06", "ch07")
 

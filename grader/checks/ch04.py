@@ -225,14 +225,22 @@ def lidar_to_world_random_points(ctx):
                           mistakes=s) for g, want, s, case in zip(got, expected, slips, cases)])
 
 
-@CHECKS.check("lidar_to_world_jacobian", points=2)
-def lidar_to_world_jacobian_worked_example(ctx):
-    """lidar_to_world_jacobian(1, 0, pose=(1, 2, pi/2)) is [[0, -1], [1, 0]]"""
-    pose = (1.0, 2.0, np.pi / 2)
-    want, slips = REF.lidar_to_world_jacobian(1, 0, pose), REF.lidar_jacobian_mistakes(1, 0, pose)
-    got = yield call("lidar_to_world_jacobian", 1, 0, pose)
-    return expect(got, want, label="lidar_to_world_jacobian(1, 0, (1, 2, pi/2))", entries=J_LIDAR, rtol=1e-9,
-                  mistakes=known(slips, LIDAR_JACOBIAN_SLIPS))
+def _lidar_worked_example(function: str, entries: Entries, slips: str, helps: dict, value: str) -> None:
+    """Register `function`'s check at the contract's point, return (1, 0) at pose (1, 2, pi/2), where it is `value`;
+    a wrong answer is named by the reference's `slips` there."""
+    def worked_example(ctx):
+        pose = (1.0, 2.0, np.pi / 2)
+        want, mistakes = getattr(REF, function)(1, 0, pose), known(getattr(REF, slips)(1, 0, pose), helps)
+        got = yield call(function, 1, 0, pose)
+        return expect(got, want, label=f"{function}(1, 0, (1, 2, pi/2))", entries=entries, rtol=1e-9,
+                      mistakes=mistakes)
+
+    CHECKS.check(function, 2, description=f"{function}(1, 0, pose=(1, 2, pi/2)) is {value}",
+                 id=f"{function}_worked_example")(worked_example)
+
+
+_lidar_worked_example("lidar_to_world_jacobian", J_LIDAR, "lidar_jacobian_mistakes", LIDAR_JACOBIAN_SLIPS,
+                      "[[0, -1], [1, 0]]")
 
 
 add_derivative_checks(CHECKS, Derivative(
@@ -260,14 +268,7 @@ add_exact_check(CHECKS, "lidar_to_world_jacobian", J_LIDAR, _lidar_exact_cases, 
                 LIDAR_EXACT_WHERE)
 
 
-@CHECKS.check("lidar_pose_jacobian", points=2)
-def lidar_pose_jacobian_worked_example(ctx):
-    """lidar_pose_jacobian(1, 0, pose=(1, 2, pi/2)) is [[1, 0, -1], [0, 1, 0]]"""
-    pose = (1.0, 2.0, np.pi / 2)
-    want, slips = REF.lidar_pose_jacobian(1, 0, pose), REF.lidar_pose_mistakes(1, 0, pose)
-    got = yield call("lidar_pose_jacobian", 1, 0, pose)
-    return expect(got, want, label="lidar_pose_jacobian(1, 0, (1, 2, pi/2))", entries=J_POSE, rtol=1e-9,
-                  mistakes=known(slips, POSE_SLIPS))
+_lidar_worked_example("lidar_pose_jacobian", J_POSE, "lidar_pose_mistakes", POSE_SLIPS, "[[1, 0, -1], [0, 1, 0]]")
 
 
 add_derivative_checks(CHECKS, Derivative(

@@ -244,24 +244,32 @@ def propagate_result_is_symmetric_psd(ctx):
         cases.append((P, _transpose_sensitive_F(rng, P, singular)))
     got = yield [call("propagate_covariance", Array(P.tolist()), Array(Fm.tolist())) for P, Fm in cases]
     for g, (P, Fm) in zip(got, cases):
-        label = _label(P, Fm)
-        problem = value_problem(g, P.shape, label)
+        problem, _ = _covariance_problem(g, P.shape, _label(P, Fm), "F P F^T")
         if problem:
-            return fail(problem)
-        out = g.as_array()
-        if not np.all(np.isfinite(out)):
-            return fail(f"{label} is not finite: {_mat(out)}.", got=out)
-        size = float(np.max(np.abs(out))) or 1.0
-        asymmetry = float(np.max(np.abs(out - out.T)))
-        if asymmetry > SYMMETRY * size:
-            i, j = np.unravel_index(int(np.argmax(np.abs(out - out.T))), out.shape)
-            return fail(f"{label} is not symmetric: P'[{i},{j}] = {fmt(out[i, j])} but P'[{j},{i}] = {fmt(out[j, i])} "
-                        f"(F P F^T is always symmetric).", got=out)
-        lowest = float(np.linalg.eigvalsh(0.5 * (out + out.T)).min())
-        if lowest < -SYMMETRY * size:
-            return fail(f"{label} has a negative eigenvalue {fmt(lowest)}: F P F^T must be positive semi-definite.",
-                        got=out)
+            return problem
     return passed()
+
+
+def _covariance_problem(returned, shape: tuple, label: str, product: str) -> tuple:
+    """(a failing verdict, None) when the learner's `returned` is not a finite symmetric positive semi-definite
+    matrix of `shape`, as `product` always is; else (None, its eigenvalues in ascending order, over its size)."""
+    problem = value_problem(returned, shape, label)
+    if problem:
+        return fail(problem), None
+    out = returned.as_array()
+    if not np.all(np.isfinite(out)):
+        return fail(f"{label} is not finite: {_mat(out)}.", got=out), None
+    size = float(np.max(np.abs(out))) or 1.0
+    asymmetry = float(np.max(np.abs(out - out.T)))
+    if asymmetry > SYMMETRY * size:
+        i, j = np.unravel_index(int(np.argmax(np.abs(out - out.T))), out.shape)
+        return fail(f"{label} is not symmetric: entry [{i},{j}] = {fmt(out[i, j])} but [{j},{i}] = {fmt(out[j, i])} "
+                    f"({product} is always symmetric).", got=out), None
+    values = np.linalg.eigvalsh(0.5 * (out + out.T))
+    if values[0] < -SYMMETRY * size:
+        return fail(f"{label} has a negative eigenvalue {fmt(values[0])}: {product} must be positive "
+                    "semi-definite.", got=out), None
+    return None, values / size
 
 
 # ------------------------------------------------------------------------------ the bicycle model's controls
@@ -389,20 +397,11 @@ def control_noise_symmetric_rank_two(ctx):
     got = yield [call("control_noise_covariance", tuple(float(v) for v in case[0]), *case[1:]) for case in cases]
     for g, case in zip(got, cases):
         label = _bicycle_label("control_noise_covariance", *case)
-        problem = value_problem(g, (3, 3), label)
+        problem, values = _covariance_problem(g, (3, 3), label, "V diag(sigma_v^2, sigma_steer^2) V^T")
         if problem:
-            return fail(problem)
-        out = g.as_array()
-        if not np.all(np.isfinite(out)):
-            return fail(f"{label} is not finite: {_mat(out)}.", got=out)
-        size = float(np.max(np.abs(out))) or 1.0
-        if float(np.max(np.abs(out - out.T))) > SYMMETRY * size:
-            return fail(f"{label} is not symmetric: {_mat(out)} (V S V^T always is).", got=out)
-        values = np.linalg.eigvalsh(0.5 * (out + out.T))
-        if values[0] < -SYMMETRY * size:
-            return fail(f"{label} has a negative eigenvalue {fmt(values[0])}: a covariance is positive "
-                        "semi-definite.", got=out)
-        if values[0] > SYMMETRY * size:
-            return fail(f"{label} has rank 3 (eigenvalues {_show(values)}): two noisy controls spread the state "
-                        "in at most two directions, so their covariance has rank <= 2.", got=out)
+            return problem
+        if values[0] > SYMMETRY:
+            return fail(f"{label} has rank 3 (eigenvalues over the largest entry {_show(values)}): two noisy "
+                        "controls spread the state in at most two directions, so their covariance has rank <= 2.",
+                        got=g.as_array())
     return passed()
