@@ -188,7 +188,7 @@ def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissio
         recorded = db.execute("SELECT count(*) FROM results WHERE status = 'graded'").fetchone()[0]
         assert recorded >= len(done) - 1  # the last one may have been killed between its report and its row
     result = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
-    assert f"{len(done)} unchanged" in result.output
+    assert f"{len(done)} unchanged" in result.output, repr(result.exception)
     rows = _rows(out / "gradebook.csv")
     assert len(rows) == 10 and all(r["status"] in ("graded", "unreadable") for r in rows)
     with sqlite3.connect(out / "gradebook.db") as db:
