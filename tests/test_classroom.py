@@ -36,7 +36,7 @@ def workflow(tmp_path_factory):
     out = tmp_path_factory.mktemp("release") / "handout"
     patch = pytest.MonkeyPatch()
 
-    def build(folder: Path, course, force: bool = False):
+    def build(folder: Path, course, **options):
         folder.mkdir(parents=True, exist_ok=True)
         (folder / WHEEL).write_bytes(b"")
         return release.Release(folder, folder / WHEEL, "0.1.0+handout.0123456789ab")
