@@ -65,7 +65,7 @@ class Limits:
     """Time and resource limits for learner code."""
 
     startup_seconds: float = 60.0
-    import_seconds: float = 5.0
+    import_seconds: float = 15.0  # jax or torch alone take seconds to import on a busy laptop
     call_seconds: float = 5.0
     chapter_seconds: float = 20.0
     learner_seconds: float = 60.0  # everything of one learner together (all chapters' code; the quiz gets what is left)

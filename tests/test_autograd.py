@@ -59,8 +59,9 @@ def _grade(root: Path, *extra: str) -> dict:
 
 
 def _failures(report: dict) -> list[str]:
-    return [f"{c['chapter']}/{k['id']}: {k['message']}" for c in report["chapters"] for k in c["checks"]
-            if k["status"] not in ("pass", "skip")]
+    return [f"{c['chapter']}: {problem}" for c in report["chapters"] for problem in c.get("problems", [])] + [
+        f"{c['chapter']}/{k['id']}: {k['message']}" for c in report["chapters"] for k in c["checks"]
+        if k["status"] not in ("pass", "skip")]
 
 
 @needs_jax
