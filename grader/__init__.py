@@ -1,5 +1,7 @@
 """Auto-grader for the lesson "Jacobians & Linearization"."""
 
+__version__ = "0.1.0"  # pyproject.toml reads it (a handout's wheel adds its own local label)
+
 
 def load_ipython_extension(ipython) -> None:
     """`%load_ext grader` in IPython or Jupyter: the `%grade` magic (grader.magic)."""

@@ -17,17 +17,13 @@ import hashlib
 from pathlib import Path
 
 GRADER_DIR = Path(__file__).resolve().parent
-DISTRIBUTION = "jacobians-grader"
 
 
 def base_version() -> str:
-    """The installed distribution's version without a local label ("0.1.0")."""
-    from importlib.metadata import PackageNotFoundError, version
+    """The grader's version without a local label ("0.1.0")."""
+    from grader import __version__
 
-    try:
-        return version(DISTRIBUTION).split("+")[0]
-    except PackageNotFoundError:
-        return "0.1.0"
+    return __version__
 
 
 def _sources() -> list[Path]:

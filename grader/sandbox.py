@@ -23,7 +23,6 @@ import os
 import shutil
 import sys
 import sysconfig
-from pathlib import Path
 
 from grader.spawn import child_path
 
@@ -86,38 +85,56 @@ def _module_locations(name: str) -> list[str]:
 
 
 def _autograd_modules() -> set[str]:
-    """Top-level modules of the installed autograd libraries and everything they require."""
+    """Top-level modules of the installed autograd libraries and everything they require (read from their
+    *.dist-info as importlib.metadata would, without its import of the email package)."""
     roots = [name for name in AUTOGRAD_PACKAGES if importlib.util.find_spec(name) is not None]
     if not roots:
         return set()
-    import importlib.metadata as metadata
     import re
+
+    def key(name: str) -> str:
+        return re.sub(r"[-_.]+", "-", name).lower()
+
+    dist_infos: dict[str, str] = {}
+    for folder in sys.path:
+        try:
+            names = os.listdir(folder or ".")
+        except OSError:
+            continue
+        for n in names:
+            if n.endswith(".dist-info"):
+                dist_infos.setdefault(key(n.removesuffix(".dist-info").split("-")[0]), os.path.join(folder, n))
+
+    def read(dist_info: str, name: str) -> str:
+        try:
+            with open(os.path.join(dist_info, name), encoding="utf-8", errors="replace") as file:
+                return file.read()
+        except OSError:
+            return ""
 
     modules: set[str] = set()
     seen: set[str] = set()
     pending = list(roots)
     while pending:
-        name = pending.pop()
-        key = re.sub(r"[-_.]+", "-", name).lower()
-        if key in seen:
+        name = key(pending.pop())
+        if name in seen or name not in dist_infos:
             continue
-        seen.add(key)
-        try:
-            dist = metadata.distribution(name)
-        except metadata.PackageNotFoundError:
-            continue
-        top = (dist.read_text("top_level.txt") or "").split()
-        if not top:
-            top = sorted({Path(str(f)).parts[0].removesuffix(".py") for f in dist.files or []
-                          if not str(f).startswith(("..", "/")) and ".dist-info" not in Path(str(f)).parts[0]})
+        seen.add(name)
+        dist_info = dist_infos[name]
+        top = read(dist_info, "top_level.txt").split() or _recorded_top_level(read(dist_info, "RECORD"))
         modules.update(t for t in top if t.isidentifier())
-        for requirement in dist.requires or []:
-            if "extra ==" in requirement:
-                continue
-            match = re.match(r"[A-Za-z0-9][A-Za-z0-9._-]*", requirement)
-            if match:
-                pending.append(match.group(0))
+        for line in read(dist_info, "METADATA").split("\n\n", 1)[0].splitlines():
+            if line.startswith("Requires-Dist:") and "extra ==" not in line:
+                match = re.match(r"[A-Za-z0-9][A-Za-z0-9._-]*", line.removeprefix("Requires-Dist:").strip())
+                if match:
+                    pending.append(match.group(0))
     return modules
+
+
+def _recorded_top_level(record: str) -> set[str]:
+    """The first path component of each file a wheel's RECORD lists."""
+    firsts = {line.split(",", 1)[0].replace("\\", "/").split("/", 1)[0] for line in record.splitlines()}
+    return {f.removesuffix(".py") for f in firsts if f and not f.startswith(("..", "/")) and ".dist-info" not in f}
 
 
 @functools.lru_cache(maxsize=1)

@@ -64,7 +64,6 @@ class Watcher:
         direct = {files[p] for p in changed}
         if "*" in direct:
             return list(self.chapters)
-        package = Path(self.submission.root) / self.submission.package
         modules = [BY_ID[c].module for c in direct]
         for chapter in self.chapters:
             try:

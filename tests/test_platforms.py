@@ -20,7 +20,7 @@ from tests.test_watch import RIGHT_H, WRONG_H, Watching, _save
 CHAPTERS = ["ch03", "ch05", "ch06", "ch07", "ch09"]
 
 BUGGY = {
-    "ch06_measurement": replace_function("ch06_measurement", "H_jacobian", f"def H_jacobian(x, y):\n"
+    "ch06_measurement": replace_function("ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n"
                                          "    r2 = x * x + y * y\n    r = np.sqrt(r2)\n" + WRONG_H + "\n"),
     "ch05_finite_differences": replace_function(
         "ch05_finite_differences", "jacobian_fd",
