@@ -143,12 +143,17 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
     entries: list[Entry] = []
     skipped: list[Skipped] = []
     taken: set[str] = set()
-    for path in sorted(folder.iterdir()):
-        shown = unicode_clean(path.name)
-        if not (path.is_symlink() or path.is_dir() or (path.is_file() and path.suffix.lower() == ".zip")):
+    suffix: dict[str, int] = {}  # id -> the n of id-n to try next: a name once taken stays taken
+    with os.scandir(folder) as listing:  # the types come with the listing: no stat per entry
+        items = sorted(listing, key=lambda item: os.path.normcase(item.name))  # the order of sorted Paths
+    for item in items:
+        path = folder / item.name
+        shown = unicode_clean(item.name)
+        if not (item.is_symlink() or item.is_dir(follow_symlinks=False)
+                or (item.is_file(follow_symlinks=False) and path.suffix.lower() == ".zip")):
             skipped.append(Skipped(shown, "not a folder or a .zip file"))
             continue
-        stem = path.stem if path.is_file() else path.name
+        stem = path.stem if item.is_file() else path.name  # a link: what it points at
         named = names.get(path.name) or names.get(stem)
         if named is None and path.name.startswith("."):
             skipped.append(Skipped(shown, "a hidden (dot-named) entry, as tools leave behind (.git, .DS_Store, "
@@ -167,9 +172,10 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
         if problem is not None:
             skipped.append(Skipped(shown, why, submission=True))
             continue
-        unique, n = learner, 2
+        unique, n = learner, suffix.get(learner, 2)
         while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
             unique, n = f"{learner}-{n}", n + 1
+        suffix[learner] = n  # the next submission with this id starts here, not at id-2 again
         taken.add(unique)
         entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique",
                              named[2] if named is not None else ""))
@@ -537,10 +543,13 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     states: dict[str, tuple] = {}  # learner -> _learner_state, read once
     run = history.start(provenance.grader_version(), course.current_handout if course else None,
                         course.id if course else None, seed, chapters)
+    by_learner: dict[str, list] = {}  # each learner's overrides, in the file's order
+    for row in rows:
+        by_learner.setdefault(row.learner, []).append(row)
     try:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
-                                   frozenset(hidden), course, tuple(o for o in rows if o.learner == entry.learner)):
+                                   frozenset(hidden), course, tuple(by_learner.get(entry.learner, ()))):
                        entry.learner for entry in entries}
             for future in as_completed(futures):
                 learner = futures[future]

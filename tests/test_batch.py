@@ -206,6 +206,21 @@ def test_two_submissions_with_the_same_id_keep_both(tmp_path):
     assert len({e.source for e in entries}) == 2
 
 
+def test_many_submissions_with_one_id_each_get_the_next_free_name(tmp_path):
+    """The roster gives five submissions one id and a sixth, first in the folder's order, the name a third
+    would be made unique as: no two share an id, each takes the first id-n still free, in the folder's order."""
+    folder = tmp_path / "submissions"
+    for name in ("0", "a1", "a2", "a3", "b1", "b2"):
+        (folder / name).mkdir(parents=True)
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner\n0,alice-3\n"
+                      + "".join(f"{name},alice\n" for name in ("a1", "a2", "a3", "b1", "b2")))
+    entries = discover(folder, roster)
+    assert [(e.source.name, e.learner) for e in entries] == [
+        ("0", "alice-3"), ("a1", "alice"), ("a2", "alice-2"), ("a3", "alice-4"), ("b1", "alice-5"), ("b2", "alice-6")]
+    assert [e.origin.endswith("made unique") for e in entries] == [False, False, True, True, True, True]
+
+
 def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
     from grader.batch import Entry
 
