@@ -152,6 +152,25 @@ def test_report_file_has_no_axe_violation(reports, name):
     assert not results["violations"], f"{name}: axe-core found\n{summary(results)}"
 
 
+def test_class_summary_has_no_axe_violation(repo_root, tmp_path):
+    """The instructor's summary.html of a batch (right and partly right learners, named mistakes, chosen
+    options, the similarity table) meets WCAG 2.1 AA too."""
+    from tests.conftest import build_submission
+
+    submissions = tmp_path / "submissions"
+    build_submission(submissions / "ann")
+    build_submission(submissions / "bo")
+    partly_right(submissions / "cy", repo_root)
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(tmp_path / "out"),
+                           "--no-html", "--similarity"], cwd=repo_root, capture_output=True, text=True,
+                          encoding="utf-8", timeout=600)
+    assert done.returncode in (0, 1), done.stderr[-2000:]
+    page = tmp_path / "out" / "summary.html"
+    assert "cy" in page.read_text(encoding="utf-8")
+    results = axe(page)
+    assert not results["violations"], f"summary.html: axe-core found\n{summary(results)}"
+
+
 def test_axe_finds_the_old_low_contrast_green(reports, tmp_path):
     """The harness is not blind: the pass green the report had (#16a34a, 3.3:1 on white) is found."""
     path, data = reports["partly"]

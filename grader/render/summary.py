@@ -226,7 +226,7 @@ def render(view: Summary) -> str:
     """summary.html."""
     counts = view.counts
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
-             f"<style>{STYLE}</style></head><body><h1>Class summary</h1>",
+             f"<style>{STYLE}</style></head><body><main><h1>Class summary</h1>",
              f"<p>{_count(len(view.reports), 'learner')} graded; {len(view.not_graded)} could not be graded; "
              f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
              f"{_count(len(view.changes), 'score')} moved since the last run.</p>",
@@ -289,4 +289,4 @@ def render(view: Summary) -> str:
             parts.append(f"<h2 id='{section}'>{title}</h2><ul>")
             parts.extend(f"<li>{escape(k) + ': ' if k else ''}{escape(v)}</li>" for k, v in items)
             parts.append("</ul>")
-    return "".join(parts) + "</body></html>\n"
+    return "".join(parts) + "</main></body></html>\n"
