@@ -83,8 +83,15 @@ def for_terminal(text: str, one_line: bool = False) -> str:
 
 def for_json(value: object) -> object:
     """Plain JSON data (dicts, lists, strings, numbers) whose strings all encode as UTF-8; JSON's
-    own escaping takes care of control characters."""
-    return clean_value(value, unicode_clean)
+    own escaping takes care of control characters. Data that already does is returned as it is (one
+    encoding in C tells, instead of a walk through every string)."""
+    import json
+
+    try:
+        json.dumps(value, ensure_ascii=False).encode("utf-8")
+    except (UnicodeEncodeError, TypeError, ValueError):
+        return clean_value(value, unicode_clean)
+    return value
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})
