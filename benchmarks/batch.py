@@ -5,6 +5,13 @@ CLI, and the same batch with a fresh sandboxed interpreter per learner instead o
 (GRADER_FORK_SERVER=off).
 
     python benchmarks/batch.py [--count 300] [--jobs N] [--baseline-count 100]
+
+--rss grades 250, 500 and 1000 generated submissions instead (--rss-counts) and prints, against the count,
+the peak resident memory of the batch's own process and of its process tree (workers, fork servers,
+learner children: /proc polled), and the ratio of each at the largest count to at the smallest (flat: near
+1). --discovery times grader.batch.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
+giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
+the seconds at 10,000 against the 3.4 s the issue measured. --repeat N runs each N times: medians.
 """
 
 from __future__ import annotations
@@ -13,6 +20,7 @@ import argparse
 import os
 import random
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -76,12 +84,167 @@ def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict,
     return wall, cpu, "\n".join(lines)
 
 
+# ------------------------------------------------------------------------------------ memory against the count
+
+def _children() -> dict[int, list[int]]:
+    """Every process's children, by parent pid, from /proc."""
+    children: dict[int, list[int]] = {}
+    for entry in os.scandir("/proc"):
+        if not entry.name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry.name}/stat", "rb") as handle:
+                parent = int(handle.read().rsplit(b")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        children.setdefault(parent, []).append(int(entry.name))
+    return children
+
+
+def _memory(pid: int) -> tuple[int, int]:
+    """(resident now, resident at its peak) of a process in kB; (0, 0) once it is gone."""
+    values = {}
+    try:
+        with open(f"/proc/{pid}/status") as handle:
+            for line in handle:
+                if line.startswith(("VmRSS:", "VmHWM:")):
+                    values[line[:5]] = int(line.split()[1])
+    except (OSError, ValueError):
+        return 0, 0
+    return values.get("VmRSS", 0), values.get("VmHWM", 0)
+
+
+def run_batch_memory(submissions: Path, out: Path, jobs: int | None, every: float = 0.1) -> dict:
+    """One `grade batch` run (isolation on, HTML reports written) with its memory polled from /proc: the peak
+    of its own process (VmHWM), the largest peak of any other process in its tree, the tree's peak total
+    (every process's resident memory summed, at one poll: shared pages counted in each), and the largest
+    process's peak as the kernel reports it for reaped children (ru_maxrss of RUSAGE_CHILDREN, through a
+    wrapper process of its own, so that earlier runs do not count)."""
+    import json
+
+    command = [sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out)]
+    command += ["--jobs", str(jobs)] if jobs else []
+    wrapper = ("import json, resource, subprocess, sys\n"
+               "done = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)\n"
+               "print(json.dumps([done.returncode, done.stderr[-300:],"
+               " resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss]))\n")
+    started = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-c", wrapper, *command], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    main_peak = other_peak = tree_peak = 0
+    batch: int | None = None
+    while proc.poll() is None:
+        children = _children()
+        if batch is None:
+            batch = next(iter(children.get(proc.pid, [])), None)
+        if batch is not None:
+            pending, total = [batch], 0
+            while pending:
+                pid = pending.pop()
+                pending.extend(children.get(pid, []))
+                now, peak = _memory(pid)
+                total += now
+                if pid == batch:
+                    main_peak = max(main_peak, peak)
+                else:
+                    other_peak = max(other_peak, peak)
+            tree_peak = max(tree_peak, total)
+        time.sleep(every)
+    code, errors, maxrss = json.loads(proc.stdout.read())
+    return {"seconds": time.perf_counter() - started, "main": main_peak, "other": other_peak, "tree": tree_peak,
+            "maxrss": maxrss, "code": code, "errors": errors}
+
+
+def memory_figures(work: Path, counts: list[int], jobs: int | None, repeat: int) -> None:
+    """Peak RSS against the number of submissions (medians of `repeat` runs), and the ratio at the largest
+    count to at the smallest."""
+    make(work / "all", max(counts))
+    names = sorted(path.name for path in (work / "all").iterdir())
+    rows = {}
+    for count in counts:
+        folder = work / f"submissions-{count}"
+        for name in names[:count]:  # the same learners, a prefix of the largest set (hard links: quick)
+            shutil.copytree(work / "all" / name, folder / name, copy_function=os.link)
+        runs = []
+        for _ in range(repeat):
+            shutil.rmtree(work / "out", ignore_errors=True)
+            runs.append(run_batch_memory(folder, work / "out", jobs))
+            if runs[-1]["code"] not in (0, 1):
+                print(f"grade batch failed (exit {runs[-1]['code']}): {runs[-1]['errors']}")
+        rows[count] = {key: statistics.median(r[key] for r in runs) for key in ("seconds", "main", "other", "tree",
+                                                                                "maxrss")}
+        row = rows[count]
+        print(f"{count:5d} submissions: {row['seconds']:6.1f} s; peak RSS: batch process {row['main'] / 1024:6.1f} MB, "
+              f"largest other process {row['other'] / 1024:6.1f} MB, whole tree {row['tree'] / 1024:7.1f} MB "
+              f"(ru_maxrss of the largest process {row['maxrss'] / 1024:.1f} MB)", flush=True)
+    low, high = rows[min(counts)], rows[max(counts)]
+
+    def ratio(key: str) -> float:
+        return high[key] / low[key] if low[key] else float("nan")
+
+    print(f"peak RSS at {max(counts)} / at {min(counts)} submissions ({repeat} run{'s' * (repeat > 1)} each, medians): "
+          f"batch process {ratio('main'):.2f}, whole tree {ratio('tree'):.2f}, largest process {ratio('maxrss'):.2f}; "
+          "target: flat (near 1)")
+
+
+# ------------------------------------------------------------------------------------ discovery against the count
+
+DISCOVERY_BASELINE = 3.4  # seconds for 10,000 empty folders, as issue 14 measured them
+
+
+def discovery_figures(work: Path, counts: list[int], repeat: int) -> None:
+    """grader.batch.discover on empty folders (by name, and with a roster giving every one the same id, which
+    makes each id unique in turn): seconds per count (medians), the cost per folder at the largest count
+    against at the smallest, and the largest against the issue's baseline."""
+    from grader.batch import discover
+
+    for label, with_roster in (("by folder name", False), ("one id for all, from a roster", True)):
+        seconds = {}
+        for count in counts:
+            folder = work / f"empty-{count}"
+            if not folder.exists():
+                for i in range(count):
+                    (folder / f"learner{i:05d}").mkdir(parents=True)
+            roster = None
+            if with_roster:
+                roster = work / f"roster-{count}.csv"
+                roster.write_text("submission,learner\n" + "".join(f"learner{i:05d},alice\n" for i in range(count)))
+            times = []
+            for _ in range(repeat):
+                started = time.perf_counter()
+                found = discover(folder, roster)
+                times.append(time.perf_counter() - started)
+            assert len(found) == count
+            seconds[count] = statistics.median(times)
+        low, high = min(counts), max(counts)
+        per = (seconds[high] / high) / (seconds[low] / low)
+        print(f"discover(), {label}: " + ", ".join(f"{n} folders {seconds[n]:.3f} s" for n in counts)
+              + f"; per folder at {high} / at {low}: {per:.2f} (linear: near 1)")
+        if not with_roster and high == 10000:
+            print(f"discover() on 10000 empty folders: {seconds[high]:.3f} s against {DISCOVERY_BASELINE} s in the issue: "
+                  f"{seconds[high] / DISCOVERY_BASELINE:.3f}x ({DISCOVERY_BASELINE / seconds[high]:.0f} times faster)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=300)
     parser.add_argument("--baseline-count", type=int, default=100)
     parser.add_argument("--jobs", type=int, default=None)
+    parser.add_argument("--rss", action="store_true", help="peak resident memory against the number of submissions")
+    parser.add_argument("--rss-counts", default="250,500,1000")
+    parser.add_argument("--discovery", action="store_true", help="discover() on 2,500 to 10,000 empty folders")
+    parser.add_argument("--discovery-counts", default="2500,5000,10000")
+    parser.add_argument("--repeat", type=int, default=None, help="runs per figure (medians); --rss 1, --discovery 7")
     args = parser.parse_args()
+    if args.rss or args.discovery:
+        work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
+        try:
+            if args.discovery:
+                discovery_figures(work, [int(n) for n in args.discovery_counts.split(",")], args.repeat or 7)
+            if args.rss:
+                memory_figures(work, [int(n) for n in args.rss_counts.split(",")], args.jobs, args.repeat or 1)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        return
     work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
     make(work / "submissions", args.count)
     make(work / "baseline", args.baseline_count)
