@@ -23,6 +23,7 @@ import json
 import os
 import re
 import sys
+import tempfile
 import time
 import unicodedata
 import zipfile
@@ -52,6 +53,7 @@ _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz01234567
 _MAX_FOLDER = 160
 _BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 RETRY_PAUSE = 1.0  # seconds before a learner whose child could not start is tried again
+HELD_REPORTS = 32  # reports graded before their turn in the class outputs kept meanwhile; others are read again
 
 
 class StagingError(ValueError):
@@ -540,7 +542,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     done = 0
     limits = limits or {}
     history = histories.History(out / histories.FILE_NAME)
-    states: dict[str, tuple] = {}  # learner -> _learner_state, read once
+    collected = ClassOutputs(out, [e.learner for e in entries], statuses, messages)
     run = history.start(provenance.grader_version(), course.current_handout if course else None,
                         course.id if course else None, seed, chapters)
     by_learner: dict[str, list] = {}  # each learner's overrides, in the file's order
@@ -557,16 +559,18 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                     _, statuses[learner], messages[learner] = future.result()
                 except Exception as exc:  # one broken submission never stops the batch
                     statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
-                states[learner] = _learner_state(out, learner, statuses[learner], messages[learner])
-                history.record(run, states[learner][0])
+                state = _learner_state(out, learner, statuses[learner], messages[learner])
+                history.record(run, state[0])
+                collected.arrived(learner, state)
                 done += 1
                 if progress:
                     progress(done, len(entries), time.monotonic() - started)
         isolation = isolation_line(sandboxed)
         summary = rebuild(out, history, run, [e.learner for e in entries], chapters, statuses, messages, skipped,
                           isolation, lms_layouts, rows, override_problems, similarity=similarity,
-                          deadline=bool(course and course.late), states=states)
+                          deadline=bool(course and course.late), collected=collected)
     finally:
+        collected.close()
         history.close()
     counts: dict[str, int] = {}
     for status in statuses.values():
@@ -627,41 +631,102 @@ def _learner_state(out: Path, learner: str, status: str, message: str):
                      manifest_handout=manifest.get("handout"), submitted=batch.get("submitted")), report, batch
 
 
+class ClassOutputs:
+    """What the class outputs need of every learner, taken in learner by learner in the batch's order (the
+    order of `learners`) as each is graded: the report is counted into the summary (grader.render.summary.Tally)
+    and its <testsuite> written into a scratch file for junit.xml (grader.render.lms.JUnit), then let go; what
+    stays per learner is small (its history Result, flags, whether it has a submission time). A learner graded
+    before its turn waits with its report, at most HELD_REPORTS of them; the report of any other is read again
+    from report.json when its turn comes. So the memory of a batch does not grow with its reports."""
+
+    def __init__(self, out: Path, learners: list[str], statuses: dict, messages: dict) -> None:
+        from grader.render import lms, summary
+
+        self.out, self.learners, self.statuses, self.messages = out, learners, statuses, messages
+        self.position = 0  # learners[:position] are taken in
+        self.waiting: dict[str, tuple | None] = {}  # graded before their turn: the state, None to read again
+        self.held: set[str] = set()  # those waiting with their report
+        self.results: list = []  # grader.history.Result per learner, in order
+        self.flagged: dict[str, list[str]] = {}
+        self.not_graded: dict[str, str] = {}
+        self.graded: list[str] = []
+        self.untimed: list[str] = []  # graded without a submission time
+        self.tally = summary.Tally()
+        # no name in OUT: gone even when the batch is killed; closed by close()
+        self.scratch = tempfile.TemporaryFile("w+", encoding="utf-8", newline="", dir=out)  # noqa: SIM115
+        self.junit = lms.JUnit(self.scratch)
+
+    def arrived(self, learner: str, state: tuple) -> None:
+        """A learner just graded, with its _learner_state."""
+        if state[1] is not None and learner != self.learners[self.position]:
+            if len(self.held) < HELD_REPORTS:
+                self.held.add(learner)
+            else:
+                state = None
+        self.waiting[learner] = state
+        while self.position < len(self.learners) and self.learners[self.position] in self.waiting:
+            self._take(self.learners[self.position])
+
+    def finish(self) -> None:
+        """Take in every learner not taken in yet (the report.json of those that did not arrive is read)."""
+        while self.position < len(self.learners):
+            self._take(self.learners[self.position])
+
+    def close(self) -> None:
+        self.scratch.close()
+
+    def _take(self, learner: str) -> None:
+        state = self.waiting.pop(learner, None)
+        self.held.discard(learner)
+        self.position += 1
+        result, report, batch = state or _learner_state(self.out, learner, self.statuses.get(learner, "graded"),
+                                                        self.messages.get(learner, ""))
+        self.results.append(result)
+        if report is None:
+            self.not_graded[learner] = result.message
+            return
+        if result.flags:
+            self.flagged[learner] = result.flags
+        extra = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", ""),
+                 "manifest": batch.get("manifest"), "submitted": batch.get("submitted")}
+        self.graded.append(learner)
+        if not extra["submitted"]:
+            self.untimed.append(learner)
+        self.tally.add(learner, report, extra)
+        self.junit.add(learner, report, extra)
+
+
 def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
             skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(),
             override_problems: list[str] = (), similarity: bool = False, deadline: bool = False,
-            states: dict | None = None) -> dict:
+            collected: ClassOutputs | None = None) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
     and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
     kept as gradebook.edited-<time>.csv (it is an export: changes belong in overrides.csv) and said so.
-    `states` holds what _learner_state read already, by learner. Returns what was flagged per learner, the
-    changes, the similar pairs and notes for the instructor."""
+    `collected` (ClassOutputs) has taken in the learners graded so far; the others' report.json are read
+    here. Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
     from grader import history as histories
     from grader.render import lms, summary
 
-    results, reports, extras, flagged, not_graded = [], [], {}, {}, {}
-    for learner in learners:
-        result, report, batch = (states or {}).get(learner) or _learner_state(
-            out, learner, statuses.get(learner, "graded"), messages.get(learner, ""))
-        results.append(result)
-        if report is None:
-            not_graded[learner] = result.message
-            continue
-        if result.flags:
-            flagged[learner] = result.flags
-        reports.append((learner, report))
-        extras[learner] = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", ""),
-                           "manifest": batch.get("manifest"), "submitted": batch.get("submitted")}
+    if collected is None:
+        taken = ClassOutputs(out, learners, statuses, messages)
+        try:
+            return rebuild(out, history, run, learners, chapters, statuses, messages, skipped, isolation, lms_layouts,
+                           overrides, override_problems, similarity, deadline, taken)
+        finally:
+            taken.close()
+    collected.finish()
+    results, flagged, graded = collected.results, collected.flagged, collected.graded
     applied = {(r.learner, a["source"]): a for r in results for a in r.adjustments if a["kind"] == "override"}
     override_rows = [(o.learner, o.target, o.points, o.factor, o.reason, o.who, o.source,
                       f"{applied[(o.learner, o.source)]['points']:+g}" if (o.learner, o.source) in applied
                       else "not applied (the learner is not graded)") for o in overrides]
     moved = histories.changes(history, run, {r.learner: r for r in results})
     notes = _keep_hand_edits(out, history, run)
-    untimed = [learner for learner, _ in reports if not extras[learner].get("submitted")]
+    untimed = collected.untimed
     if deadline and untimed:
-        notes.append(f"no submission time for {len(untimed)} of {len(reports)} graded (no `submitted` column in the "
+        notes.append(f"no submission time for {len(untimed)} of {len(graded)} graded (no `submitted` column in the "
                      f"roster for them, no grade submit manifest): no late penalty applied to {', '.join(untimed[:20])}"
                      + (" ..." if len(untimed) > 20 else ""))
     gradebook = lms.gradebook(results, chapters)
@@ -672,14 +737,18 @@ def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[st
         write_atomically(out / "gradebook-canvas.csv", lms.canvas_gradebook(results, chapters))
     if "moodle" in lms_layouts:
         write_atomically(out / "gradebook-moodle.csv", lms.moodle_gradebook(results, chapters))
-    write_atomically(out / "junit.xml", lms.junit(reports, extras))
+    temporary = out / f".junit.xml.{os.getpid()}.tmp"  # as write_atomically, the suites copied from the scratch file
+    with temporary.open("w", encoding="utf-8") as target:
+        collected.junit.write(target)
+    os.replace(temporary, out / "junit.xml")
     similar = []
     if similarity:
         from grader import similarity as similarities
 
-        similar = similarities.rank(out / STAGING, [learner for learner, _ in reports])
-    view = summary.Summary(reports, not_graded, isolation or isolation_line(), [(s.name, s.reason) for s in skipped],
-                           flagged, extras, moved, list(override_problems) + notes, similar)
+        similar = similarities.rank(out / STAGING, graded)
+    view = summary.Summary(collected.tally, collected.not_graded, isolation or isolation_line(),
+                           [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
+                           similar)
     write_atomically(out / "summary.html", summary.render(view))
     write_atomically(out / "summary.json", summary.as_json(view))
     return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}

@@ -221,6 +221,39 @@ def test_many_submissions_with_one_id_each_get_the_next_free_name(tmp_path):
     assert [e.origin.endswith("made unique") for e in entries] == [False, False, True, True, True, True]
 
 
+def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions, tmp_path, monkeypatch):
+    """grade batch takes each learner into junit.xml and the summary's counts as they finish, in the batch's
+    order, keeping few reports that finish early (HELD_REPORTS) and reading the others' report.json again
+    when their turn comes: every order of finishing gives what the batch wrote."""
+    import io
+
+    from grader import batch
+    from grader.render import summary
+
+    out = tmp_path / "out"
+    _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
+    rows = {row["learner"]: row for row in _rows(out / "gradebook.csv")}
+    learners = sorted(rows)
+    statuses = {learner: row["status"] for learner, row in rows.items()}
+    messages = {learner: row["message"] for learner, row in rows.items()}
+    monkeypatch.setattr(batch, "HELD_REPORTS", 1)
+    taken = []
+    for order in (learners, learners[::-1], [learners[2], learners[0], learners[3], learners[1]]):
+        collected = batch.ClassOutputs(out, learners, statuses, messages)
+        for learner in order:
+            collected.arrived(learner, batch._learner_state(out, learner, statuses[learner], messages[learner]))
+        collected.finish()
+        text = io.StringIO()
+        collected.junit.write(text)
+        view = summary.Summary(collected.tally, collected.not_graded, flagged=collected.flagged)
+        taken.append((text.getvalue(), summary.as_json(view), [r.learner for r in collected.results]))
+        collected.close()
+    assert taken[0][0] == (out / "junit.xml").read_text(encoding="utf-8")
+    assert [statuses[learner] for learner in learners] == ["graded", "graded", "graded", "unreadable"]
+    assert taken[0][2] == learners and list(json.loads(taken[0][1])["not_graded"]) == ["dave"]
+    assert taken[1] == taken[0] and taken[2] == taken[0]
+
+
 def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
     from grader.batch import Entry
 

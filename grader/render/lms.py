@@ -218,50 +218,96 @@ def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = No
     <failure>, a check that could not be graded an <error>, both with the first line as `message` and the
     whole message (with the chapter's message for errors) as text; skipped and recorded checks <skipped>.
     `extras` maps a learner to {"seconds": ..., "output": what their code printed} (from report.json).
-    Valid against Jenkins' junit-10.xsd."""
+    Valid against Jenkins' junit-10.xsd. JUnit writes the same, learner by learner."""
     extras = extras or {}
-    suites = ElementTree.Element("testsuites", name="jacobians-grader")
-    totals = {"tests": 0, "failures": 0, "errors": 0, "time": 0.0}
+    suites = JUnit(io.StringIO())
     for learner, report in reports:
-        name = for_xml(learner)
-        extra = extras.get(learner, {})
-        cases = []
-        for chapter in report.chapters:
-            classname = f"{name}.{chapter.chapter}"
-            if chapter.problems:
-                tag = "error" if chapter_status(chapter) == "error" else "failure"
-                cases.append((classname, f"{chapter.chapter}:chapter", tag, "\n".join(chapter.problems), "chapter"))
-            for check in chapter.checks:
-                tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
-                       Status.RECORDED: "skipped"}.get(check.status)
-                cases.append((classname, f"{check.kind}:{check.id}", tag, check_message(check, chapter),
-                              check.status.value))
-        counts = {tag: sum(c[2] == tag for c in cases) for tag in ("failure", "error", "skipped")}
-        seconds = float(extra.get("seconds") or 0.0)
-        suite = ElementTree.SubElement(suites, "testsuite", name=name, tests=str(len(cases)),
-                                       failures=str(counts["failure"]), errors=str(counts["error"]),
-                                       skipped=str(counts["skipped"]), time=_time(seconds))
-        properties = ElementTree.SubElement(suite, "properties")
-        for key, value in report.provenance().items():
-            ElementTree.SubElement(properties, "property", name=key, value=for_xml("" if value is None else str(value)))
-        for classname, case_name, tag, text, kind in cases:
-            case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
-            if tag:
-                first = text.splitlines()[0][:200] if text else ""
-                element = ElementTree.SubElement(case, tag, message=for_xml(first), type=kind)
-                if tag != "skipped" or text:
-                    element.text = for_xml(text)
-        output = extra.get("output") or ""
-        if output:
-            ElementTree.SubElement(suite, "system-out").text = for_xml(output)
-        totals["tests"] += len(cases)
-        totals["failures"] += counts["failure"]
-        totals["errors"] += counts["error"]
-        totals["time"] += seconds
-    for key in ("tests", "failures", "errors"):
-        suites.set(key, str(totals[key]))
-    suites.set("time", _time(totals["time"]))
-    return ElementTree.tostring(suites, encoding="unicode", xml_declaration=True) + "\n"
+        suites.add(learner, report, extras.get(learner))
+    return suites.document()
+
+
+class JUnit:
+    """junit.xml written learner by learner into `stream` (a text file: each learner's <testsuite> as it
+    comes, so that no report need be kept until the end), then put together with the totals (document, or
+    write for a file)."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.totals = {"tests": 0, "failures": 0, "errors": 0, "time": 0.0}
+        self.count = 0
+
+    def add(self, learner: str, report: Report, extra: dict | None = None) -> None:
+        """One learner's <testsuite>; `extra` is {"seconds": ..., "output": what their code printed}."""
+        suite, counts, seconds = _suite(learner, report, extra or {})
+        self.stream.write(ElementTree.tostring(suite, encoding="unicode"))
+        self.count += 1
+        self.totals["tests"] += counts["tests"]
+        self.totals["failures"] += counts["failure"]
+        self.totals["errors"] += counts["error"]
+        self.totals["time"] += seconds
+
+    def _ends(self) -> tuple[str, str]:
+        """The text before the suites (the declaration and <testsuites> with the totals) and after them."""
+        suites = ElementTree.Element("testsuites", name="jacobians-grader")
+        for key in ("tests", "failures", "errors"):
+            suites.set(key, str(self.totals[key]))
+        suites.set("time", _time(self.totals["time"]))
+        if not self.count:
+            return ElementTree.tostring(suites, encoding="unicode", xml_declaration=True) + "\n", ""
+        ElementTree.SubElement(suites, "suites")
+        head, tail = ElementTree.tostring(suites, encoding="unicode", xml_declaration=True).split("<suites />")
+        return head, tail + "\n"
+
+    def document(self) -> str:
+        """The whole junit.xml (for a `stream` that is an io.StringIO)."""
+        head, tail = self._ends()
+        return head + self.stream.getvalue() + tail
+
+    def write(self, target) -> None:
+        """The whole junit.xml into the text file `target`, the suites copied from `stream`."""
+        head, tail = self._ends()
+        target.write(head)
+        self.stream.seek(0)
+        while True:
+            block = self.stream.read(1 << 20)
+            if not block:
+                break
+            target.write(block)
+        target.write(tail)
+
+
+def _suite(learner: str, report: Report, extra: dict) -> tuple[ElementTree.Element, dict[str, int], float]:
+    """One learner's <testsuite>, its counts (tests, failure, error, skipped) and its seconds."""
+    name = for_xml(learner)
+    cases = []
+    for chapter in report.chapters:
+        classname = f"{name}.{chapter.chapter}"
+        if chapter.problems:
+            tag = "error" if chapter_status(chapter) == "error" else "failure"
+            cases.append((classname, f"{chapter.chapter}:chapter", tag, "\n".join(chapter.problems), "chapter"))
+        for check in chapter.checks:
+            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
+                   Status.RECORDED: "skipped"}.get(check.status)
+            cases.append((classname, f"{check.kind}:{check.id}", tag, check_message(check, chapter),
+                          check.status.value))
+    counts = {tag: sum(c[2] == tag for c in cases) for tag in ("failure", "error", "skipped")}
+    seconds = float(extra.get("seconds") or 0.0)
+    suite = ElementTree.Element("testsuite", name=name, tests=str(len(cases)), failures=str(counts["failure"]),
+                                errors=str(counts["error"]), skipped=str(counts["skipped"]), time=_time(seconds))
+    properties = ElementTree.SubElement(suite, "properties")
+    for key, value in report.provenance().items():
+        ElementTree.SubElement(properties, "property", name=key, value=for_xml("" if value is None else str(value)))
+    for classname, case_name, tag, text, kind in cases:
+        case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
+        if tag:
+            first = text.splitlines()[0][:200] if text else ""
+            element = ElementTree.SubElement(case, tag, message=for_xml(first), type=kind)
+            if tag != "skipped" or text:
+                element.text = for_xml(text)
+    output = extra.get("output") or ""
+    if output:
+        ElementTree.SubElement(suite, "system-out").text = for_xml(output)
+    return suite, {**counts, "tests": len(cases)}, seconds
 
 
 # ------------------------------------------------------------------------------------ gradebooks

@@ -42,21 +42,21 @@ def _count(n: int, word: str, words: str | None = None) -> str:
 
 @dataclass
 class Summary:
-    """Everything the class summary shows, gathered by grade batch."""
+    """Everything the class summary shows, gathered by grade batch: `graded` has counted the graded
+    learners' reports one by one (Tally), so that no report need be kept."""
 
-    reports: list[tuple[str, Report]]
+    graded: Tally
     not_graded: dict[str, str] = field(default_factory=dict)
     isolation: str = ""
     skipped: list[tuple[str, str]] = field(default_factory=list)
     flagged: dict[str, list[str]] = field(default_factory=dict)
-    extras: dict[str, dict] = field(default_factory=dict)  # learner -> report.json's batch data we show
     changes: list[tuple] = field(default_factory=list)  # (learner, before, after, delta, why)
     notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
     similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
 
     @functools.cached_property
     def counts(self) -> dict:
-        return tally(self)
+        return self.graded.counts()
 
 
 # ------------------------------------------------------------------------------------ what is counted
@@ -113,71 +113,104 @@ def _form(text: str, values: dict[str, float]) -> str:
     return form
 
 
-def tally(view: Summary) -> dict:
-    """The counts summary.html and summary.json show."""
-    seen, own, upstream, errors, names, kinds = Counter(), Counter(), Counter(), Counter(), {}, {}
-    mistakes: dict[tuple, set] = defaultdict(set)
-    messages: Counter = Counter()
-    chosen: Counter = Counter()
-    forms: dict[tuple, dict] = {}
-    for learner, report in view.reports:
+class Tally:
+    """What the class summary counts, added learner by learner in the batch's order (add) and read at the end
+    (counts): the counts summary.html and summary.json show, the scores, the first learner's provenance and
+    the archives per handout. It keeps counts and a score per learner, never a report: a class of any size
+    is summarised in the memory of a few reports."""
+
+    def __init__(self) -> None:
+        self.seen, self.own, self.upstream, self.errors = Counter(), Counter(), Counter(), Counter()
+        self.names: dict[str, str] = {}
+        self.kinds: dict[str, str] = {}
+        self.mistakes: dict[tuple, set] = defaultdict(set)
+        self.messages: Counter = Counter()
+        self.chosen: Counter = Counter()
+        self.forms: dict[tuple, dict] = {}
+        self.scores: list[float] = []
+        self.max_score: float | None = None
+        self.first: dict | None = None  # the first learner's provenance: grader, handout, course, seed
+        self.handouts: Counter = Counter()  # archives per handout they were packed with (grade submit's manifest)
+
+    def __len__(self) -> int:
+        return len(self.scores)
+
+    def add(self, learner: str, report: Report, extra: dict | None = None) -> None:
+        """Count one graded learner's report; `extra` is what its report.json's batch data says (the manifest)."""
+        if self.first is None:
+            self.first = {"grader": report.grader, "handout": report.handout, "course": report.course,
+                          "seed": report.seed}
+        self.scores.append(report.score)
+        self.max_score = report.max_score if self.max_score is None else max(self.max_score, report.max_score)
+        manifest = (extra or {}).get("manifest")
+        self.handouts[(manifest or {}).get("handout") or ("none" if manifest is None else "the project")] += 1
         who = report.learner_id or learner
         for chapter in report.chapters:
             for check in chapter.checks:
                 key = f"{chapter.chapter}/{check.id}"
-                kinds[key] = check.kind
-                names[key] = template(chapter.chapter, check.function, check.description) if check.kind == "quiz" \
-                    else check.description
-                seen[key] += 1
+                self.kinds[key] = check.kind
+                self.names[key] = template(chapter.chapter, check.function, check.description) \
+                    if check.kind == "quiz" else check.description
+                self.seen[key] += 1
                 caused_upstream = bool(check.upstream) or (check.status == Status.SKIP
                                                            and check.points < check.max_points)
                 if check.status == Status.ERROR:
-                    errors[key] += 1
+                    self.errors[key] += 1
                 elif caused_upstream:
-                    upstream[key] += 1
+                    self.upstream[key] += 1
                 elif check.status == Status.FAIL:
-                    own[key] += 1
+                    self.own[key] += 1
                     if check.mistake:
-                        mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
+                        self.mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
                     if check.message:
-                        messages[(chapter.chapter, check.message.splitlines()[0][:160])] += 1
+                        self.messages[(chapter.chapter, check.message.splitlines()[0][:160])] += 1
                 if check.kind == "quiz" and check.got is not None and check.status in (Status.PASS, Status.FAIL):
                     for option in _options_chosen(chapter.chapter, check, who):
-                        chosen[(chapter.chapter, check.function, option)] += 1
+                        self.chosen[(chapter.chapter, check.function, option)] += 1
                     question = _question(chapter.chapter, check.function)
                     if question is not None and question.kind == "symbolic" and isinstance(check.got, str):
                         form = _form(check.got, question.values_for(who, chapter.chapter))
-                        entry = forms.setdefault((chapter.chapter, check.function, form, check.status.value),
-                                                 {"learners": 0, "verdict": check.status.value,
-                                                  "mistake": check.mistake or None})
+                        entry = self.forms.setdefault((chapter.chapter, check.function, form, check.status.value),
+                                                      {"learners": 0, "verdict": check.status.value,
+                                                       "mistake": check.mistake or None})
                         entry["learners"] += 1
-    options = []
-    for (chapter, question_id, option), count in sorted(chosen.items()):
-        question = _question(chapter, question_id)
-        options.append({"question": f"{chapter}/quiz_{question_id}", "option": option,
-                        "text": question.options.get(option, "") if question else "",
-                        "right": option in _right_options(chapter, question_id), "chosen": count})
-    return {
-        "checks": [{"id": key, "description": names[key], "kind": kinds[key], "seen": seen[key],
-                    "failed": own[key], "failed_upstream": upstream[key], "errors": errors[key]}
-                   for key in sorted(seen, key=lambda k: (-own[k] / seen[k], -(upstream[k] + errors[k]) / seen[k], k))],
-        "mistakes": [{"chapter": c, "function": f, "kind": k, "mistake": m, "learners": len(who)}
-                     for (c, f, k, m), who in sorted(mistakes.items(), key=lambda kv: (-len(kv[1]), kv[0]))],
-        "options": options,
-        "answer_forms": [{"question": f"{c}/quiz_{q}", "form": form, **entry}
-                         for (c, q, form, _), entry in sorted(forms.items(),
-                                                               key=lambda kv: (kv[0][:2], -kv[1]["learners"], kv[0]))],
-        "messages": [{"chapter": c, "message": m, "count": n} for (c, m), n in messages.most_common(25)],
-    }
+
+    def counts(self) -> dict:
+        """The counts summary.html and summary.json show."""
+        seen, own, upstream, errors = self.seen, self.own, self.upstream, self.errors
+        options = []
+        for (chapter, question_id, option), count in sorted(self.chosen.items()):
+            question = _question(chapter, question_id)
+            options.append({"question": f"{chapter}/quiz_{question_id}", "option": option,
+                            "text": question.options.get(option, "") if question else "",
+                            "right": option in _right_options(chapter, question_id), "chosen": count})
+        return {
+            "checks": [{"id": key, "description": self.names[key], "kind": self.kinds[key], "seen": seen[key],
+                        "failed": own[key], "failed_upstream": upstream[key], "errors": errors[key]}
+                       for key in sorted(seen, key=lambda k: (-own[k] / seen[k], -(upstream[k] + errors[k]) / seen[k],
+                                                              k))],
+            "mistakes": [{"chapter": c, "function": f, "kind": k, "mistake": m, "learners": len(who)}
+                         for (c, f, k, m), who in sorted(self.mistakes.items(), key=lambda kv: (-len(kv[1]), kv[0]))],
+            "options": options,
+            "answer_forms": [{"question": f"{c}/quiz_{q}", "form": form, **entry}
+                             for (c, q, form, _), entry in sorted(self.forms.items(),
+                                                                   key=lambda kv: (kv[0][:2], -kv[1]["learners"],
+                                                                                   kv[0]))],
+            "messages": [{"chapter": c, "message": m, "count": n} for (c, m), n in self.messages.most_common(25)],
+        }
+
+
+def tally(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = None) -> Tally:
+    """A Tally of (learner, report) pairs, in their order; `extras`: their report.json's batch data, by learner."""
+    counted = Tally()
+    for learner, report in reports:
+        counted.add(learner, report, (extras or {}).get(learner))
+    return counted
 
 
 def _handouts(view: Summary) -> dict[str, int]:
     """How many archives were packed with each handout (grade submit's manifests); "none": no manifest."""
-    seen: Counter = Counter()
-    for learner, _ in view.reports:
-        manifest = view.extras.get(learner, {}).get("manifest")
-        seen[(manifest or {}).get("handout") or ("none" if manifest is None else "the project")] += 1
-    return dict(seen)
+    return dict(view.graded.handouts)
 
 
 # ------------------------------------------------------------------------------------ JSON
@@ -185,17 +218,17 @@ def _handouts(view: Summary) -> dict[str, int]:
 def as_json(view: Summary) -> str:
     """summary.json (grader/schemas/summary.schema.json)."""
     counts = view.counts
-    scores = [r.score for _, r in view.reports]
-    first = view.reports[0][1] if view.reports else None
+    scores = view.graded.scores
+    first = view.graded.first
     data = {
         "version": VERSION,
-        "provenance": {"grader": first.grader or None, "handout": first.handout, "course": first.course,
-                       "seed": first.seed} if first else None,
-        "learners": {"graded": len(view.reports), "not_graded": len(view.not_graded), "skipped": len(view.skipped),
+        "provenance": {"grader": first["grader"] or None, "handout": first["handout"], "course": first["course"],
+                       "seed": first["seed"]} if first else None,
+        "learners": {"graded": len(view.graded), "not_graded": len(view.not_graded), "skipped": len(view.skipped),
                      "flagged": len(view.flagged)},
         "scores": {"mean": round(statistics.fmean(scores), 3) if scores else None,
                    "median": round(statistics.median(scores), 3) if scores else None,
-                   "max_score": max((r.max_score for _, r in view.reports), default=None)},
+                   "max_score": view.graded.max_score},
         **counts,
         "handouts": _handouts(view),
         "flagged": view.flagged,
@@ -227,17 +260,17 @@ def render(view: Summary) -> str:
     counts = view.counts
     parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
              f"<style>{STYLE}</style></head><body><main><h1>Class summary</h1>",
-             f"<p>{_count(len(view.reports), 'learner')} graded; {len(view.not_graded)} could not be graded; "
+             f"<p>{_count(len(view.graded), 'learner')} graded; {len(view.not_graded)} could not be graded; "
              f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
              f"{_count(len(view.changes), 'score')} moved since the last run.</p>",
              f"<p id='isolation'>{escape(view.isolation)}</p>" if view.isolation else ""]
-    if view.reports:
-        first = view.reports[0][1]
-        parts.append(f"<p id='provenance'>Graded by grader {escape(first.grader or 'unknown')}, course "
-                     f"{escape(first.course or 'none')}, current handout {escape(first.handout or 'not set')}, seed "
-                     f"{escape(first.seed)}.</p>")
-        top = max(r.max_score for _, r in view.reports) or 1
-        bins = Counter(min(9, int(10 * r.score / top)) for _, r in view.reports)
+    if len(view.graded):
+        first = view.graded.first
+        parts.append(f"<p id='provenance'>Graded by grader {escape(first['grader'] or 'unknown')}, course "
+                     f"{escape(first['course'] or 'none')}, current handout {escape(first['handout'] or 'not set')}, "
+                     f"seed {escape(first['seed'])}.</p>")
+        top = view.graded.max_score or 1
+        bins = Counter(min(9, int(10 * score / top)) for score in view.graded.scores)
         parts.append("<h2 id='histogram'>Scores</h2><table>")
         for b in range(10):
             count = bins.get(b, 0)
