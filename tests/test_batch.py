@@ -246,12 +246,28 @@ def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions
         text = io.StringIO()
         collected.junit.write(text)
         view = summary.Summary(collected.tally, collected.not_graded, flagged=collected.flagged)
-        taken.append((text.getvalue(), summary.as_json(view), [r.learner for r in collected.results]))
+        taken.append((text.getvalue(), summary.as_json(view), [r.learner for r in collected.results.values()]))
         collected.close()
     assert taken[0][0] == (out / "junit.xml").read_text(encoding="utf-8")
     assert [statuses[learner] for learner in learners] == ["graded", "graded", "graded", "unreadable"]
     assert taken[0][2] == learners and list(json.loads(taken[0][1])["not_graded"]) == ["dave"]
     assert taken[1] == taken[0] and taken[2] == taken[0]
+
+
+def test_the_summary_counts_failure_messages_as_a_counter_does():
+    """summary.Messages keeps the messages on disk, and ranks them as Counter.most_common: by count, ties in the
+    order first seen (a lone surrogate kept)."""
+    from collections import Counter
+
+    from grader.render.summary import Messages
+
+    seen = [("ch06", "b"), ("ch06", "a"), ("ch03", "b"), ("ch06", "a"), ("ch06", "lone \udcff"), ("ch06", "b"),
+            *[("ch07", f"wrong at {i}") for i in range(30)], ("ch06", "lone \udcff")]
+    counted = Messages()
+    for chapter, message in seen:
+        counted.add(chapter, message)
+    assert counted.most_common(25) == Counter(seen).most_common(25)
+    counted.close()
 
 
 def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):

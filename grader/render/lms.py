@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import json
 from collections.abc import Collection, Iterable
 from pathlib import Path
@@ -313,7 +314,7 @@ def _suite(learner: str, report: Report, extra: dict) -> tuple[ElementTree.Eleme
 # ------------------------------------------------------------------------------------ gradebooks
 # Every gradebook is an export of grade batch's history (grader.history): one Result per learner.
 
-def _csv(rows: list[list[str]]) -> str:
+def _csv(rows: Iterable[list[str]]) -> str:
     buffer = io.StringIO()
     csv.writer(buffer).writerows(rows)
     return buffer.getvalue()
@@ -348,9 +349,9 @@ def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
                   "" if result.seed is None else str(result.seed)]
 
 
-def gradebook(results: list[Result], chapters: list[str]) -> str:
-    """gradebook.csv."""
-    return _csv([gradebook_header(chapters)] + [gradebook_row(r, chapters) for r in results])
+def gradebook(results: Iterable[Result], chapters: list[str]) -> str:
+    """gradebook.csv (`results` are read once, one by one)."""
+    return _csv(itertools.chain([gradebook_header(chapters)], (gradebook_row(r, chapters) for r in results)))
 
 
 def points_possible(results: list[Result], chapters: list[str]) -> dict[str, float]:

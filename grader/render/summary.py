@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+import sqlite3
 import statistics
 from collections import Counter, defaultdict
 from dataclasses import dataclass, field
@@ -116,15 +117,16 @@ def _form(text: str, values: dict[str, float]) -> str:
 class Tally:
     """What the class summary counts, added learner by learner in the batch's order (add) and read at the end
     (counts): the counts summary.html and summary.json show, the scores, the first learner's provenance and
-    the archives per handout. It keeps counts and a score per learner, never a report: a class of any size
-    is summarised in the memory of a few reports."""
+    the archives per handout. It keeps counts and a score per learner, never a report, and the failure
+    messages (many hold a learner's own numbers: tens of distinct ones per learner) in a private temporary
+    SQLite database (Messages): a class of any size is summarised in the memory of a few reports."""
 
     def __init__(self) -> None:
         self.seen, self.own, self.upstream, self.errors = Counter(), Counter(), Counter(), Counter()
         self.names: dict[str, str] = {}
         self.kinds: dict[str, str] = {}
         self.mistakes: dict[tuple, set] = defaultdict(set)
-        self.messages: Counter = Counter()
+        self.messages = Messages()
         self.chosen: Counter = Counter()
         self.forms: dict[tuple, dict] = {}
         self.scores: list[float] = []
@@ -163,7 +165,7 @@ class Tally:
                     if check.mistake:
                         self.mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
                     if check.message:
-                        self.messages[(chapter.chapter, check.message.splitlines()[0][:160])] += 1
+                        self.messages.add(chapter.chapter, check.message.splitlines()[0][:160])
                 if check.kind == "quiz" and check.got is not None and check.status in (Status.PASS, Status.FAIL):
                     for option in _options_chosen(chapter.chapter, check, who):
                         self.chosen[(chapter.chapter, check.function, option)] += 1
@@ -198,6 +200,33 @@ class Tally:
                                                                                    kv[0]))],
             "messages": [{"chapter": c, "message": m, "count": n} for (c, m), n in self.messages.most_common(25)],
         }
+
+    def close(self) -> None:
+        self.messages.close()
+
+
+class Messages:
+    """How often each (chapter, message) was seen, as a Counter counts them, kept in a private temporary
+    SQLite database (its cache small, the rest on disk) instead of in memory; most_common gives what
+    Counter.most_common gives: the most frequent first, ties in the order first seen."""
+
+    def __init__(self) -> None:
+        self.db = sqlite3.connect("")  # "": a temporary database of its own, deleted when closed
+        self.db.execute("CREATE TABLE seen (chapter TEXT, message BLOB, n INTEGER, first INTEGER, "
+                        "PRIMARY KEY (chapter, message))")
+        self.order = 0
+
+    def add(self, chapter: str, message: str) -> None:
+        self.order += 1  # the message as UTF-8, lone surrogates as they are (a text column refuses them)
+        self.db.execute("INSERT INTO seen VALUES (?, ?, 1, ?) ON CONFLICT (chapter, message) DO UPDATE SET n = n + 1",
+                        (chapter, message.encode("utf-8", "surrogatepass"), self.order))
+
+    def most_common(self, count: int) -> list[tuple[tuple[str, str], int]]:
+        return [((chapter, message.decode("utf-8", "surrogatepass")), n) for chapter, message, n in self.db.execute(
+            "SELECT chapter, message, n FROM seen ORDER BY n DESC, first LIMIT ?", (count,))]
+
+    def close(self) -> None:
+        self.db.close()
 
 
 def tally(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = None) -> Tally:
