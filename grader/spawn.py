@@ -236,7 +236,24 @@ def _send(stream, request: dict) -> None:
         pass
 
 
-class SpawnedChild:
+class _Started:
+    """What both kinds of child share: the started process's wait and exit status."""
+
+    process: subprocess.Popen
+
+    def wait(self, timeout: float) -> None:
+        try:
+            self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            pass
+
+    @property
+    def returncode(self) -> int | None:
+        """The exit status (negative: killed by that signal), or None while it runs."""
+        return self.process.poll()
+
+
+class SpawnedChild(_Started):
     """A child interpreter started by start_child: its process (group), result pipe, output file, and
     the folder it writes the learner's files to (`root`; removed at stop when it is on the host)."""
 
@@ -255,17 +272,6 @@ class SpawnedChild:
     def read(self, timeout: float) -> bytes:
         return read_chunk(self.read_fd, timeout)
 
-    def wait(self, timeout: float) -> None:
-        try:
-            self.process.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            pass
-
-    @property
-    def returncode(self) -> int | None:
-        """The exit status (negative: killed by that signal), or None while it runs."""
-        return self.process.poll()
-
     def stop(self, output_limit: int) -> str:
         """Kill the whole process group and stray grandchildren; return what learner code printed."""
         try:
@@ -283,7 +289,7 @@ class SpawnedChild:
         return read_capture(self.capture_fd, output_limit)
 
 
-class PortableChild:
+class PortableChild(_Started):
     """A child started without process groups or passed descriptors (strategy "portable"): request on
     its stdin, results on its stdout (read by a thread: Windows pipes cannot be selected), learner
     output in a capture file it was given by name, its process tree in a Windows job object if any."""
@@ -301,16 +307,6 @@ class PortableChild:
 
     def read(self, timeout: float) -> bytes:
         return self.results.read(timeout)
-
-    def wait(self, timeout: float) -> None:
-        try:
-            self.process.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            pass
-
-    @property
-    def returncode(self) -> int | None:
-        return self.process.poll()
 
     def stop(self, output_limit: int) -> str:
         """Kill the child's process tree; return what learner code printed."""
