@@ -24,7 +24,7 @@ from grader.runner import Limits, Session
 from grader.sandbox import Sandbox
 from grader.submission import Submission
 from grader.wire import MAX_LINE, clean_error
-from tests.conftest import REPO, build_submission, replace_function
+from tests.conftest import REPO, build_submission, processes_with, replace_function
 
 BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
 pytestmark = pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"),
@@ -75,18 +75,6 @@ def _h(tmp_path: Path, name: str, source: str) -> Path:
 
 def _ch06(session: Session) -> dict:
     return {c.id: c for c in grade(session, ["ch06"], seed=3).chapters[0].checks}
-
-
-def _strays() -> list[str]:
-    found = []
-    for pid in os.listdir("/proc"):
-        if pid.isdigit():
-            try:
-                if MARKER in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
-                    found.append(pid)
-            except OSError:
-                continue
-    return found
 
 
 def _host_ipc_keys() -> set[int]:
@@ -144,7 +132,7 @@ def test_the_memory_of_all_of_a_learners_processes_together_is_capped(tmp_path):
     assert elapsed < 8, elapsed  # stopped when it crossed the cap, not when the call's time ran out
     assert all(c.status.value == "pass" for c in good.values())
     time.sleep(0.2)
-    assert _strays() == []
+    assert processes_with(MARKER) == []
 
 
 # at import: takes every process slot it can, and any that comes free, for 4 s
@@ -188,7 +176,7 @@ def test_a_learner_holding_every_process_slot_costs_no_one_else(tmp_path):
     held = int(message.split("held ")[1].split()[0])
     assert 30 <= held < 64, message  # it got its own processes, up to its cap, never more
     time.sleep(0.2)
-    assert _strays() == []
+    assert processes_with(MARKER) == []
 
 
 def test_one_time_budget_for_all_of_a_learners_chapters(tmp_path):

@@ -18,7 +18,7 @@ from grader.model import Status
 from grader.runner import Limits, Session
 from grader.sandbox import Sandbox
 from grader.submission import Submission
-from tests.conftest import replace_function
+from tests.conftest import processes_with, replace_function
 
 MARKER = "271.828"  # sleep duration of the learner's background process, to find it in /proc
 BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
@@ -28,18 +28,6 @@ LIMITS = Limits(import_seconds=3.0, call_seconds=3.0, chapter_seconds=10.0)
 def _grade(server: ForkServer, root: Path):
     report = grade(Session(Submission(root, "exercises"), LIMITS, launcher=server.start), ["ch06"], seed=3)
     return {c.id: c for c in report.chapters[0].checks}
-
-
-def _strays() -> list[str]:
-    found = []
-    for pid in os.listdir("/proc"):
-        if pid.isdigit():
-            try:
-                if MARKER in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
-                    found.append(pid)
-            except OSError:
-                continue
-    return found
 
 
 @pytest.fixture
@@ -60,7 +48,7 @@ def test_background_processes_of_a_run_are_killed_before_the_next(server, submis
     spawned = _grade(server, spawner)
     assert "entries differ" in spawned["H_worked_example"].message  # it returned: both processes started
     time.sleep(0.2)
-    assert _strays() == []
+    assert processes_with(MARKER) == []
     good = _grade(server, submission_factory())
     assert all(c.status == Status.PASS for c in good.values())
 
