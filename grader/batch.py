@@ -309,6 +309,18 @@ def write_atomically(path: Path, text: str) -> None:
     os.replace(temporary, path)
 
 
+def write_atomically_from(path: Path, write, replace: bool = True) -> Path:
+    """As write_atomically, `write` writing the text into the file it is given (piece by piece: a large class's
+    outputs are never whole in memory); with replace=False the written file is left beside `path` (returned)
+    for the caller to os.replace."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with temporary.open("w", encoding="utf-8") as handle:
+        write(handle)
+    if replace:
+        os.replace(temporary, path)
+    return temporary
+
+
 # ------------------------------------------------------------------------------------ grading
 
 _worker_state: dict = {}
@@ -764,18 +776,22 @@ def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[st
         notes.append(f"no submission time for {len(untimed)} of {len(graded)} graded (no `submitted` column in the "
                      f"roster for them, no grade submit manifest): no late penalty applied to {', '.join(untimed[:20])}"
                      + (" ..." if len(untimed) > 20 else ""))
-    gradebook = lms.gradebook(results, chapters)
-    history.finish(run, results, override_rows, moved, hashlib.sha256(gradebook.encode()).hexdigest())
-    write_atomically(out / "gradebook.csv", gradebook)
+    digest = hashlib.sha256()
+
+    def gradebook(handle) -> None:
+        for line in lms.gradebook_lines(results, chapters):
+            digest.update(line.encode())
+            handle.write(line)
+
+    written = write_atomically_from(out / "gradebook.csv", gradebook, replace=False)
+    history.finish(run, results, override_rows, moved, digest.hexdigest())
+    os.replace(written, out / "gradebook.csv")
     write_atomically(out / "changes.csv", lms.changes_csv(moved))
     if "canvas" in lms_layouts:
         write_atomically(out / "gradebook-canvas.csv", lms.canvas_gradebook(results, chapters))
     if "moodle" in lms_layouts:
         write_atomically(out / "gradebook-moodle.csv", lms.moodle_gradebook(results, chapters))
-    temporary = out / f".junit.xml.{os.getpid()}.tmp"  # as write_atomically, the suites copied from the scratch file
-    with temporary.open("w", encoding="utf-8") as target:
-        collected.junit.write(target)
-    os.replace(temporary, out / "junit.xml")
+    write_atomically_from(out / "junit.xml", collected.junit.write)  # the suites copied from the scratch file
     similar = []
     if similarity:
         from grader import similarity as similarities
@@ -784,8 +800,8 @@ def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[st
     view = summary.Summary(collected.tally, collected.not_graded, isolation or isolation_line(),
                            [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
                            similar)
-    write_atomically(out / "summary.html", summary.render(view))
-    write_atomically(out / "summary.json", summary.as_json(view))
+    write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
+    write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
     return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}
 
 

@@ -11,7 +11,7 @@ import csv
 import io
 import itertools
 import json
-from collections.abc import Collection, Iterable
+from collections.abc import Collection, Iterable, Iterator
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -351,7 +351,18 @@ def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
 
 def gradebook(results: Iterable[Result], chapters: list[str]) -> str:
     """gradebook.csv (`results` are read once, one by one)."""
-    return _csv(itertools.chain([gradebook_header(chapters)], (gradebook_row(r, chapters) for r in results)))
+    return "".join(gradebook_lines(results, chapters))
+
+
+def gradebook_lines(results: Iterable[Result], chapters: list[str]) -> Iterator[str]:
+    """gradebook.csv line by line (a cell may hold a line break: a line is a row as CSV writes it)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    for row in itertools.chain([gradebook_header(chapters)], (gradebook_row(r, chapters) for r in results)):
+        buffer.seek(0)
+        buffer.truncate()
+        writer.writerow(row)
+        yield buffer.getvalue()
 
 
 def points_possible(results: list[Result], chapters: list[str]) -> dict[str, float]:

@@ -19,6 +19,7 @@ import re
 import sqlite3
 import statistics
 from collections import Counter, defaultdict
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from html import escape as _escape
 
@@ -246,6 +247,16 @@ def _handouts(view: Summary) -> dict[str, int]:
 
 def as_json(view: Summary) -> str:
     """summary.json (grader/schemas/summary.schema.json)."""
+    return json.dumps(_json_data(view), indent=1, allow_nan=False) + "\n"
+
+
+def write_json(view: Summary, handle) -> None:
+    """summary.json into the text file `handle`, piece by piece (as_json's text)."""
+    json.dump(_json_data(view), handle, indent=1, allow_nan=False)
+    handle.write("\n")
+
+
+def _json_data(view: Summary) -> dict:
     counts = view.counts
     scores = view.graded.scores
     first = view.graded.first
@@ -268,7 +279,7 @@ def as_json(view: Summary) -> str:
         "notes": list(view.notes),
         "isolation": view.isolation,
     }
-    return json.dumps(for_json(data), indent=1, allow_nan=False) + "\n"
+    return for_json(data)
 
 
 # ------------------------------------------------------------------------------------ HTML
@@ -286,69 +297,75 @@ def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]]
 
 def render(view: Summary) -> str:
     """summary.html."""
+    return "".join(html_parts(view))
+
+
+def html_parts(view: Summary) -> Iterator[str]:
+    """summary.html piece by piece, to be written as they come: a large class's lists are never in memory whole."""
     counts = view.counts
-    parts = [f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
-             f"<style>{STYLE}</style></head><body><main><h1>Class summary</h1>",
-             f"<p>{_count(len(view.graded), 'learner')} graded; {len(view.not_graded)} could not be graded; "
-             f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
-             f"{_count(len(view.changes), 'score')} moved since the last run.</p>",
-             f"<p id='isolation'>{escape(view.isolation)}</p>" if view.isolation else ""]
+    yield (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
+           f"<style>{STYLE}</style></head><body><main><h1>Class summary</h1>")
+    yield (f"<p>{_count(len(view.graded), 'learner')} graded; {len(view.not_graded)} could not be graded; "
+           f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
+           f"{_count(len(view.changes), 'score')} moved since the last run.</p>")
+    yield f"<p id='isolation'>{escape(view.isolation)}</p>" if view.isolation else ""
     if len(view.graded):
         first = view.graded.first
-        parts.append(f"<p id='provenance'>Graded by grader {escape(first['grader'] or 'unknown')}, course "
-                     f"{escape(first['course'] or 'none')}, current handout {escape(first['handout'] or 'not set')}, "
-                     f"seed {escape(first['seed'])}.</p>")
+        yield (f"<p id='provenance'>Graded by grader {escape(first['grader'] or 'unknown')}, course "
+               f"{escape(first['course'] or 'none')}, current handout {escape(first['handout'] or 'not set')}, "
+               f"seed {escape(first['seed'])}.</p>")
         top = view.graded.max_score or 1
         bins = Counter(min(9, int(10 * score / top)) for score in view.graded.scores)
-        parts.append("<h2 id='histogram'>Scores</h2><table>")
+        yield "<h2 id='histogram'>Scores</h2><table>"
         for b in range(10):
             count = bins.get(b, 0)
-            parts.append(f"<tr><td>{10 * b}-{10 * b + 10}%</td><td class='num'>{count}</td>"
-                         f"<td><span class='bar' style='width:{8 * count}px'></span></td></tr>")
-        parts.append("</table>")
-        parts.append(_table("mistakes", "Named mistakes (learners who made each; failures of their own)",
-                            ["check", "mistake", "learners"],
-                            [[escape(f"{m['chapter']}/{m['function']}") + f" <small>{m['kind']}</small>",
-                              escape(m["mistake"]), str(m["learners"])] for m in counts["mistakes"]], {2}))
+            yield (f"<tr><td>{10 * b}-{10 * b + 10}%</td><td class='num'>{count}</td>"
+                   f"<td><span class='bar' style='width:{8 * count}px'></span></td></tr>")
+        yield "</table>"
+        yield _table("mistakes", "Named mistakes (learners who made each; failures of their own)",
+                     ["check", "mistake", "learners"],
+                     [[escape(f"{m['chapter']}/{m['function']}") + f" <small>{m['kind']}</small>",
+                       escape(m["mistake"]), str(m["learners"])] for m in counts["mistakes"]], {2})
         failing = [c for c in counts["checks"] if c["failed"] + c["failed_upstream"] + c["errors"]][:60]
-        parts.append(_table("failure-rates", "Checks by failure rate (a helper's failure counted apart)",
-                            ["check", "failed", "rate", "because a helper fails", "could not be graded"],
-                            [[f"{escape(c['id'])}<br><small>{escape(c['description'])}</small>",
-                              f"{c['failed']}/{c['seen']}", f"{100 * c['failed'] / c['seen']:.0f}%",
-                              str(c["failed_upstream"]), str(c["errors"])] for c in failing], {1, 2, 3, 4}))
-        parts.append(_table("options", "Options chosen (by option: each learner has their own letters)",
-                            ["question", "option", "right", "chosen by"],
-                            [[escape(o["question"]), f"{escape(o['option'])}) {escape(o['text'])}",
-                              "yes" if o["right"] else "no", str(o["chosen"])] for o in counts["options"]], {3}))
-        parts.append(_table("answer-forms", "Symbolic answers by form", ["question", "answer", "verdict", "learners"],
-                            [[escape(f["question"]), f"<code>{escape(f['form'])}</code>",
-                              escape(f["verdict"] + (f" ({f['mistake']})" if f["mistake"] else "")),
-                              str(f["learners"])] for f in counts["answer_forms"]], {3}))
-        parts.append(_table("messages", "Most common failure messages", ["count", "chapter", "message"],
-                            [[str(m["count"]), escape(m["chapter"]), escape(m["message"])] for m in counts["messages"]],
-                            {0}))
+        yield _table("failure-rates", "Checks by failure rate (a helper's failure counted apart)",
+                     ["check", "failed", "rate", "because a helper fails", "could not be graded"],
+                     [[f"{escape(c['id'])}<br><small>{escape(c['description'])}</small>",
+                       f"{c['failed']}/{c['seen']}", f"{100 * c['failed'] / c['seen']:.0f}%",
+                       str(c["failed_upstream"]), str(c["errors"])] for c in failing], {1, 2, 3, 4})
+        yield _table("options", "Options chosen (by option: each learner has their own letters)",
+                     ["question", "option", "right", "chosen by"],
+                     [[escape(o["question"]), f"{escape(o['option'])}) {escape(o['text'])}",
+                       "yes" if o["right"] else "no", str(o["chosen"])] for o in counts["options"]], {3})
+        yield _table("answer-forms", "Symbolic answers by form", ["question", "answer", "verdict", "learners"],
+                     [[escape(f["question"]), f"<code>{escape(f['form'])}</code>",
+                       escape(f["verdict"] + (f" ({f['mistake']})" if f["mistake"] else "")),
+                       str(f["learners"])] for f in counts["answer_forms"]], {3})
+        yield _table("messages", "Most common failure messages", ["count", "chapter", "message"],
+                     [[str(m["count"]), escape(m["chapter"]), escape(m["message"])] for m in counts["messages"]],
+                     {0})
     if view.similar:
         rows = []
         for pair in view.similar:
             shared = "".join(f"<pre>{escape(block)}</pre>" for block in pair.shared[:3])
             rows.append([escape(f"{pair.first} and {pair.second}"), f"{pair.score:.2f}",
                          escape(", ".join(pair.functions[:6])), shared])
-        parts.append(_table("similar", "Most similar submissions (for a person to look at; not an accusation)",
-                            ["learners", "similarity", "functions most alike", "shared lines"], rows, {1}))
+        yield _table("similar", "Most similar submissions (for a person to look at; not an accusation)",
+                     ["learners", "similarity", "functions most alike", "shared lines"], rows, {1})
     handouts = _handouts(view)
     if handouts:
-        parts.append("<h2 id='handouts'>Archives by handout</h2><ul>")
-        parts.extend(f"<li>{escape(h)}: {n}</li>" for h, n in sorted(handouts.items()))
-        parts.append("</ul>")
-    for section, title, items in (("flagged", "Flagged (graded; look at these)",
-                                   [(k, "; ".join(v)) for k, v in sorted(view.flagged.items())]),
-                                  ("changes", "Scores that moved since the last run",
-                                   [(c[0], f"{c[1]} -> {c[2]}: {c[4]}") for c in view.changes]),
-                                  ("notes", "For the instructor", [("", n) for n in view.notes]),
-                                  ("not-graded", "Not graded", sorted(view.not_graded.items())),
-                                  ("skipped", "Skipped (not taken as submissions)", list(view.skipped))):
-        if items:
-            parts.append(f"<h2 id='{section}'>{title}</h2><ul>")
-            parts.extend(f"<li>{escape(k) + ': ' if k else ''}{escape(v)}</li>" for k, v in items)
-            parts.append("</ul>")
-    return "".join(parts) + "</main></body></html>\n"
+        yield "<h2 id='handouts'>Archives by handout</h2><ul>"
+        yield from (f"<li>{escape(h)}: {n}</li>" for h, n in sorted(handouts.items()))
+        yield "</ul>"
+    sections = (("flagged", "Flagged (graded; look at these)", view.flagged,
+                 ((k, "; ".join(v)) for k, v in sorted(view.flagged.items()))),
+                ("changes", "Scores that moved since the last run", view.changes,
+                 ((c[0], f"{c[1]} -> {c[2]}: {c[4]}") for c in view.changes)),
+                ("notes", "For the instructor", view.notes, (("", n) for n in view.notes)),
+                ("not-graded", "Not graded", view.not_graded, sorted(view.not_graded.items())),
+                ("skipped", "Skipped (not taken as submissions)", view.skipped, view.skipped))
+    for section, title, present, items in sections:
+        if present:
+            yield f"<h2 id='{section}'>{title}</h2><ul>"
+            yield from (f"<li>{escape(k) + ': ' if k else ''}{escape(v)}</li>" for k, v in items)
+            yield "</ul>"
+    yield "</main></body></html>\n"
