@@ -31,7 +31,7 @@ import zipfile
 import zlib
 from collections.abc import Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -648,23 +648,30 @@ def _learner_state(out: Path, learner: str, status: str, message: str):
 
 class PackedResults(Mapping):
     """grader.history.Result by learner, in the order added, each kept packed (marshal, the values' types kept:
-    5 is not 5.0; compressed: about 1 kB) and unpacked when read: a class's results in a fraction of the memory of
-    the objects, and none of it scattered among the reports read meanwhile."""
+    5 is not 5.0; compressed where that pays: about 1 kB for a graded learner) and unpacked when read: a class's
+    results in a fraction of the memory of the objects, and none of it scattered among the reports read meanwhile."""
 
     def __init__(self) -> None:
+        from grader.history import Result
+
         self._packed: dict[str, bytes | object] = {}
+        self._fields = tuple(f.name for f in fields(Result))
 
     def add(self, result) -> None:
         try:
-            self._packed[result.learner] = zlib.compress(marshal.dumps(astuple(result)), 1)
+            data = marshal.dumps(tuple(getattr(result, name) for name in self._fields))
         except ValueError:  # a value marshal does not know: kept as it is
             self._packed[result.learner] = result
+            return
+        self._packed[result.learner] = b"z" + zlib.compress(data, 1) if len(data) > 512 else b"m" + data
 
     def __getitem__(self, learner: str):
         from grader.history import Result
 
         packed = self._packed[learner]
-        return Result(*marshal.loads(zlib.decompress(packed))) if isinstance(packed, bytes) else packed
+        if not isinstance(packed, bytes):
+            return packed
+        return Result(*marshal.loads(zlib.decompress(packed[1:]) if packed[:1] == b"z" else packed[1:]))
 
     def __contains__(self, learner: object) -> bool:
         return learner in self._packed
