@@ -48,17 +48,64 @@ HOSTILE = [
 ]
 
 
-def make(folder: Path, count: int) -> None:
+# Right answers as learners write them (issue 14): loops over samples in plain Python, math per element,
+# sympy at every call. Each replaces the reference's function of that name in a "styled" submission.
+STYLED = [
+    ("ch00_range_sensor", "mean_shift", """def mean_shift(mean, sigma, n, seed):
+    import math
+    rng = np.random.default_rng(seed)
+    total = 0.0
+    for _ in range(int(n)):
+        dx, dy = rng.standard_normal(2)
+        total += math.hypot(mean[0] + sigma * dx, mean[1] + sigma * dy)
+    return total / int(n) - math.hypot(mean[0], mean[1])
+"""),
+    ("ch08_lab", "measure_samples", """def measure_samples(samples, ref_bearing):
+    import math
+    rows = []
+    for x, y in samples:
+        bearing = math.atan2(y, x)
+        bearing += 2 * math.pi * round((ref_bearing - bearing) / (2 * math.pi))
+        rows.append([math.hypot(x, y), bearing])
+    return np.array(rows)
+"""),
+    ("ch02_gradient", "example_gradient", """def example_gradient(x, y):
+    import sympy
+    X, Y = sympy.symbols("x y")
+    f = X ** 2 + X * Y
+    return np.array([float(sympy.diff(f, v).subs({X: x, Y: y})) for v in (X, Y)])
+"""),
+    ("ch06_measurement", "H_jacobian", """def H_jacobian(x, y):
+    import math
+    r2 = x * x + y * y
+    if r2 == 0:
+        raise ValueError("H is undefined at r = 0")
+    r = math.sqrt(r2)
+    return np.array([[x / r, y / r], [-y / r2, x / r2]])
+"""),
+]
+
+
+def make(folder: Path, count: int, styles: bool = False) -> None:
+    """`count` submissions: right, buggy and hostile in turn; with `styles`, right ones in the learners' styles
+    (STYLED) as a fourth kind, and every third submission zipped."""
     draw = random.Random(1)
     answers = ROOT / "solutions" / "answers"
+    kinds = ("right", "styled", "buggy", "hostile") if styles else ("right", "buggy", "hostile")
     for i in range(count):
-        kind = ("right", "buggy", "hostile")[i % 3]
-        replacements = {}
-        if kind != "right":
+        kind = kinds[i % len(kinds)]
+        replacements: dict[str, str] = {}
+        if kind == "styled":
+            for module, function, source in STYLED:
+                replacements[module] = replace_function(module, function, source)  # one function per module
+        elif kind != "right":
             module, function, source = draw.choice(BUGGY if kind == "buggy" else HOSTILE)
             replacements[module] = replace_function(module, function, source)
         root = build_submission(folder / f"{kind}{i:04d}", replacements)
         shutil.copytree(answers, root / "exercises" / "answers")
+        if styles and i % 3 == 2:
+            shutil.make_archive(str(root), "zip", root)
+            shutil.rmtree(root)
 
 
 def busy_cpu_seconds() -> float | None:
@@ -233,6 +280,9 @@ def main() -> None:
     parser.add_argument("--rss-counts", default="250,500,1000")
     parser.add_argument("--discovery", action="store_true", help="discover() on 2,500 to 10,000 empty folders")
     parser.add_argument("--discovery-counts", default="2500,5000,10000")
+    parser.add_argument("--styles", action="store_true",
+                        help="a realistic mix: right answers also in learners' styles (plain-Python loops, math, sympy), a "
+                             "third zipped")
     parser.add_argument("--repeat", type=int, default=None, help="runs per figure (medians); --rss 1, --discovery 7")
     args = parser.parse_args()
     if args.rss or args.discovery:
@@ -246,8 +296,8 @@ def main() -> None:
             shutil.rmtree(work, ignore_errors=True)
         return
     work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
-    make(work / "submissions", args.count)
-    make(work / "baseline", args.baseline_count)
+    make(work / "submissions", args.count, args.styles)
+    make(work / "baseline", args.baseline_count, args.styles)
     singles = []
     for _ in range(3):
         started = time.perf_counter()
