@@ -331,3 +331,22 @@ def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
     report = json.loads((tmp_path / "out" / "slow" / "report.json").read_text())
     messages = [c["message"] for c in report["chapters"][1]["checks"] if c["function"] == "H_jacobian"]
     assert any("3 s" in m and "ran out" in m for m in messages), messages
+
+
+def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preloaded_it(tmp_path):
+    """The batch's fork server imports sympy before it forks; a learner whose gradient differentiates with sympy
+    at every call is graded as the reference is."""
+    sympy_style = replace_function("ch02_gradient", "example_gradient", """
+        def example_gradient(x, y):
+            import sympy
+            X, Y = sympy.symbols("x y")
+            f = X ** 2 + X * Y
+            return np.array([float(sympy.diff(f, v).subs({X: x, Y: y})) for v in (X, Y)])
+        """)
+    build_submission(tmp_path / "submissions" / "sam", {"ch02_gradient": sympy_style})
+    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(tmp_path / "submissions"), "--out",
+                           str(tmp_path / "out"), "--chapters", "ch02", "--no-html"],
+                          cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=300)
+    assert done.returncode in (0, 1), done.stderr[-2000:]
+    rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
+    assert rows["sam"]["status"] == "graded" and rows["sam"]["ch02_code"] == code_points("ch02"), rows["sam"]

@@ -12,7 +12,7 @@ from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
 from grader.cli import main
-from tests.conftest import run_on_terminal
+from tests.conftest import REPO, run_on_terminal
 
 CHECK_KEYS = {"id", "function", "description", "status", "points", "max_points", "message", "expected", "got"}
 
@@ -240,3 +240,16 @@ def test_no_color_and_force_color_as_their_specs_say(repo_root, env, terminal, c
     else:
         output = subprocess.run(command, cwd=repo_root, env=full, capture_output=True, text=True, timeout=120).stdout
     assert ("\x1b[" in output) is coloured and "ch03 total" in output
+
+
+def test_grade_chapter_imports_nothing_heavy_it_does_not_use():
+    """`grade ch06` with its quiz, in an environment that has jax (CI's test extras): no sympy, jinja2 or
+    matplotlib, and no importlib.metadata (reading the autograd libraries' files through it cost 180 ms)."""
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "grader", "ch06", "--solutions"],
+                          cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    imported = {line.split("|")[-1].strip() for line in done.stderr.splitlines() if "|" in line}
+    assert "grader.quiz" in imported  # the quiz was graded
+    heavy = {m for m in imported if m.split(".")[0] in ("sympy", "jinja2", "matplotlib", "email")
+             or m == "importlib.metadata"}
+    assert not heavy, sorted(heavy)
