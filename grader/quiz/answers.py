@@ -16,9 +16,14 @@ from pathlib import Path
 
 import yaml
 
-# The pure-Python loader on purpose: libyaml's composer recurses in C and crashes the process on
-# deeply nested input, while Python's stops with a RecursionError. Answer files are small.
+# libyaml's composer recurses in C and crashes the process on deeply nested input, while the pure-Python
+# one stops with a RecursionError. So libyaml (15 times faster) composes only a text that cannot nest
+# deeper than C_DEPTH_BOUND: every level of nesting needs one of NESTING's characters or a line. Any
+# text that libyaml refuses is composed again by the pure-Python loader, whose messages are the ones shown.
 LOADER = yaml.SafeLoader
+FAST_LOADER = getattr(yaml, "CSafeLoader", None)
+NESTING = "[{-?:"
+C_DEPTH_BOUND = 1000
 MAX_BYTES = 64_000
 MAX_DEPTH = 3  # an answer, a list, a list of lists (a matrix)
 MAX_ITEMS = 100
@@ -130,6 +135,17 @@ def _why_not_yaml(line: str, key: str) -> str:
     return "this answer is not valid YAML (quote it: key: \"...\")"
 
 
+def compose(text: str) -> yaml.Node | None:
+    """`text` composed into YAML nodes (marks give lines and character offsets); yaml.YAMLError or
+    RecursionError as the pure-Python loader raises them."""
+    if FAST_LOADER is not None and sum(map(text.count, NESTING)) + text.count("\n") < C_DEPTH_BOUND:
+        try:
+            return yaml.compose(text, Loader=FAST_LOADER)
+        except yaml.YAMLError:
+            pass  # composed again below, for the pure-Python loader's message
+    return yaml.compose(text, Loader=LOADER)
+
+
 def read(path: Path, shown: str) -> AnswerFile:
     """The answers in `path`; `shown` is how messages name the file."""
     out = AnswerFile({}, [])
@@ -142,7 +158,7 @@ def read(path: Path, shown: str) -> AnswerFile:
         return out
     text = path.read_bytes().decode("utf-8", errors="replace")
     try:
-        node = yaml.compose(text, Loader=LOADER)
+        node = compose(text)
         if node is not None:
             _entries_of_node(node, 0, text, shown, out)
         return out
@@ -159,7 +175,7 @@ def read(path: Path, shown: str) -> AnswerFile:
     for begin, end in pairwise(starts):
         block = "\n".join(lines[begin:end])
         try:
-            node = yaml.compose(block, Loader=LOADER)
+            node = compose(block)
         except (yaml.YAMLError, RecursionError):
             key = _ENTRY.match(lines[begin]).group(1)
             out.unreadable[key] = f"{shown}, line {begin + 1}, question {key}: {_why_not_yaml(lines[begin], key)}"

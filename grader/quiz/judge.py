@@ -7,6 +7,7 @@ the bank's canonical letters, in which keys and feedback are written."""
 from __future__ import annotations
 
 import ast
+import dataclasses
 import re
 from dataclasses import dataclass
 
@@ -156,9 +157,32 @@ def right_answer(question: Question, key: Key, right_value: object, values: dict
     return right_value
 
 
+_JUDGED: dict[tuple, tuple[Judgement, Question, Key]] = {}
+_JUDGED_MAX = 4096
+
+
 def judge(question: Question, key: Key, value: object, right_value: object, seed: int,
           lettering: dict[str, str] | None = None, deadline: float | None = None,
           values: dict[str, float] | None = None, text: str = "") -> Judgement:
+    """As `_judge`, once per process for the same question, key, answer, numbers and letters (a verdict
+    depends on nothing else): a class's learners give the same answers to the same questions, and
+    grade batch's workers judge them once. A verdict sympy left undecided is not kept."""
+    memo = (id(question), id(key), type(value).__name__, repr(value), repr(right_value), seed, text,
+            tuple((lettering or {}).items()), tuple(sorted((values or {}).items())))
+    kept = _JUDGED.get(memo)
+    if kept is not None:
+        return dataclasses.replace(kept[0])
+    verdict = _judge(question, key, value, right_value, seed, lettering, deadline, values, text)
+    if not verdict.undecided:
+        if len(_JUDGED) >= _JUDGED_MAX:
+            _JUDGED.clear()
+        _JUDGED[memo] = (dataclasses.replace(verdict), question, key)  # the objects kept: their ids stay theirs
+    return verdict
+
+
+def _judge(question: Question, key: Key, value: object, right_value: object, seed: int,
+           lettering: dict[str, str] | None = None, deadline: float | None = None,
+           values: dict[str, float] | None = None, text: str = "") -> Judgement:
     """The verdict on `value` (letters as shown through `lettering`, default the bank's own) against
     `right_value`; feedback of a wrong option names it by its shown letter, a wrong value or
     expression that matches a known mistake (grader.quiz.mistakes; `values`: the learner's numbers,

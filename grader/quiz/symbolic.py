@@ -29,6 +29,7 @@ definition there; for sympy it is replaced by its definition.
 from __future__ import annotations
 
 import ast
+import functools
 import json
 import keyword
 import math
@@ -333,7 +334,15 @@ def _unknown_name(name: str, allowed: str, names: set[str]) -> str:
 
 def check_text(text: object, symbols: tuple[str, ...] = (), lists: bool = False) -> ast.Expression:
     """Whitelist-check an answer's syntax tree (with `lists`, brackets of numbers too), after
-    `normalize`; the tree, or AnswerError. Needs neither sympy nor any evaluation."""
+    `normalize`; the tree, or AnswerError. Needs neither sympy nor any evaluation. The tree of a text
+    is checked once per process and shared: callers read it and never change it."""
+    if isinstance(text, str):
+        return _checked_tree(text, tuple(symbols), lists)
+    return _checked_tree.__wrapped__(text, tuple(symbols), lists)
+
+
+@functools.lru_cache(maxsize=4096)  # a class's answers and a key's wrong versions repeat across learners
+def _checked_tree(text: object, symbols: tuple[str, ...], lists: bool) -> ast.Expression:
     text = normalize(text, symbols)
     if not text:
         raise AnswerError("the answer is empty")
@@ -404,18 +413,18 @@ def number(text: object) -> float:
         raise AnswerError(f"it has no finite real value ({exc})") from None
 
 
-class _Numbers(ast.NodeTransformer):
-    """Replaces the names of `values` by their numbers (a negative one as a minus sign and a number)."""
-
-    def __init__(self, values: dict[str, float]) -> None:
-        self.values = values
-
-    def visit_Name(self, node: ast.Name) -> ast.AST:
-        if node.id not in self.values:
-            return node
-        value = float(self.values[node.id])
+def _with_numbers(node: object, values: dict[str, float]) -> object:
+    """A copy of a checked tree with the names of `values` replaced by their numbers (a negative one as a
+    minus sign and a number); the tree itself stays as it is (check_text shares it)."""
+    if isinstance(node, ast.Name) and node.id in values:
+        value = float(values[node.id])
         size = ast.Constant(int(abs(value)) if value.is_integer() else abs(value))
         return ast.UnaryOp(ast.USub(), size) if value < 0 else size
+    if isinstance(node, ast.AST):
+        return type(node)(**{name: _with_numbers(field, values) for name, field in ast.iter_fields(node)})
+    if isinstance(node, list):
+        return [_with_numbers(item, values) for item in node]
+    return node
 
 
 def substitute(text: str, values: dict[str, float], symbols: tuple[str, ...] = ()) -> str:
@@ -424,8 +433,14 @@ def substitute(text: str, values: dict[str, float], symbols: tuple[str, ...] = (
     `symbols` alone. AnswerError if `text` does not pass the whitelist with those names."""
     if not values:
         return text
-    tree = check_text(text, symbols + tuple(values))
-    written = ast.unparse(ast.fix_missing_locations(_Numbers(values).visit(tree)))
+    return _substituted(text, tuple(values.items()), tuple(symbols))
+
+
+@functools.lru_cache(maxsize=4096)
+def _substituted(text: str, values: tuple[tuple[str, float], ...], symbols: tuple[str, ...]) -> str:
+    numbers = dict(values)
+    tree = _with_numbers(check_text(text, symbols + tuple(numbers)), numbers)
+    written = ast.unparse(ast.fix_missing_locations(tree))
     return written.replace(" ** ", "^").replace(" * ", "*").replace(" / ", "/")
 
 
