@@ -16,7 +16,7 @@ Light on purpose: the child and `grade`'s launcher import this before numpy (num
 from __future__ import annotations
 
 import binascii
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 # ------------------------------------------------------------------------------ events (child -> parent)
 
@@ -271,6 +271,7 @@ class Returned:
     encoded: dict | None = None
     error: dict | None = None
     note: str = ""
+    _array: tuple | None = field(default=None, init=False, repr=False, compare=False)  # as_array's, once decoded
 
     @property
     def ok(self) -> bool:
@@ -297,7 +298,14 @@ class Returned:
         return [Returned(VALUE, self.function, item) for item in self.encoded["items"]]
 
     def as_array(self):
-        """Plain float64 array for an exact ndarray or a real scalar (shape ()); None otherwise."""
+        """Plain float64 array for an exact ndarray or a real scalar (shape ()); None otherwise. Decoded
+        once; each caller gets its own copy."""
+        if self._array is None:
+            object.__setattr__(self, "_array", (self._decoded_array(),))
+        array = self._array[0]
+        return None if array is None else array.copy()
+
+    def _decoded_array(self):
         import numpy as np
 
         enc = self.encoded
