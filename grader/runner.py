@@ -111,9 +111,10 @@ class _Child:
         is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
         the caller stops the child for it."""
         while True:
-            while b"\n" in self.buffer:
-                line, self.buffer = self.buffer.split(b"\n", 1)
-                yield _parse(line)
+            if b"\n" in self.buffer:
+                *lines, self.buffer = self.buffer.split(b"\n")  # one split per chunk, not one copy per line
+                for line in lines:
+                    yield _parse(line)
             if len(self.buffer) > MAX_LINE:
                 yield MALFORMED
                 return

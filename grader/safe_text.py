@@ -94,6 +94,27 @@ def for_json(value: object) -> object:
     return value
 
 
+# What for_terminal would change, as it shows in JSON text written with ensure_ascii=False: C0 controls
+# (escaped by JSON as \u00XX, \r, \b, \f), C1 controls and DEL, bidirectional marks and separators. A
+# backslash the text itself holds shows as \\ and may match too: that only sends the data the slow way.
+_TERMINAL_UNSAFE_JSON = re.compile(r"\\u00|\\[rbf]|[\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069\u2028\u2029]")
+
+
+def json_for_terminal(data: object) -> str:
+    """JSON text (ASCII, no NaN) of plain data with every string made safe by for_terminal. Data with
+    nothing to clean, as almost all is (one encoding in C tells), is written as it is: no walk."""
+    import json
+
+    try:
+        text = json.dumps(data, ensure_ascii=False, allow_nan=False)
+        text.encode("utf-8")  # lone surrogates
+    except (UnicodeEncodeError, TypeError, ValueError):
+        text = None
+    if text is not None and not _TERMINAL_UNSAFE_JSON.search(text):
+        return json.dumps(data, allow_nan=False)
+    return json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False)
+
+
 _PLAIN = frozenset({int, float, bool, type(None)})
 
 

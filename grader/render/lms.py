@@ -20,7 +20,7 @@ from grader.chapters import BY_ID
 from grader.history import Result
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.render import plural
-from grader.safe_text import clean_value, for_csv, for_json, for_terminal, for_xml
+from grader.safe_text import for_csv, for_xml, json_for_terminal
 
 SCHEMA_DIR = Path(__file__).resolve().parent.parent / "schemas"
 SCHEMAS = ("report", "batch-report", "gradescope-results", "classroom", "summary")
@@ -141,7 +141,7 @@ def for_display(data: dict) -> str:
     """JSON text whose strings show as they read: no terminal escape sequence or control character (but
     line breaks and tabs) from learner text survives into what Gradescope's page or GitHub's log shows
     (the log renders colours), and valid UTF-8."""
-    return json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False) + "\n"
+    return json_for_terminal(data) + "\n"
 
 
 def gradescope(report: Report, **options) -> str:
