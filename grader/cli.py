@@ -184,6 +184,10 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     if watch:
         _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose, functions)
         return
+    if html_path is not None:  # before any thread (grader.launch may have started it already)
+        from grader.render import drawer
+
+        drawing = drawer.start()
     # the child may already run (grader.launch); else start it now, to overlap our imports below
     session = launch.take(submission)
     if session is not None and no_sandbox and session.wrap is not None:
@@ -199,7 +203,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
     if not no_quiz:
         threading.Thread(target=_preload_quiz, daemon=True).start()
-    if html_path is not None:
+    if html_path is not None and not drawing:
         from grader.render.html import preload
 
         threading.Thread(target=preload, daemon=True).start()

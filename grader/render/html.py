@@ -174,7 +174,7 @@ class _Figure:
         self.gave = gave  # what the learner's own functions gave, in numbers (also in alt)
 
 
-def _svg_uri(fig) -> str:
+def svg_uri(fig) -> str:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="svg")  # fixed margins: bbox_inches="tight" would draw everything twice
     return "data:image/svg+xml;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
@@ -228,7 +228,7 @@ def _draw_ch01(fig, d):
 
 
 def _draw_ch02(ax, d):
-    grid = np.linspace(-3, 3, 200)
+    grid = np.linspace(-3, 3, 80)  # a quadratic's contours are smooth: 80 points draw them as well as 200
     X, Y = np.meshgrid(grid, grid)
     ax.contour(X, Y, X**2 + 0.5 * X * Y + Y**2, levels=8, colors=GUIDE, linewidths=0.8)
     ok = all(v is not None for v in d["learner"])
@@ -349,7 +349,7 @@ def _draw_ch08(fig, d):
 def _draw_ch09(ax, d):
     ok = d["H"] is not None
     H = np.array(d["H"] if ok else d["H_ref"], dtype=float)
-    grid = np.linspace(-2, 2, 200)
+    grid = np.linspace(-2, 2, 80)  # a quadratic's contours are smooth: 80 points draw them as well as 200
     X, Y = np.meshgrid(grid, grid)
     Q = 0.5 * (H[0, 0] * X**2 + 2 * H[0, 1] * X * Y + H[1, 1] * Y**2)
     # one dark colour: matplotlib draws the negative levels dashed, so the sign is told by line style
@@ -365,7 +365,7 @@ def _draw_ch09(ax, d):
 
 _DRAW = {"ch00": _draw_ch00, "ch01": _draw_ch01, "ch02": _draw_ch02, "ch03": _draw_ch03, "ch04": _draw_ch04,
          "ch05": _draw_ch05, "ch06": _draw_ch06, "ch07": _draw_ch07, "ch08": _draw_ch08, "ch09": _draw_ch09}
-_TWO_PANELS = {"ch01", "ch08"}
+TWO_PANELS = {"ch01", "ch08"}
 
 
 # What each plot's learner functions gave, in numbers: the plot's text alternative (WCAG 1.1.1) says
@@ -489,17 +489,21 @@ def gave(chapter: str, data: dict) -> str:
     return f"In numbers: {said}." if said else ""
 
 
-def _plain_log_labels(fig) -> None:
-    """Log-axis labels as plain text (1e-05, 0.01): matplotlib's default 10^k labels go through its
-    mathtext parser, which costs more than drawing the rest of the figure."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
+def _light_ticks(fig) -> None:
+    """At most five labelled ticks per axis and no minor ticks: every tick is a small drawing of its own
+    (most of a figure's cost), and five read as well as nine. Log-axis labels as plain text (1e-05, 0.01):
+    matplotlib's default 10^k labels go through its mathtext parser, which costs more than the rest."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullLocator
 
     plain = FuncFormatter(lambda value, _: f"{value:g}")
     for ax in fig.axes:
         for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
             if scale == "log":
+                axis.set_major_locator(LogLocator(numticks=5))
                 axis.set_major_formatter(plain)
-                axis.set_minor_formatter(NullFormatter())
+            else:
+                axis.set_major_locator(MaxNLocator(nbins=5))
+            axis.set_minor_locator(NullLocator())
 
 
 def preload() -> None:
@@ -508,6 +512,9 @@ def preload() -> None:
 
     matplotlib.use("Agg")
     matplotlib.rcParams["svg.fonttype"] = "none"  # text stays text: smaller and faster than glyph paths
+    # titles just above the axes (no ticks are on top): else matplotlib measures every tick label of each
+    # axes to place its title, a quarter of a figure's cost
+    matplotlib.rcParams["axes.titley"] = 1.0
     import matplotlib.pyplot  # noqa: F401
 
 
@@ -517,11 +524,11 @@ def draw(chapter_id: str, data: dict):
     preload()
     import matplotlib.pyplot as plt
 
-    fig = plt.figure(figsize=(9, 3.4) if chapter_id in _TWO_PANELS else (6, 3.6))
+    fig = plt.figure(figsize=(9, 3.4) if chapter_id in TWO_PANELS else (6, 3.6))
     try:
-        target = fig if chapter_id in _TWO_PANELS else fig.add_subplot()
+        target = fig if chapter_id in TWO_PANELS else fig.add_subplot()
         _, caption = (_NAMED[data["plot"]][0] if "plot" in data else _DRAW[chapter_id])(target, data)
-        _plain_log_labels(fig)
+        _light_ticks(fig)
         fig.subplots_adjust(left=0.1, right=0.97, bottom=0.15, top=0.9, wspace=0.28)
     except BaseException:
         plt.close(fig)
@@ -546,7 +553,7 @@ def figures(chapter: ChapterResult) -> list[_Figure]:
             continue
         try:
             alt = f"{chapter.chapter} plot: {caption}. {numbers}".strip()
-            out.append(_Figure(_svg_uri(fig), alt, caption, 900 if chapter.chapter in _TWO_PANELS else 600, 340,
+            out.append(_Figure(svg_uri(fig), alt, caption, 900 if chapter.chapter in TWO_PANELS else 600, 340,
                                numbers))
         except Exception as exc:
             out.append(_Figure("", "", f"This plot could not be drawn ({type(exc).__name__}: {exc}).", gave=numbers))
@@ -586,10 +593,12 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
         reports in one notebook would repeat the names (axe: landmark-unique)."""
         return Markup(f' aria-labelledby="{pid}{section}-title"') if kind == "page" else Markup("")
 
-    return _template(source).render(report=report, figures=_all_figures(report), num=_num, values=_values,
-                                    verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid,
-                                    root=root, kind=kind, h=heading, landmark=landmark,
-                                    footer=provenance.footer(report), adjustments=report.all_adjustments())
+    figures_drawn = _figures_due(report)
+    template = _template(source)
+    return template.render(report=report, figures=figures_drawn(), num=_num, values=_values,
+                           verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
+                           kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report),
+                           adjustments=report.all_adjustments())
 
 
 def render(report: Report) -> str:
@@ -614,27 +623,16 @@ def render_fragment(report: Report, id_prefix: str | None = None, heading_level:
     return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level)
 
 
-def _all_figures(report: Report) -> dict[str, list[_Figure]]:
-    """Every chapter's figures, drawn by two forked processes where forking is safe (drawing is most of
-    the report's cost); serially where it is not (Windows, macOS) or fails."""
+def _figures_due(report: Report):
+    """Start drawing every chapter's figures (grader.render.drawer); returns the function that waits for them."""
+    from grader.render import drawer
+
     chapters = [c for c in report.chapters if c.plots]
-    out: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
-    from grader.spawn import fork_is_safe
+    wait = drawer.figures_due(chapters)
 
-    if len(chapters) > 1 and fork_is_safe():
-        try:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
+    def collect() -> dict[str, list[_Figure]]:
+        out: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
+        out.update({chapter.chapter: drawn for chapter, drawn in zip(chapters, wait())})
+        return out
 
-            preload()
-            with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
-                                     mp_context=multiprocessing.get_context("fork")) as pool:
-                for chapter, drawn in zip(chapters, pool.map(figures, chapters)):
-                    out[chapter.chapter] = drawn
-            return out
-        except (OSError, ValueError, ImportError, RuntimeError):
-            pass
-    for chapter in chapters:
-        out[chapter.chapter] = figures(chapter)
-    return out
-
+    return collect

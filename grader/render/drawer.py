@@ -1,0 +1,127 @@
+"""The HTML report's figures, drawn in processes of their own.
+
+Drawing (matplotlib) is most of the report's cost, and importing matplotlib alone takes about 0.4 s.
+So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
+forks imports matplotlib and forks its own two drawing processes on the other core while the grader
+grades, then draws the chapters it is sent. Without it (not started, or it failed) two processes are
+forked when the figures are due; where forking is not safe (Windows, macOS) the figures are drawn in
+the grader's own process. This module imports nothing heavy."""
+
+from __future__ import annotations
+
+import os
+
+_STARTED: list = []  # the drawing process and our end of its pipe, until they are used
+
+
+def start() -> bool:
+    """Fork the drawing process now. Call it before any thread starts (a fork copies only the calling
+    thread). False where forking is not safe or fails."""
+    from grader.spawn import fork_is_safe, spare
+
+    if _STARTED or not fork_is_safe():
+        return bool(_STARTED)
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    ours, theirs = context.Pipe()
+    process = context.Process(target=_draw_what_comes, args=(theirs,), name="grade-report-drawer")
+    try:
+        process.start()
+    except OSError:
+        return False
+    theirs.close()
+    spare(process.pid)  # the grader's own process: grader.spawn.kill_orphans leaves it alone
+    _STARTED.append((process, ours))
+    import atexit
+
+    atexit.register(_stop)  # before multiprocessing's own exit handler, which would wait for it
+    return True
+
+
+def _stop() -> None:
+    """End a drawing process nobody used: it reads the end of its pipe."""
+    while _STARTED:
+        process, ours = _STARTED.pop()
+        ours.close()
+        process.join(5)
+        if process.is_alive():
+            process.kill()
+
+
+def _draw_what_comes(connection) -> None:
+    """The drawing process: only its pipe stays open (no copy of the grader's pipes to the learner's
+    child); it ends when the pipe closes."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from grader.render.html import preload
+
+    keep = connection.fileno()
+    os.closerange(3, keep)
+    os.closerange(keep + 1, 1 << 16)
+    preload()
+    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
+                             mp_context=multiprocessing.get_context("fork")) as pool:
+        list(pool.map(int, range(2)))  # both drawing processes forked now, not when the figures are due
+        try:
+            chapters = connection.recv()
+        except (EOFError, OSError):
+            return
+        connection.send(_draw_with(pool, chapters))
+
+
+def _draw_with(pool, chapters: list) -> list[list]:
+    """Each chapter's figures (grader.render.html.figures), drawn by `pool`'s processes, the two-panel
+    figures first (they take longest)."""
+    from grader.render.html import TWO_PANELS, figures
+
+    order = sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS)
+    futures = {i: pool.submit(figures, chapters[i]) for i in order}
+    return [futures[i].result() for i in range(len(chapters))]
+
+
+def _draw_in_two(chapters: list) -> list[list]:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
+                             mp_context=multiprocessing.get_context("fork")) as pool:
+        return _draw_with(pool, chapters)
+
+
+def figures_due(chapters: list):
+    """Start drawing the figures of `chapters` (grader.model.ChapterResult); returns the function that
+    waits for them, one list of figures per chapter: drawn by the started drawing process, else by two
+    processes forked then, where forking is safe, else by this process."""
+    from grader.render.html import figures, preload
+    from grader.spawn import fork_is_safe
+
+    sent = None
+    if chapters and _STARTED:
+        process, ours = _STARTED.pop()
+        try:
+            ours.send(chapters)
+            sent = (process, ours)
+        except (OSError, ValueError):
+            ours.close()
+
+    def wait() -> list[list]:
+        if sent is not None:
+            process, ours = sent
+            try:
+                return ours.recv()
+            except (EOFError, OSError):
+                pass  # drawn below instead
+            finally:
+                ours.close()
+                process.join(5)
+        if len(chapters) > 1 and fork_is_safe():
+            try:
+                preload()
+                return _draw_in_two(chapters)
+            except (OSError, ValueError, ImportError, RuntimeError):
+                pass
+        return [figures(chapter) for chapter in chapters]
+
+    return wait

@@ -1,0 +1,69 @@
+"""The HTML report's drawing process (grader.render.drawer): started before grading, it draws the figures
+itself, survives the grader's cleanup of orphaned learner processes, and ends when the grader does."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from grader.spawn import fork_is_safe
+from tests.conftest import REPO
+
+pytestmark = pytest.mark.skipif(not fork_is_safe(), reason="the drawing process is forked (Linux)")
+
+SCRIPT = textwrap.dedent("""
+    import os, sys
+    from pathlib import Path
+    from grader import spawn
+    from grader.render import drawer, html
+
+    spawn.become_subreaper()
+    assert drawer.start()
+    process = drawer._STARTED[0][0]
+    spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
+
+    from grader.grading import grade
+    from grader.runner import Session
+    from grader.submission import Submission
+    report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch01", "ch06", "ch08"], with_plots=True)
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the figures were drawn here, not by the drawing process")
+
+    drawer._draw_in_two = html.figures = must_not_run  # in this process only: the drawer forked before
+    chapters = [c for c in report.chapters if c.plots]
+    drawn = drawer.figures_due(chapters)()
+    print(process.is_alive() or process.exitcode == 0, [len(f) for f in drawn],
+          all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))
+""")
+
+
+def test_the_drawing_process_draws_every_figure_and_outlives_the_cleanup_of_orphans():
+    proc = subprocess.run([sys.executable, "-c", SCRIPT, str(REPO)], cwd=REPO, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["True", "[1,", "1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]
+
+
+def test_an_unused_drawing_process_ends_with_the_grader():
+    script = textwrap.dedent("""
+        from grader.render import drawer
+        assert drawer.start()
+        print(drawer._STARTED[0][0].pid, flush=True)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    pid = int(proc.stdout.split()[0])
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return
+        time.sleep(0.1)
+    pytest.fail(f"the drawing process {pid} outlived the grader that started it")
