@@ -197,13 +197,11 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.sandbox import learner_sandbox
 
         session = Session(submission, wrap=None if no_sandbox else learner_sandbox())
-    # Imports that grading does not need yet run in a thread: it makes progress while grading
-    # waits on the child (pyyaml for the quiz, matplotlib for the report).
-    import threading
-
-    if not no_quiz:
-        threading.Thread(target=_preload_quiz, daemon=True).start()
+    # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
+    # matplotlib is imported in a thread, which makes progress while grading waits on the child.
     if html_path is not None and not drawing:
+        import threading
+
         from grader.render.html import preload
 
         threading.Thread(target=preload, daemon=True).start()
@@ -308,10 +306,6 @@ def _handout_id(given: str) -> str:
     except (OSError, ValueError, KeyError, TypeError):
         raise click.BadParameter(f"{path} is not the handout.json grade release writes",
                                  param_hint="--handout") from None
-
-
-def _preload_quiz() -> None:
-    import grader.quiz.judge  # noqa: F401  (pyyaml and the quiz modules)
 
 
 def write_atomically(path: str, text: str) -> None:

@@ -79,6 +79,17 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     course = course or (courses.current() if courses.in_handout() else courses.Course())
     others, notes = other_functions(request)
     hidden = hidden_ids(course, request.chapters)
+    if request.functions:
+        request = dataclasses.replace(request, quiz=False)
+    quizzes: list[Report] = []
+    if request.quiz:  # judged while the child runs the code's calls (no learner code: YAML only)
+        def quiz_meanwhile() -> None:
+            try:
+                quizzes.append(quiz_report(session, request, course, list(request.chapters)))
+            except Exception:  # noqa: BLE001  judged again below, where what it raises is the report's to meet
+                pass
+
+        session.meanwhile = quiz_meanwhile
     report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
                    submission_label=request.label,
                    exclude=hidden | switched_off(course, request.chapters) | others)
@@ -91,26 +102,39 @@ def build_report(session: Session, request: Request, course: courses.Course | No
                     if f"{chapter.chapter}/{c.id}" in hidden and f"{chapter.chapter}/{c.id}" not in others]
             chapter.hidden_checks, chapter.hidden_points = len(mine), sum(c.points for c in mine)
             chapter.notes.append(notes[chapter.chapter])
-    if request.functions:
-        request = dataclasses.replace(request, quiz=False)
     learner_id = request.learner
     if request.quiz:
-        from grader.quiz import add_quiz_results, answers_dir, learner_id as quiz_learner
-
-        submission = session.submission  # the quiz gets what is left of the learner's time budget
-        add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
-        folder = answers_dir(submission.root, submission.package)
-        learner_id = quiz_learner(folder, request.learner)[0]
-        from grader.quiz import DEFAULT_LEARNER, other_ids
-
-        report.flags += other_ids.explain(report, folder, f"{submission.package}/answers", learner_id,
-                                          [*request.other_ids, quiz_learner(folder, None)[0], DEFAULT_LEARNER])
-        for chapter in report.chapters:
-            if course.practice(chapter.chapter):
-                practice(chapter)
+        quiz = quizzes.pop() if quizzes else quiz_report(session, request, course, [c.chapter for c in report.chapters])
+        learner_id = quiz.learner_id
+        report.learner = quiz.learner
+        report.flags += quiz.flags
+        for chapter, quiz_chapter in zip(report.chapters, quiz.chapters):
+            chapter.checks.extend(quiz_chapter.checks)
+            chapter.problems.extend(quiz_chapter.problems)
     from grader import provenance
 
     provenance.stamp(report, course, learner_id)
+    return report
+
+
+def quiz_report(session: Session, request: Request, course: courses.Course, chapters: list[str]) -> Report:
+    """The quiz of `chapters` alone, as a Report (its `learner_id`: whose numbers were graded): answers judged
+    with what is left of the learner's time budget, answers worked out with another id's numbers explained,
+    practice quizzes marked."""
+    from grader.model import ChapterResult
+    from grader.quiz import DEFAULT_LEARNER, add_quiz_results, answers_dir, other_ids
+    from grader.quiz import learner_id as quiz_learner
+
+    submission = session.submission
+    report = Report(request.label or str(submission.root), [ChapterResult(c, "") for c in chapters])
+    add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
+    folder = answers_dir(submission.root, submission.package)
+    report.learner_id = quiz_learner(folder, request.learner)[0]
+    report.flags += other_ids.explain(report, folder, f"{submission.package}/answers", report.learner_id,
+                                      [*request.other_ids, quiz_learner(folder, None)[0], DEFAULT_LEARNER])
+    for chapter in report.chapters:
+        if course.practice(chapter.chapter):
+            practice(chapter)
     return report
 
 

@@ -170,6 +170,8 @@ class Session:
         self.output = ""
         self._prepared: Prepared | None = None
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
+        # work of the grader's own (no learner code) done once, while the first child runs the calls
+        self.meanwhile: Callable[[], None] | None = None
         self._child: _Child | None = _Child(started or self.launcher(submission))
 
     @property
@@ -224,7 +226,16 @@ class Session:
         if self._child is None:
             self._child = _Child(self.launcher(self.submission))
         child = self._child
-        child.send(self._request(pending, runs))
+        request, (work, self.meanwhile) = self._request(pending, runs), (self.meanwhile, None)
+        sender = None
+        if work is None:
+            child.send(request)
+        else:  # a thread writes the request (a child still starting reads it only when ready) while we work
+            import threading
+
+            sender = threading.Thread(target=child.send, args=(request,), daemon=True)
+            sender.start()
+            work()  # the child runs on the other core meanwhile; its lines wait in the pipe
         by_name = {r.chapter: r for r in pending}
         limits = self.limits
         state = {"deadline": time.monotonic() + limits.startup_seconds, "chapter_end": float("inf"),
@@ -289,6 +300,8 @@ class Session:
             child.handle.wait(2)
         self.output += child.stop()
         self._child = None
+        if sender is not None:
+            sender.join(5)  # the child is gone: a write still under way has failed by now
         if finished:
             return []
         exit_text = ("it broke the grading protocol: learner code wrote to the grader's result channel"

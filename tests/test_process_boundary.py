@@ -194,3 +194,33 @@ def test_a_malformed_array_from_the_child_is_no_value():
                     {"t": "ndarray", "dtype": "float64", "shape": [4], "f8": "AAAAAAAAAAA="},
                     {"t": "ndarray", "dtype": "float64", "shape": [3], "f8": 12}):
         assert Returned(VALUE, "f", encoded).as_array() is None, encoded
+
+
+def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submission_factory, tmp_path):
+    """The quiz is judged while the child runs the code's calls (Session.meanwhile): here the learner's module
+    waits, at import, for a file that only the meanwhile work writes, so grading finishes only if that work runs
+    after the request is sent and before the results are awaited."""
+    from grader.grading import grade
+    from grader.runner import Session
+    from grader.submission import Submission
+
+    signal_file = tmp_path / "meanwhile-ran"
+    root = submission_factory({"ch00_range_sensor": (
+        "import os, time\n"
+        "import numpy as np\n"
+        f"for _ in range(400):\n"
+        f"    if os.path.exists({str(signal_file)!r}):\n"
+        "        break\n"
+        "    time.sleep(0.025)\n"
+        "else:\n"
+        "    raise RuntimeError('the meanwhile work never ran')\n"
+        "def range_reading(x, y):\n"
+        "    return float(np.hypot(x, y))\n")})
+    session = Session(Submission(root, "exercises"))  # no sandbox: the learner's module sees tmp_path
+    ran = []
+    session.meanwhile = lambda: (ran.append(True), signal_file.write_text("yes", encoding="utf-8"))
+    report = grade(session, ["ch00"])
+    chapter = report.chapters[0]
+    assert ran == [True]
+    assert not chapter.problems, chapter.problems
+    assert {c.status.value for c in chapter.checks if c.function == "range_reading"} == {"pass"}
