@@ -167,7 +167,9 @@ def judge(question: Question, key: Key, value: object, right_value: object, seed
     """As `_judge`, once per process for the same question, key, answer, numbers and letters (a verdict
     depends on nothing else): a class's learners give the same answers to the same questions, and
     grade batch's workers judge them once. A verdict sympy left undecided is not kept."""
-    memo = (id(question), id(key), type(value).__name__, repr(value), repr(right_value), seed, text,
+    right = (right_value.dtype.str, right_value.shape, right_value.tobytes()) if isinstance(right_value, np.ndarray) \
+        else repr(right_value)  # every bit of an array (its repr rounds, and formats slowly)
+    memo = (id(question), id(key), type(value).__name__, repr(value), right, seed, text,
             tuple((lettering or {}).items()), tuple(sorted((values or {}).items())))
     kept = _JUDGED.get(memo)
     if kept is not None:

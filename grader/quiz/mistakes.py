@@ -117,10 +117,10 @@ def expression_mistake(question: Question, key: Key, got: str, right: str, seed:
     the numbers alone (never sympy)."""
     same = {"symbols": question.symbols, "domain": question.domain, "seed": seed, "derived": question.derived}
     for wrong in key.wrong:
-        try:
-            candidate = wrong_expression(question, wrong, values or {})
-            if equivalent(got, candidate, decide=False, **same) and \
-                    not equivalent(candidate, right, decide=False, **same):
+        try:  # the learner's numbers stand in for the parameters where it is evaluated (as wrong_expression
+            candidate = str(wrong["answer"])  # writes them in, but parsed once for every learner)
+            if equivalent(got, candidate, decide=False, bound=values, **same) and \
+                    not equivalent(candidate, right, decide=False, bound=values, **same):
                 return Mistake(wrong["name"], wrong["feedback"])
         except AnswerError:
             continue  # a wrong answer the bank's own test would have refused

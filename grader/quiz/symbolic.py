@@ -605,27 +605,43 @@ def _simplify_is_zero(answer: str, key: str, symbols: tuple[str, ...], deadline:
         return simplifier.is_zero(answer, key, symbols, derived)
 
 
-def _pairs(answer: str, key: str, symbols: tuple[str, ...], domain: dict[str, tuple[float, float]] | None,
-           seed: int, derived: dict[str, str] | None):
-    """(answer, key) values at up to NUMERIC_POINTS * 4 random points of the domain where both are
-    defined (and every derived symbol is). AnswerError if `answer` cannot be read."""
-    derived = derived or {}
-    names = symbols + tuple(derived)
-    answer_tree = check_text(answer, names)
-    key_tree = check_text(key, names)
-    definitions = {name: check_text(text, symbols) for name, text in derived.items()}
-    domain = domain or {}
+@functools.lru_cache(maxsize=256)
+def _points(symbols: tuple[str, ...], domain: tuple[tuple[str, tuple[float, float]], ...],
+            seed: int) -> tuple[dict[str, float], ...]:
+    """The NUMERIC_POINTS * 4 random points `_pairs` tries (the same for the same symbols, domain and seed;
+    callers copy a point before adding to it)."""
+    ranges = dict(domain)
     draw = random.Random(seed)
+    points = []
     for _ in range(NUMERIC_POINTS * 4):
         point = {}
         for name in symbols:
-            if name in domain:
-                point[name] = draw.uniform(*domain[name])
+            if name in ranges:
+                point[name] = draw.uniform(*ranges[name])
             else:
                 point[name] = draw.choice((-1, 1)) * draw.uniform(*DEFAULT_DOMAIN)
+        points.append(point)
+    return tuple(points)
+
+
+def _pairs(answer: str, key: str, symbols: tuple[str, ...], domain: dict[str, tuple[float, float]] | None,
+           seed: int, derived: dict[str, str] | None, bound: dict[str, float] | None = None):
+    """(answer, key) values at up to NUMERIC_POINTS * 4 random points of the domain where both are
+    defined (and every derived symbol is). `bound` names have the same value at every point (a per-learner
+    key's parameters: the same values as substitute writes in). AnswerError if `answer` cannot be read."""
+    derived = derived or {}
+    bound = bound or {}
+    names = symbols + tuple(derived) + tuple(bound)
+    answer_tree = check_text(answer, names)
+    key_tree = check_text(key, names)
+    definitions = {name: check_text(text, symbols) for name, text in derived.items()}
+    ranges = tuple(sorted((name, tuple(span)) for name, span in (domain or {}).items()))
+    for drawn in _points(tuple(symbols), ranges, seed):
+        point = dict(drawn)
         try:
             for name, tree in definitions.items():
                 point[name] = evaluate(tree, point)
+            point.update((name, float(value)) for name, value in bound.items())
             yield evaluate(answer_tree, point), evaluate(key_tree, point)
         except Undefined:
             continue
@@ -638,16 +654,17 @@ def _close(a: float, b: float) -> bool:
 def equivalent(answer: str, key: str, symbols: tuple[str, ...],
                domain: dict[str, tuple[float, float]] | None = None, seed: int = 0,
                simplifier: Simplifier | None = None, derived: dict[str, str] | None = None,
-               decide: bool = True) -> bool | None:
+               decide: bool = True, bound: dict[str, float] | None = None) -> bool | None:
     """Whether two expression texts are the same function of `symbols` (see the module docstring):
     True or False, or None when sympy had to decide and could not in time (never "equal").
     `domain` maps a symbol to its (low, high) range; others are drawn from +-DEFAULT_DOMAIN.
     `derived` maps a derived symbol to its definition in `symbols`.
     `simplifier` is the Simplifier to ask if sympy must decide (else one of its own); with
-    `decide=False` sympy is never asked, and what the numbers cannot decide is None.
+    `decide=False` sympy is never asked, and what the numbers cannot decide is None. `bound` names
+    stand for their numbers in both expressions (for sympy, they are written in: substitute).
     AnswerError if `answer` cannot be read."""
     agree = 0
-    for a, k in _pairs(answer, key, symbols, domain, seed, derived):
+    for a, k in _pairs(answer, key, symbols, domain, seed, derived, bound):
         if not _close(a, k):
             return False  # a point where both are defined and differ: not the same function
         agree += 1
@@ -657,6 +674,9 @@ def equivalent(answer: str, key: str, symbols: tuple[str, ...],
         return True
     if not decide:
         return None
+    if bound:
+        names = symbols + tuple(derived or {})
+        answer, key = substitute(answer, bound, names), substitute(key, bound, names)
     if simplifier is not None:
         return simplifier.is_zero(answer, key, symbols, derived)
     return _simplify_is_zero(answer, key, symbols, derived=derived)
