@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -52,6 +53,24 @@ class Entries:
         return text
 
 
+class Label:
+    """A call's label for messages (`H_jacobian(3, 4)`), written the first time a message uses it: formatting
+    the arguments of every call costs more than comparing the values, and most comparisons pass."""
+
+    __slots__ = ("_make", "_text")
+
+    def __init__(self, make: Callable[[], str]) -> None:
+        self._make, self._text = make, None
+
+    def __str__(self) -> str:
+        if self._text is None:
+            self._text = self._make()
+        return self._text
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+
 def fmt(value: float, zero_below: float = 0.0, digits: int = 6) -> str:
     """A number as a learner reads it: up to `digits` significant digits; 0 for anything no larger than
     `zero_below` (a value meant as 0 that rounding left at 3.8e-17)."""
@@ -76,7 +95,8 @@ def tolerance_text(rtol: float, atol: float) -> str:
     return f"tolerance |got - expected| <= {atol:g} + {rtol:g}*|expected|"
 
 
-def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: str, symbol: str = "result") -> str | None:
+def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: str | Label,
+                  symbol: str = "result") -> str | None:
     """Why `returned` cannot be compared to a result of `expected_shape`, or None if it can."""
     if not returned.ok:
         return returned.problem()
@@ -102,7 +122,7 @@ def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: st
     return None
 
 
-def expect(returned: Returned, expected: object, *, label: str, rtol: float = 1e-6,
+def expect(returned: Returned, expected: object, *, label: str | Label, rtol: float = 1e-6,
            atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = (),
            exact: bool = False) -> Verdict:
     """Compare a learner's returned value with the expected number or array (see compare_arrays); a
@@ -134,7 +154,7 @@ def _all_within(got: list[float], expected: list[float], rtol: float, atol: floa
     return all(abs(g - e) <= atol + rtol * abs(e) for g, e in zip(got, expected))
 
 
-def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str, rtol: float = 1e-6,
+def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label, rtol: float = 1e-6,
                    atol: float = 1e-9, entries: Entries | None = None,
                    expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False,
                    digits: int = 6) -> Verdict:

@@ -16,6 +16,7 @@ Light on purpose: the child and `grade`'s launcher import this before numpy (num
 from __future__ import annotations
 
 import binascii
+import math
 from dataclasses import dataclass, field
 
 # ------------------------------------------------------------------------------ events (child -> parent)
@@ -325,7 +326,7 @@ class Returned:
                 data = np.frombuffer(raw, dtype="<f8").astype(np.float64)
             else:
                 data = np.array(enc["data"], dtype=np.float64)
-            if data.size != int(np.prod(shape, dtype=np.int64)):
+            if data.size != math.prod(shape):
                 return None
             return data.reshape(shape)
         return None

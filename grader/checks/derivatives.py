@@ -35,7 +35,7 @@ from typing import Callable
 import numpy as np
 
 from grader.checks.base import ChapterChecks, Context, Skip
-from grader.compare import Entries, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
+from grader.compare import Entries, Label, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
 from grader.diagnose import Mistake
 from grader.wire import Array, Returned, call
 
@@ -79,8 +79,13 @@ class Derivative:
     def forward_name(self) -> str:
         return self.forward_text or self.forward
 
-    def label(self, function: str, case: Case) -> str:
-        return f"{function}({', '.join(describe_argument(a) for a in self.args(*case))})"
+    def label(self, function: str, case: Case) -> Label:
+        return call_label(function, self.args(*case))
+
+
+def call_label(function: str, args: tuple) -> Label:
+    """`function(arguments)` as messages show the call, written only if one does (most calls pass)."""
+    return Label(lambda: f"{function}({', '.join(describe_argument(a) for a in args)})")
 
 
 # Cases of the check against the learner's own forward map: each costs 2n + 2 learner calls, and a
@@ -205,7 +210,7 @@ def _single_precision(returned: Returned, got: np.ndarray) -> bool:
     return dtype in ("float32", "float16") or bool(np.all(got.astype(np.float32).astype(np.float64) == got))
 
 
-def exact_verdict(returned: Returned, exact: np.ndarray, label: str, entries: Entries) -> Verdict:
+def exact_verdict(returned: Returned, exact: np.ndarray, label: "str | Label", entries: Entries) -> Verdict:
     """The learner's derivative against the exact one to rounding (EXACT_RTOL of the entry and of the largest
     entry), naming an answer right to single precision only and one right to some digits only (a finite
     difference)."""
@@ -248,7 +253,7 @@ def add_exact_check(checks: ChapterChecks, function: str, entries: Entries,
         arguments = cases(ctx.rng)
         wanted = [np.asarray(reference(*args), dtype=float) for args in arguments]
         got = yield [call(function, *args) for args in arguments]
-        return all_of([exact_verdict(g, want, f"{function}({', '.join(describe_argument(a) for a in args)})", entries)
+        return all_of([exact_verdict(g, want, call_label(function, args), entries)
                        for g, want, args in zip(got, wanted, arguments)])
 
     exact_check.__doc__ = (f"{entries.symbol} is the exact derivative, right to rounding (1e-12) at random points "
