@@ -98,7 +98,38 @@ def _drop_capabilities(libc) -> None:
 
 
 def _namespace_pids(own_ns: str) -> list[int]:
-    """The pids (as /proc shows them) of every process in the PID namespace `own_ns`."""
+    """The pids (as /proc shows them) of every process in the PID namespace `own_ns`, whose init this process
+    is: its descendants (every process of a PID namespace descends from its init), read from the kernel's
+    lists of children, which costs a file per process instead of a look at every process of the machine.
+    Where the kernel keeps no such lists, every process is looked at."""
+    try:
+        return _descendants(int(os.readlink("/proc/self")))
+    except FileNotFoundError:
+        return _scanned_pids(own_ns)
+
+
+def _descendants(root: int) -> list[int]:
+    found, todo = [], [root]
+    while todo:
+        pid = todo.pop()
+        try:
+            tasks = os.listdir(f"/proc/{pid}/task")
+        except OSError:  # ended meanwhile
+            continue
+        found.append(pid)
+        for tid in tasks:
+            try:
+                with open(f"/proc/{pid}/task/{tid}/children", "rb") as handle:
+                    todo.extend(int(child) for child in handle.read().split())
+            except FileNotFoundError:
+                if pid == root and tid == tasks[0]:
+                    raise  # no lists of children here (a kernel without CONFIG_PROC_CHILDREN)
+            except OSError:
+                continue
+    return found
+
+
+def _scanned_pids(own_ns: str) -> list[int]:
     found = []
     for entry in os.listdir("/proc"):
         if entry.isdigit():
