@@ -108,9 +108,10 @@ def build_report(session: Session, request: Request, course: courses.Course | No
         learner_id = quiz.learner_id
         report.learner = quiz.learner
         report.flags += quiz.flags
-        for chapter, quiz_chapter in zip(report.chapters, quiz.chapters):
-            chapter.checks.extend(quiz_chapter.checks)
-            chapter.problems.extend(quiz_chapter.problems)
+        judged = {c.chapter: c for c in quiz.chapters}
+        for chapter in report.chapters:
+            chapter.checks.extend(judged[chapter.chapter].checks)
+            chapter.problems.extend(judged[chapter.chapter].problems)
     from grader import provenance
 
     provenance.stamp(report, course, learner_id)

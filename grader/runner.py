@@ -226,7 +226,8 @@ class Session:
         if self._child is None:
             self._child = _Child(self.launcher(self.submission))
         child = self._child
-        request, (work, self.meanwhile) = self._request(pending, runs), (self.meanwhile, None)
+        request = self._request(pending, runs)
+        work, self.meanwhile = self.meanwhile, None
         sender = None
         if work is None:
             child.send(request)

@@ -123,3 +123,15 @@ def test_grade_chapter_json_and_html_are_valid_utf8(hostile, tmp_path):
     html = page.read_bytes().decode("utf-8")
     assert "all good" in html and "\x1b" not in html and "\x00" not in html and "\udcff" not in html
     assert "<script" not in html
+
+
+@pytest.mark.parametrize("text", ["plain", "\x1b[31mred\x1b[0m", "a\rb", "bi\u202edi", "c1\x85", "lone\udcff",
+                                  "back\\slash \\u00e9 \\r", "tab\tnl\n", "\x08\x0c\x0b\x00", "emoji \U0001F600 é",
+                                  "\x9b2J", "line\u2028sep", "del\x7f"])
+def test_results_json_written_without_a_walk_is_what_the_walk_writes(text):
+    """json_for_terminal skips cleaning data with nothing a terminal acts on: for every kind of learner text
+    it gives exactly the text that cleaning every string (for_terminal) and encoding gives."""
+    from grader.safe_text import clean_value, for_json, for_terminal, json_for_terminal
+
+    data = {"id": text, "tests": [{"output": f"got {text}", "score": 1.5, "tags": [text, None, True]}]}
+    assert json_for_terminal(data) == json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False)

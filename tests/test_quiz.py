@@ -312,3 +312,31 @@ def test_grade_chapter_shows_code_and_quiz_apart(repo_root):
     assert chapter["max_score"] == chapter["quiz_max_score"] + chapter["code_max_score"]
     assert {c["kind"] for c in chapter["checks"]} == {"code", "quiz"}
     assert all("error" != c["status"] for c in chapter["checks"])
+
+
+def test_a_verdict_kept_for_one_learner_is_never_given_to_another():
+    """judge keeps verdicts per process (a class answers alike): the same answer text is right for the learner
+    whose numbers it was worked out with and wrong for one with other numbers, in whatever order they come."""
+    from grader.quiz.judge import right_answer
+
+    checked = 0
+    for chapter, question in QUESTIONS:
+        key = (bank.keys(chapter) or {}).get(question.id)
+        if not question.params or key is None or question.kind not in ("numeric", "vector", "matrix", "symbolic"):
+            continue
+        seed = bank.variant_seed("points", chapter, question.id)
+
+        def verdict(learner: str, answer: str) -> bool:
+            values = question.values_for(learner, chapter)
+            return judge(question, key, answer, key.value_for(chapter, values), seed,
+                         question.lettering(learner, chapter), values=values, text=answer).right
+
+        values = question.values_for("alice", chapter)
+        right = right_answer(question, key, key.value_for(chapter, values), values)
+        answer = right if question.kind == "symbolic" else json.dumps(np.asarray(right, dtype=float).tolist())
+        if verdict("bob", answer):
+            continue  # these numbers happen to give bob the same answer
+        assert [verdict("alice", answer), verdict("bob", answer), verdict("alice", answer)] == [True, False, True], \
+            f"{chapter} {question.id}"
+        checked += 1
+    assert checked >= 5  # the banks have per-learner questions of every kind

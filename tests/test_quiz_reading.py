@@ -184,3 +184,31 @@ def test_cli_grades_an_implicit_product_and_a_unicode_answer(tmp_path):
     proc = run_grade("quiz", "ch02", "ch06", "--submission", tmp_path, "--learner", "alice", "--format", "json")
     checks = {c["function"]: c for ch in json.loads(proc.stdout)["chapters"] for c in ch["checks"]}
     assert checks["partial_x"]["status"] == "pass" and checks["dbearing_dx"]["status"] == "pass", proc.stdout
+
+
+def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path):
+    """Answer files are composed by libyaml where their nesting is provably shallow: the same answers, lines
+    and source texts as the pure-Python loader gives, Unicode before them included; a deeply nested file goes
+    to the pure-Python loader, whose RecursionError is caught, never to libyaml, whose crash would end the run."""
+    import yaml
+
+    from grader.quiz import answers
+
+    text = ('# réponse: θ\nq1: "θ = 2π"\nq2: [1, 2.5, -3]\nq3: [[1, 2], [3, 4]]\nq4: 3/5\n'
+            'q5: sqrt(x^2 + y^2)\nq6: b, c\n')
+    path = tmp_path / "ch06.yaml"
+    path.write_text(text, encoding="utf-8")
+    fast = answers.read(path, "ch06.yaml")
+    answers.FAST_LOADER, kept = None, answers.FAST_LOADER
+    try:
+        slow = answers.read(path, "ch06.yaml")
+    finally:
+        answers.FAST_LOADER = kept
+    assert kept is not None and yaml.__with_libyaml__
+    assert fast.answers == slow.answers and fast.problems == slow.problems
+    assert [(a.line, a.text) for a in fast.answers.values()] == \
+        [(2, "θ = 2π"), (3, "[1, 2.5, -3]"), (4, "[[1, 2], [3, 4]]"), (5, "3/5"), (6, "sqrt(x^2 + y^2)"), (7, "b, c")]
+    deep = "q1: " + "[" * 20_000 + "]" * 20_000 + "\n"
+    assert sum(map(deep.count, answers.NESTING)) >= answers.C_DEPTH_BOUND  # not for libyaml
+    path.write_text(deep, encoding="utf-8")
+    assert "q1" in answers.read(path, "ch06.yaml").unreadable
