@@ -201,7 +201,7 @@ def encode_value(value: object, depth: int = 0) -> dict:
         converted = from_array_library(value)
         if converted is not None:
             if converted.ndim == 0 and converted.dtype.kind in "fiu":
-                return {"t": T_SCALAR, "type": _type_name(value), "dtype": str(converted.dtype),
+                return {"t": T_SCALAR, "type": _type_name(value), "dtype": _dtype_name(converted.dtype),
                         "data": float(converted)}
             value, kind = converted, np.ndarray
         elif (getattr(kind, "__module__", "") or "").split(".")[0] in ARRAY_LIBRARIES:
@@ -212,7 +212,7 @@ def encode_value(value: object, depth: int = 0) -> dict:
             return {"t": T_NDARRAY_OTHER, "type": f"ndarray of dtype {value.dtype}"}
         if value.size > _MAX_ELEMENTS:
             return {"t": T_TOO_LARGE, "type": f"ndarray with {value.size} elements"}
-        encoded = {"t": T_NDARRAY, "dtype": str(value.dtype), "shape": list(value.shape)}
+        encoded = {"t": T_NDARRAY, "dtype": _dtype_name(value.dtype), "shape": list(value.shape)}
         if value.size <= _MAX_AS_TEXT:  # small arrays stay readable in the protocol
             encoded["data"] = np.asarray(value, dtype=np.float64).ravel().tolist()
         else:  # large ones travel as little-endian float64 bytes: exact and fast both ways
@@ -236,6 +236,17 @@ def encode_value(value: object, depth: int = 0) -> dict:
     if isinstance(value, np.ndarray):
         name = f"{name} (an ndarray subclass)"
     return {"t": T_OTHER, "type": name}
+
+
+_DTYPE_NAMES: dict = {}
+
+
+def _dtype_name(dtype) -> str:
+    """str(dtype), which numpy builds afresh each time (4 us, once per returned array)."""
+    name = _DTYPE_NAMES.get(dtype)
+    if name is None:
+        name = _DTYPE_NAMES[dtype] = str(dtype)
+    return name
 
 
 _SCALARS: frozenset | None = None
