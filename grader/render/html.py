@@ -499,10 +499,10 @@ def _light_ticks(fig) -> None:
     for ax in fig.axes:
         for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
             if scale == "log":
-                axis.set_major_locator(LogLocator(numticks=5))
+                axis.set_major_locator(LogLocator(numticks=4))
                 axis.set_major_formatter(plain)
             else:
-                axis.set_major_locator(MaxNLocator(nbins=5))
+                axis.set_major_locator(MaxNLocator(nbins=4))
             axis.set_minor_locator(NullLocator())
 
 
@@ -529,7 +529,7 @@ def draw(chapter_id: str, data: dict):
         target = fig if chapter_id in TWO_PANELS else fig.add_subplot()
         _, caption = (_NAMED[data["plot"]][0] if "plot" in data else _DRAW[chapter_id])(target, data)
         _light_ticks(fig)
-        fig.subplots_adjust(left=0.1, right=0.97, bottom=0.15, top=0.9, wspace=0.28)
+        fig.subplots_adjust(left=0.12, right=0.97, bottom=0.15, top=0.9, wspace=0.3)
     except BaseException:
         plt.close(fig)
         raise
