@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from grader.diagnose import Mistake, diagnose, shape_mistake
+from grader.diagnose import SMALL, Mistake, diagnose, shape_mistake, within
 from grader.wire import RAISED, Returned
 
 SHOWN_ENTRIES = 3
@@ -139,19 +139,16 @@ def expect(returned: Returned, expected: object, *, label: str | Label, rtol: fl
                           mistakes=mistakes, exact=exact)
 
 
-_SMALL = 64  # entries up to which plain floats decide a passing comparison faster than numpy's calls
-
-
 def _all_within(got: list[float], expected: list[float], rtol: float, atol: float, exact: bool) -> bool:
-    """Whether every entry is finite and within the tolerance compare_arrays uses (the same formula, on
-    plain floats: the common case of a right answer, decided without a dozen numpy calls). False sends
-    the comparison through numpy, which also says what is wrong."""
+    """Whether every entry is finite and within the tolerance compare_arrays uses (on plain floats: the
+    common case of a right answer, decided without a dozen numpy calls). False sends the comparison
+    through numpy, which also says what is wrong."""
     if not all(map(math.isfinite, got)) or not all(map(math.isfinite, expected)):
         return False
     if not exact:
         scale = max(map(abs, expected), default=0.0)
         rtol, atol = max(rtol, SINGLE_PRECISION), max(atol, SINGLE_PRECISION * scale)
-    return all(abs(g - e) <= atol + rtol * abs(e) for g, e in zip(got, expected))
+    return within(got, expected, rtol, atol)
 
 
 def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label, rtol: float = 1e-6,
@@ -167,7 +164,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
     expected = np.asarray(expected, dtype=np.float64)
     if got.shape != expected.shape:
         return Verdict(False, f"{label}: shape {got.shape}, expected {expected.shape}.", expected, got)
-    if got.size <= _SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
+    if got.size <= SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
         return Verdict(True, "", expected, got)
     if not exact:
         scale = float(np.max(np.abs(expected[np.isfinite(expected)]), initial=0.0))

@@ -102,30 +102,18 @@ def _namespace_pids(own_ns: str) -> list[int]:
     is: its descendants (every process of a PID namespace descends from its init), read from the kernel's
     lists of children, which costs a file per process instead of a look at every process of the machine.
     Where the kernel keeps no such lists, every process is looked at."""
-    try:
-        return _descendants(int(os.readlink("/proc/self")))
-    except FileNotFoundError:
+    if not os.path.exists("/proc/thread-self/children"):  # a kernel without CONFIG_PROC_CHILDREN
         return _scanned_pids(own_ns)
-
-
-def _descendants(root: int) -> list[int]:
-    found, todo = [], [root]
+    found, todo = [], [int(os.readlink("/proc/self"))]
     while todo:
         pid = todo.pop()
-        try:
-            tasks = os.listdir(f"/proc/{pid}/task")
-        except OSError:  # ended meanwhile
-            continue
         found.append(pid)
-        for tid in tasks:
-            try:
+        try:
+            for tid in os.listdir(f"/proc/{pid}/task"):
                 with open(f"/proc/{pid}/task/{tid}/children", "rb") as handle:
                     todo.extend(int(child) for child in handle.read().split())
-            except FileNotFoundError:
-                if pid == root and tid == tasks[0]:
-                    raise  # no lists of children here (a kernel without CONFIG_PROC_CHILDREN)
-            except OSError:
-                continue
+        except OSError:  # it, or one of its threads, ended meanwhile
+            continue
     return found
 
 

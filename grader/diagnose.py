@@ -93,7 +93,7 @@ def diagnose(got: np.ndarray, expected: np.ndarray, mistakes, entries, rtol: flo
     """The first mistake (the check's own, then the generic ones) whose value `got` equals, or None."""
     candidates = list(mistakes) + (generic(expected, entries) if entries is not None else [])
     # plain floats for small finite values: the same comparisons, without a dozen numpy calls per candidate
-    plain = expected.size <= 64 and bool(np.all(np.isfinite(expected)))
+    plain = expected.size <= SMALL and bool(np.all(np.isfinite(expected)))
     got_list, expected_list = got.ravel().tolist(), expected.ravel().tolist()
     for mistake in candidates:
         if mistake.value is None:
@@ -103,9 +103,9 @@ def diagnose(got: np.ndarray, expected: np.ndarray, mistakes, entries, rtol: flo
             continue
         if plain:
             values = value.ravel().tolist()
-            if not all(map(math.isfinite, values)) or _within(values, expected_list, rtol, atol):
+            if not all(map(math.isfinite, values)) or within(values, expected_list, rtol, atol):
                 continue  # not a value, or this slip makes no difference here
-            if _within(got_list, values, rtol, atol):
+            if within(got_list, values, rtol, atol):
                 return mistake
             continue
         if not np.all(np.isfinite(value)) or np.allclose(value, expected, rtol=rtol, atol=atol):
@@ -115,8 +115,11 @@ def diagnose(got: np.ndarray, expected: np.ndarray, mistakes, entries, rtol: flo
     return None
 
 
-def _within(values: list[float], reference: list[float], rtol: float, atol: float) -> bool:
-    """|value - reference| <= atol + rtol |reference| for every entry (NaN is never within)."""
+SMALL = 64  # entries up to which plain floats compare faster than numpy's calls
+
+
+def within(values: list[float], reference: list[float], rtol: float, atol: float) -> bool:
+    """|value - reference| <= atol + rtol |reference| for every entry, on plain floats (NaN is never within)."""
     return all(abs(v - r) <= atol + rtol * abs(r) for v, r in zip(values, reference))
 
 

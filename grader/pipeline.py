@@ -104,7 +104,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
             chapter.notes.append(notes[chapter.chapter])
     learner_id = request.learner
     if request.quiz:
-        quiz = quizzes.pop() if quizzes else quiz_report(session, request, course, [c.chapter for c in report.chapters])
+        quiz = quizzes.pop() if quizzes else quiz_report(session, request, course, list(request.chapters))
         learner_id = quiz.learner_id
         report.learner = quiz.learner
         report.flags += quiz.flags

@@ -85,13 +85,20 @@ def for_json(value: object) -> object:
     """Plain JSON data (dicts, lists, strings, numbers) whose strings all encode as UTF-8; JSON's
     own escaping takes care of control characters. Data that already does is returned as it is (one
     encoding in C tells, instead of a walk through every string)."""
+    return value if _utf8_json(value) is not None else clean_value(value, unicode_clean)
+
+
+def _utf8_json(value: object, allow_nan: bool = True) -> str | None:
+    """`value` as JSON text that keeps its characters (ensure_ascii=False), or None where it has a lone
+    surrogate, or is not JSON data."""
     import json
 
     try:
-        json.dumps(value, ensure_ascii=False).encode("utf-8")
+        text = json.dumps(value, ensure_ascii=False, allow_nan=allow_nan)
+        text.encode("utf-8")
     except (UnicodeEncodeError, TypeError, ValueError):
-        return clean_value(value, unicode_clean)
-    return value
+        return None
+    return text
 
 
 # What for_terminal would change, as it shows in JSON text written with ensure_ascii=False: C0 controls
@@ -105,14 +112,10 @@ def json_for_terminal(data: object) -> str:
     nothing to clean, as almost all is (one encoding in C tells), is written as it is: no walk."""
     import json
 
-    try:
-        text = json.dumps(data, ensure_ascii=False, allow_nan=False)
-        text.encode("utf-8")  # lone surrogates
-    except (UnicodeEncodeError, TypeError, ValueError):
-        text = None
+    text = _utf8_json(data, allow_nan=False)
     if text is not None and not _TERMINAL_UNSAFE_JSON.search(text):
         return json.dumps(data, allow_nan=False)
-    return json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False)
+    return json.dumps(clean_value(data, for_terminal), allow_nan=False)  # for_terminal leaves no lone surrogate
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})

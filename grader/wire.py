@@ -16,8 +16,9 @@ Light on purpose: the child and `grade`'s launcher import this before numpy (num
 from __future__ import annotations
 
 import binascii
+import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 # ------------------------------------------------------------------------------ events (child -> parent)
 
@@ -238,15 +239,10 @@ def encode_value(value: object, depth: int = 0) -> dict:
     return {"t": T_OTHER, "type": name}
 
 
-_DTYPE_NAMES: dict = {}
-
-
+@functools.lru_cache(maxsize=64)
 def _dtype_name(dtype) -> str:
     """str(dtype), which numpy builds afresh each time (4 us, once per returned array)."""
-    name = _DTYPE_NAMES.get(dtype)
-    if name is None:
-        name = _DTYPE_NAMES[dtype] = str(dtype)
-    return name
+    return str(dtype)
 
 
 _SCALARS: frozenset | None = None
@@ -283,7 +279,6 @@ class Returned:
     encoded: dict | None = None
     error: dict | None = None
     note: str = ""
-    _array: tuple | None = field(default=None, init=False, repr=False, compare=False)  # as_array's, once decoded
 
     @property
     def ok(self) -> bool:
@@ -312,11 +307,10 @@ class Returned:
     def as_array(self):
         """Plain float64 array for an exact ndarray or a real scalar (shape ()); None otherwise. Decoded
         once; each caller gets its own copy."""
-        if self._array is None:
-            object.__setattr__(self, "_array", (self._decoded_array(),))
-        array = self._array[0]
+        array = self._decoded_array
         return None if array is None else array.copy()
 
+    @functools.cached_property
     def _decoded_array(self):
         import numpy as np
 

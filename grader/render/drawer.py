@@ -52,9 +52,6 @@ def _stop() -> None:
 def _draw_what_comes(connection) -> None:
     """The drawing process: only its pipe stays open (no copy of the grader's pipes to the learner's
     child); it ends when the pipe closes."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
     from grader.render.html import preload
 
     keep = connection.fileno()
@@ -62,8 +59,7 @@ def _draw_what_comes(connection) -> None:
     os.closerange(keep + 1, 1 << 16)
     try:
         preload()
-        with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
-                                 mp_context=multiprocessing.get_context("fork")) as pool:
+        with _two_processes() as pool:
             list(pool.map(int, range(2)))  # both drawing processes forked now, not when the figures are due
             chapters = connection.recv()
             connection.send(_draw_with(pool, chapters))
@@ -81,12 +77,16 @@ def _draw_with(pool, chapters: list) -> list[list]:
     return [futures[i].result() for i in range(len(chapters))]
 
 
-def _draw_in_two(chapters: list) -> list[list]:
+def _two_processes():
+    """Two forked drawing processes (one where there is one core)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1),
-                             mp_context=multiprocessing.get_context("fork")) as pool:
+    return ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1), mp_context=multiprocessing.get_context("fork"))
+
+
+def _draw_in_two(chapters: list) -> list[list]:
+    with _two_processes() as pool:
         return _draw_with(pool, chapters)
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 import base64
 import functools
 import io
-import os
 import re
 
 import numpy as np
@@ -490,8 +489,8 @@ def gave(chapter: str, data: dict) -> str:
 
 
 def _light_ticks(fig) -> None:
-    """At most five labelled ticks per axis and no minor ticks: every tick is a small drawing of its own
-    (most of a figure's cost), and five read as well as nine. Log-axis labels as plain text (1e-05, 0.01):
+    """At most four labelled ticks per axis and no minor ticks: every tick is a small drawing of its own
+    (most of a figure's cost), and four read as well as nine. Log-axis labels as plain text (1e-05, 0.01):
     matplotlib's default 10^k labels go through its mathtext parser, which costs more than the rest."""
     from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullLocator
 
@@ -593,9 +592,13 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
         reports in one notebook would repeat the names (axe: landmark-unique)."""
         return Markup(f' aria-labelledby="{pid}{section}-title"') if kind == "page" else Markup("")
 
-    figures_drawn = _figures_due(report)
+    from grader.render import drawer
+
+    plotted = [c for c in report.chapters if c.plots]
+    drawn = drawer.figures_due(plotted)  # drawn elsewhere while the template compiles
     template = _template(source)
-    return template.render(report=report, figures=figures_drawn(), num=_num, values=_values,
+    figures = {c.chapter: [] for c in report.chapters} | dict(zip([c.chapter for c in plotted], drawn()))
+    return template.render(report=report, figures=figures, num=_num, values=_values,
                            verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
                            kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report),
                            adjustments=report.all_adjustments())
@@ -621,18 +624,3 @@ def render_fragment(report: Report, id_prefix: str | None = None, heading_level:
     if not 1 <= heading_level <= 4:
         raise ValueError(f"heading_level must be 1 to 4 (the report uses three levels): {heading_level}")
     return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level)
-
-
-def _figures_due(report: Report):
-    """Start drawing every chapter's figures (grader.render.drawer); returns the function that waits for them."""
-    from grader.render import drawer
-
-    chapters = [c for c in report.chapters if c.plots]
-    wait = drawer.figures_due(chapters)
-
-    def collect() -> dict[str, list[_Figure]]:
-        out: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
-        out.update({chapter.chapter: drawn for chapter, drawn in zip(chapters, wait())})
-        return out
-
-    return collect
