@@ -186,7 +186,7 @@ def test_cli_grades_an_implicit_product_and_a_unicode_answer(tmp_path):
     assert checks["partial_x"]["status"] == "pass" and checks["dbearing_dx"]["status"] == "pass", proc.stdout
 
 
-def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path):
+def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path, monkeypatch):
     """Answer files are composed by libyaml where their nesting is provably shallow: the same answers, lines
     and source texts as the pure-Python loader gives, Unicode before them included; a deeply nested file goes
     to the pure-Python loader, whose RecursionError is caught, never to libyaml, whose crash would end the run."""
@@ -198,13 +198,20 @@ def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path):
             'q5: sqrt(x^2 + y^2)\nq6: b, c\n')
     path = tmp_path / "ch06.yaml"
     path.write_text(text, encoding="utf-8")
+    loaders = []
+    compose = yaml.compose
+
+    def spying(stream, Loader):  # noqa: N803  (yaml's own argument name)
+        loaders.append(Loader)
+        return compose(stream, Loader=Loader)
+
+    monkeypatch.setattr(yaml, "compose", spying)
     fast = answers.read(path, "ch06.yaml")
-    answers.FAST_LOADER, kept = None, answers.FAST_LOADER
-    try:
-        slow = answers.read(path, "ch06.yaml")
-    finally:
-        answers.FAST_LOADER = kept
-    assert kept is not None and yaml.__with_libyaml__
+    assert loaders == [yaml.CSafeLoader]  # this file went to libyaml alone
+    monkeypatch.setattr(answers, "FAST_LOADER", None)
+    slow = answers.read(path, "ch06.yaml")
+    assert loaders[1:] == [yaml.SafeLoader]
+    monkeypatch.undo()
     assert fast.answers == slow.answers and fast.problems == slow.problems
     assert [(a.line, a.text) for a in fast.answers.values()] == \
         [(2, "θ = 2π"), (3, "[1, 2.5, -3]"), (4, "[[1, 2], [3, 4]]"), (5, "3/5"), (6, "sqrt(x^2 + y^2)"), (7, "b, c")]
