@@ -304,9 +304,8 @@ def _grader_version() -> str:
 
 
 def write_atomically(path: Path, text: str) -> None:
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    temporary.write_text(text, encoding="utf-8")
-    os.replace(temporary, path)
+    """Write `text` to `path` through a temporary file beside it, so a reader never sees half a file."""
+    write_atomically_from(path, lambda handle: handle.write(text))
 
 
 def write_atomically_from(path: Path, write, replace: bool = True) -> Path:

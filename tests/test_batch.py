@@ -243,10 +243,10 @@ def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions
         for learner in order:
             collected.arrived(learner, batch._learner_state(out, learner, statuses[learner], messages[learner]))
         collected.finish()
-        text = io.StringIO()
+        text, json_text = io.StringIO(), io.StringIO()
         collected.junit.write(text)
-        view = summary.Summary(collected.tally, collected.not_graded, flagged=collected.flagged)
-        taken.append((text.getvalue(), summary.as_json(view), [r.learner for r in collected.results.values()]))
+        summary.write_json(summary.Summary(collected.tally, collected.not_graded, flagged=collected.flagged), json_text)
+        taken.append((text.getvalue(), json_text.getvalue(), [r.learner for r in collected.results.values()]))
         collected.close()
     assert taken[0][0] == (out / "junit.xml").read_text(encoding="utf-8")
     assert [statuses[learner] for learner in learners] == ["graded", "graded", "graded", "unreadable"]

@@ -11,6 +11,7 @@ import csv
 import io
 import itertools
 import json
+import shutil
 from collections.abc import Collection, Iterable, Iterator
 from pathlib import Path
 from xml.etree import ElementTree
@@ -269,11 +270,7 @@ class JUnit:
         head, tail = self._ends()
         target.write(head)
         self.stream.seek(0)
-        while True:
-            block = self.stream.read(1 << 20)
-            if not block:
-                break
-            target.write(block)
+        shutil.copyfileobj(self.stream, target)
         target.write(tail)
 
 
@@ -347,11 +344,6 @@ def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
                   for_csv("; ".join([result.message, *result.flags]).strip("; ")), for_csv(adjustments),
                   result.grader or "", for_csv(result.manifest_handout or ""),
                   "" if result.seed is None else str(result.seed)]
-
-
-def gradebook(results: Iterable[Result], chapters: list[str]) -> str:
-    """gradebook.csv (`results` are read once, one by one)."""
-    return "".join(gradebook_lines(results, chapters))
 
 
 def gradebook_lines(results: Iterable[Result], chapters: list[str]) -> Iterator[str]:

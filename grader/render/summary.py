@@ -230,14 +230,6 @@ class Messages:
         self.db.close()
 
 
-def tally(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = None) -> Tally:
-    """A Tally of (learner, report) pairs, in their order; `extras`: their report.json's batch data, by learner."""
-    counted = Tally()
-    for learner, report in reports:
-        counted.add(learner, report, (extras or {}).get(learner))
-    return counted
-
-
 def _handouts(view: Summary) -> dict[str, int]:
     """How many archives were packed with each handout (grade submit's manifests); "none": no manifest."""
     return dict(view.graded.handouts)
@@ -245,13 +237,8 @@ def _handouts(view: Summary) -> dict[str, int]:
 
 # ------------------------------------------------------------------------------------ JSON
 
-def as_json(view: Summary) -> str:
-    """summary.json (grader/schemas/summary.schema.json)."""
-    return json.dumps(_json_data(view), indent=1, allow_nan=False) + "\n"
-
-
 def write_json(view: Summary, handle) -> None:
-    """summary.json into the text file `handle`, piece by piece (as_json's text)."""
+    """summary.json (grader/schemas/summary.schema.json) into the text file `handle`, piece by piece."""
     json.dump(_json_data(view), handle, indent=1, allow_nan=False)
     handle.write("\n")
 
@@ -293,11 +280,6 @@ def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]]
     head = "".join(cell("th", i, escape(h)) for i, h in enumerate(header))
     body = "".join("<tr>" + "".join(cell("td", i, c) for i, c in enumerate(row)) + "</tr>" for row in rows)
     return f"<h2 id='{caption_id}'>{escape(title)}</h2><table><tr>{head}</tr>{body}</table>"
-
-
-def render(view: Summary) -> str:
-    """summary.html."""
-    return "".join(html_parts(view))
 
 
 def html_parts(view: Summary) -> Iterator[str]:
