@@ -580,9 +580,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                 if progress:
                     progress(done, len(entries), time.monotonic() - started)
         isolation = isolation_line(sandboxed)
-        summary = rebuild(out, history, run, [e.learner for e in entries], chapters, statuses, messages, skipped,
-                          isolation, lms_layouts, rows, override_problems, similarity=similarity,
-                          deadline=bool(course and course.late), collected=collected)
+        summary = rebuild(out, history, run, chapters, collected, skipped, isolation, lms_layouts, rows,
+                          override_problems, similarity=similarity, deadline=bool(course and course.late))
     finally:
         collected.close()
         history.close()
@@ -749,10 +748,9 @@ class ClassOutputs:
         self.junit.add(learner, report, extra)
 
 
-def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[str], statuses: dict, messages: dict,
-            skipped: list[Skipped] = (), isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(),
-            override_problems: list[str] = (), similarity: bool = False, deadline: bool = False,
-            collected: ClassOutputs | None = None) -> dict:
+def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassOutputs, skipped: list[Skipped] = (),
+            isolation: str = "", lms_layouts: tuple[str, ...] = (), overrides=(), override_problems: list[str] = (),
+            similarity: bool = False, deadline: bool = False) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
     and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
@@ -762,13 +760,6 @@ def rebuild(out: Path, history, run: int, learners: list[str], chapters: list[st
     from grader import history as histories
     from grader.render import lms, summary
 
-    if collected is None:
-        taken = ClassOutputs(out, learners, statuses, messages)
-        try:
-            return rebuild(out, history, run, learners, chapters, statuses, messages, skipped, isolation, lms_layouts,
-                           overrides, override_problems, similarity, deadline, taken)
-        finally:
-            taken.close()
     collected.finish()
     results, flagged, graded = collected.results.values(), collected.flagged, collected.graded  # read one by one
     applied = {(r.learner, a["source"]): a for r in results for a in r.adjustments if a["kind"] == "override"}

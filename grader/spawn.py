@@ -55,7 +55,6 @@ def child_environment() -> dict:
 
 _LIVE: set[int] = set()  # pids of the children started here and not yet stopped
 _SUBREAPER = False
-_SPARED: set[int] = set()  # pids of the grader's own helper processes (spare)
 
 
 def become_subreaper() -> None:
@@ -72,10 +71,10 @@ def become_subreaper() -> None:
         pass
 
 
-def spare(pid: int) -> None:
+def own(pid: int) -> None:
     """A process of the grader's own (the HTML report's drawing process), never learner code: kill_orphans
-    leaves it alone."""
-    _SPARED.add(pid)
+    leaves it alone, as it does the children started here, until forget(pid)."""
+    _LIVE.add(pid)
 
 
 def kill_orphans() -> None:
@@ -84,7 +83,7 @@ def kill_orphans() -> None:
         return
     me = os.getpid()
     for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) in _LIVE or int(entry) in _SPARED:
+        if not entry.isdigit() or int(entry) in _LIVE:
             continue
         try:
             with open(f"/proc/{entry}/stat", "rb") as handle:

@@ -93,15 +93,16 @@ def run_on_terminal(command: list[str], cwd: Path, env: dict | None = None, time
 
 
 def processes_with(marker: str) -> list[str]:
-    """The pids of running processes whose command line holds `marker` (a learner's strays)."""
+    """"pid: command line" of each running process whose command line holds `marker` (a learner's strays)."""
     found = []
     for pid in os.listdir("/proc"):
         if pid.isdigit():
             try:
-                if marker in Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
-                    found.append(pid)
+                command = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
             except OSError:
                 continue
+            if marker in command:
+                found.append(f"{pid}: {command}")
     return found
 
 

@@ -13,7 +13,7 @@ import pytest
 
 from grader.batch import run_batch
 from grader.spawn import GRADER_PARENT
-from tests.conftest import build_submission, replace_function
+from tests.conftest import build_submission, processes_with, replace_function
 
 MARKER = "313.131"  # sleep duration used by hostile children, to find strays in /proc
 LIMITS = {"import_seconds": 2.0, "call_seconds": 5.0, "chapter_seconds": 10.0}  # a memory bomb reaches its cap within the call on a busy machine
@@ -76,19 +76,6 @@ HOSTILE = {
     "returns_string": _h("    return '[[0.6, 0.8], [-0.16, 0.12]]'"),
     "wrong_shape": _h("    return np.array([0.6, 0.8, -0.16, 0.12])"),
 }
-
-
-def _strays() -> list[str]:
-    found = []
-    for pid in os.listdir("/proc"):
-        if pid.isdigit():
-            try:
-                cmdline = Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode()
-            except OSError:
-                continue
-            if MARKER in cmdline:
-                found.append(f"{pid}: {cmdline}")
-    return found
 
 
 @pytest.fixture(scope="module")
@@ -164,7 +151,7 @@ def test_fake_result_files_do_not_count(batch):
 
 
 def test_no_stray_process_is_left(batch):
-    assert _strays() == []
+    assert processes_with(MARKER) == []
 
 
 @pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"), reason="bubblewrap (bwrap) is not installed")

@@ -334,10 +334,12 @@ def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
 
 
 def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preloaded_it(tmp_path):
-    """The batch's fork server imports sympy before it forks; a learner whose gradient differentiates with sympy
-    at every call is graded as the reference is."""
+    """The batch's fork server imports sympy before it forks (the learner's code finds it already imported); a
+    learner whose gradient differentiates with sympy at every call is graded as the reference is."""
     sympy_style = replace_function("ch02_gradient", "example_gradient", """
         def example_gradient(x, y):
+            import sys
+            print("sympy imported before the learner's code:", "sympy" in sys.modules)
             import sympy
             X, Y = sympy.symbols("x y")
             f = X ** 2 + X * Y
@@ -350,3 +352,6 @@ def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preload
     assert done.returncode in (0, 1), done.stderr[-2000:]
     rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
     assert rows["sam"]["status"] == "graded" and rows["sam"]["ch02_code"] == code_points("ch02"), rows["sam"]
+    output = json.loads((tmp_path / "out" / "sam" / "report.json").read_text(encoding="utf-8"))["batch"]["learner_output"]
+    assert "sympy imported before the learner's code: True" in output, output
+    assert "sympy imported before the learner's code: False" not in output, output

@@ -17,7 +17,7 @@ _STARTED: list = []  # the drawing process and our end of its pipe, until they a
 def start() -> bool:
     """Fork the drawing process now. Call it before any thread starts (a fork copies only the calling
     thread). False where forking is not safe or fails."""
-    from grader.spawn import fork_is_safe, spare
+    from grader.spawn import fork_is_safe, own
 
     if _STARTED or not fork_is_safe():
         return bool(_STARTED)
@@ -31,7 +31,7 @@ def start() -> bool:
     except OSError:
         return False
     theirs.close()
-    spare(process.pid)  # the grader's own process: grader.spawn.kill_orphans leaves it alone
+    own(process.pid)  # the grader's own process: grader.spawn.kill_orphans leaves it alone
     _STARTED.append((process, ours))
     import atexit
 
@@ -44,9 +44,18 @@ def _stop() -> None:
     while _STARTED:
         process, ours = _STARTED.pop()
         ours.close()
-        process.join(5)
-        if process.is_alive():
-            process.kill()
+        _ended(process)
+
+
+def _ended(process) -> None:
+    """Wait for the drawing process to end (killed if it does not), and forget it: its pid may be reused."""
+    from grader.spawn import forget
+
+    process.join(5)
+    if process.is_alive():
+        process.kill()
+        process.join()
+    forget(process.pid)
 
 
 def _draw_what_comes(connection) -> None:
@@ -115,7 +124,7 @@ def figures_due(chapters: list):
                 pass  # drawn below instead
             finally:
                 ours.close()
-                process.join(5)
+                _ended(process)
         if len(chapters) > 1 and fork_is_safe():
             try:
                 preload()

@@ -222,16 +222,16 @@ def junit(reports: list[tuple[str, Report]], extras: dict[str, dict] | None = No
     `extras` maps a learner to {"seconds": ..., "output": what their code printed} (from report.json).
     Valid against Jenkins' junit-10.xsd. JUnit writes the same, learner by learner."""
     extras = extras or {}
-    suites = JUnit(io.StringIO())
+    suites, text = JUnit(io.StringIO()), io.StringIO()
     for learner, report in reports:
         suites.add(learner, report, extras.get(learner))
-    return suites.document()
+    suites.write(text)
+    return text.getvalue()
 
 
 class JUnit:
     """junit.xml written learner by learner into `stream` (a text file: each learner's <testsuite> as it
-    comes, so that no report need be kept until the end), then put together with the totals (document, or
-    write for a file)."""
+    comes, so that no report need be kept until the end), then put together with the totals (write)."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
@@ -259,11 +259,6 @@ class JUnit:
         ElementTree.SubElement(suites, "suites")
         head, tail = ElementTree.tostring(suites, encoding="unicode", xml_declaration=True).split("<suites />")
         return head, tail + "\n"
-
-    def document(self) -> str:
-        """The whole junit.xml (for a `stream` that is an io.StringIO)."""
-        head, tail = self._ends()
-        return head + self.stream.getvalue() + tail
 
     def write(self, target) -> None:
         """The whole junit.xml into the text file `target`, the suites copied from `stream`."""
