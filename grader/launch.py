@@ -9,6 +9,7 @@ import os
 import sys
 from typing import TYPE_CHECKING
 
+from grader.spawn import SINGLE_THREADED_BLAS
 from grader.submission import Submission
 
 if TYPE_CHECKING:
@@ -60,6 +61,8 @@ def take(submission: Submission, **session_options) -> Session | None:
 
 def main() -> None:
     global _prestarted
+    # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
+    os.environ.update(SINGLE_THREADED_BLAS)
     _prestarted = _guess(sys.argv[1:])
     from grader.cli import main as cli_main
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,36 @@ def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submiss
     assert ran == [True]
     assert not chapter.problems, chapter.problems
     assert {c.status.value for c in chapter.checks if c.function == "range_reading"} == {"pass"}
+
+
+def test_the_grade_command_runs_no_blas_threads_beside_the_learners_child(submission_factory, tmp_path):
+    """The grader's own numpy is single-threaded: OpenBLAS' pool (one thread per further core) would busy-wait
+    beside the learner's child on the same cores. While the child runs slow calls, `grade` has its main
+    thread only. (On a one-core machine OpenBLAS starts no pool either way.)"""
+    import subprocess
+    import sys
+
+    calling = tmp_path / "calling"
+    root = submission_factory({"ch00_range_sensor": (
+        "import pathlib, time\nimport numpy as np\n"
+        "def range_reading(x, y):\n"
+        f"    pathlib.Path({str(calling)!r}).touch()\n"
+        "    time.sleep(0.2)\n"
+        "    return float(np.hypot(x, y))\n")})
+    grade_process = subprocess.Popen([sys.executable, "-m", "grader", "ch00", "--submission", str(root), "--no-quiz",
+                                      "--no-sandbox"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                     env={k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")})
+    threads = []
+    try:
+        deadline = time.monotonic() + 60
+        while not calling.exists() and grade_process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        time.sleep(0.1)  # the request is written: the thread that wrote it has ended
+        for _ in range(10):
+            threads.append(len(os.listdir(f"/proc/{grade_process.pid}/task")))
+            time.sleep(0.05)
+    finally:
+        grade_process.kill()
+        grade_process.wait()
+    assert calling.exists(), "the learner's function was never called"
+    assert max(threads) == 1, f"threads of `grade` while its child ran: {threads}"
