@@ -162,6 +162,14 @@ def learner_packages() -> tuple[str, ...]:
     return tuple(sorted(p for p in places if any(_inside(p, s) for s in sites)))
 
 
+def _child_modules() -> tuple[str, ...]:
+    """The grader modules the child runs, each with its compiled file where there is one (else the child
+    compiles it at every start: it may not write the compiled file)."""
+    sources = [os.path.join(GRADER_DIR, name) for name in CHILD_MODULES]
+    compiled = [importlib.util.cache_from_source(path) for path in sources]
+    return tuple(sources + [path for path in compiled if os.path.isfile(path)])
+
+
 def _python_files() -> list[str]:
     """The interpreter (as invoked and its real file), a venv's pyvenv.cfg, the standard library and
     the folder of libpython."""
@@ -288,7 +296,7 @@ class Sandbox:
             args.extend(["--perms", "0755", "--tmpfs", folder])
             masks.append(folder)
             made.add(folder)
-        for path in learner_packages() + tuple(os.path.join(GRADER_DIR, name) for name in CHILD_MODULES):
+        for path in learner_packages() + _child_modules():
             parents(path)
             args.extend(["--ro-bind", path, path])
         for folder in masked:

@@ -6,6 +6,7 @@ itself, with its references and keys beside the grader). Needs bubblewrap, as CI
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import shutil
@@ -38,8 +39,9 @@ ROUTES = {
         "             os.path.join(here, 'quizzes', 'keys', 'ch06.yaml'), os.path.join(here, 'data'),\n"
         "             os.path.join(here, '..', 'quizzes', 'keys', 'ch06.yaml'),\n"
         "             os.path.join(here, '..', 'solutions', 'ch06_measurement.py')]\n"
-        "    raise ValueError('reached ' + repr([p for p in tried if os.path.exists(p)]) + ' beside '\n"
-        "                     + repr(sorted(os.listdir(here))))"),
+        "    compiled = os.path.join(here, '__pycache__')\n"
+        "    beside = sorted(os.listdir(here)) + sorted(os.listdir(compiled) if os.path.isdir(compiled) else [])\n"
+        "    raise ValueError('reached ' + repr([p for p in tried if os.path.exists(p)]) + ' beside ' + repr(beside))"),
     # everything but the system's shared libraries (bound whole; their Python package folders are emptied)
     "walks_the_file_system": _h(
         "    import os\n"
@@ -70,7 +72,14 @@ def _assert_closed(route: str, report: dict) -> None:
     if route == "imports_solutions":
         assert "ModuleNotFoundError: No module named 'solutions'" in message, message
     elif route == "reads_through_grader_file":
-        assert f"reached [] beside {sorted(CHILD_MODULES)!r}" in message, message
+        # the modules the child runs, and their compiled files where the grader has them: nothing else
+        reached, beside = message.split(" beside ", 1)
+        assert reached.endswith("reached []"), message
+        listed = ast.literal_eval(beside[:beside.index("]") + 1])
+        names = [n for n in listed if n != "__pycache__"]
+        sources, compiled = names[:len(CHILD_MODULES)], names[len(CHILD_MODULES):]
+        assert sources == sorted(CHILD_MODULES), message
+        assert all(n.endswith(".pyc") and f"{n.split('.')[0]}.py" in CHILD_MODULES for n in compiled), message
     else:
         assert "found []" in message, message
 
