@@ -1,4 +1,5 @@
-"""Entry point of `grade`: starts the grading child before the heavier imports (click, numpy).
+"""Entry point of `grade`: starts the grading child (and for --html the drawing process) before the heavier
+imports (click, numpy).
 
 The child's own startup (interpreter, numpy) then overlaps ours instead of following it. If the guess at the submission turns out wrong, the CLI discards it.
 """
@@ -43,6 +44,13 @@ def _guess(args: list[str]) -> tuple | None:
         return None
 
 
+def _draws_figures(args: list[str]) -> bool:
+    """Whether the command grades once and writes an HTML report (not --watch, which may never write one)."""
+    if not args or args[0] in _OTHER_COMMANDS or "--watch" in args or any(a in ("--help", "-h") for a in args):
+        return False
+    return any(a == "--html" or a.startswith("--html=") for a in args)
+
+
 def take(submission: Submission, **session_options) -> Session | None:
     """A Session around the prestarted child if it serves `submission`; otherwise None."""
     global _prestarted
@@ -63,6 +71,10 @@ def main() -> None:
     global _prestarted
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
+    if _draws_figures(sys.argv[1:]):  # matplotlib's import, the report's longest step, starts first
+        from grader.render import drawer
+
+        drawer.start()
     _prestarted = _guess(sys.argv[1:])
     from grader.cli import main as cli_main
 

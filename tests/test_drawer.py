@@ -67,3 +67,27 @@ def test_an_unused_drawing_process_ends_with_the_grader():
             return
         time.sleep(0.1)
     pytest.fail(f"the drawing process {pid} outlived the grader that started it")
+
+
+@pytest.mark.parametrize("extra", [[], ["--seed", "not-a-number"]], ids=["graded", "usage-error"])
+def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
+    """`grade ... --html` forks the drawing process before anything else (grader.launch, before click parses
+    the command line): when the command ends, graded (with every figure) or refused as misused, no process of
+    it is left. Forked processes keep the command line, which names the report."""
+    from tests.conftest import processes_with
+
+    out = tmp_path / "report-of-this-test.html"
+    said = tmp_path / "said.txt"
+    with said.open("wb") as output:  # a file, not a pipe: run() then waits for the command's own process only
+        proc = subprocess.run([sys.executable, "-m", "grader", "ch01", "ch08", "--solutions", "--html", str(out),
+                               *extra], cwd=tmp_path, stdout=output, stderr=output, timeout=120)
+    text = said.read_text(encoding="utf-8")
+    if extra:
+        assert proc.returncode == 2 and "not-a-number" in text, text[-2000:]
+    else:
+        assert proc.returncode == 0, text[-2000:]
+        assert out.read_text(encoding="utf-8").count("data:image/svg+xml;base64,") == 2  # one plot each
+    deadline = time.monotonic() + 20
+    while processes_with(str(out)) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not processes_with(str(out))

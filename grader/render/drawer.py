@@ -60,10 +60,14 @@ def _ended(process) -> None:
 
 def _draw_what_comes(connection) -> None:
     """The drawing process: only its pipe stays open (no copy of the grader's pipes to the learner's
-    child); it ends when the pipe closes."""
+    child, nor of its output: a pipeline `grade ... | less` ends with the grader); it ends when the pipe
+    closes."""
     from grader.render.html import preload
 
     keep = connection.fileno()
+    null = os.open(os.devnull, os.O_RDWR)
+    for standard in (0, 1, 2):
+        os.dup2(null, standard)
     os.closerange(3, keep)
     os.closerange(keep + 1, 1 << 16)
     try:
