@@ -1,7 +1,8 @@
 """Entry point of `grade`: starts the grading child (and for --html the drawing process) before the heavier
 imports (click, numpy).
 
-The child's own startup (interpreter, numpy) then overlaps ours instead of following it. If the guess at the submission turns out wrong, the CLI discards it.
+The child's own startup (interpreter, numpy) then overlaps ours instead of following it. If the guess at the
+submission turns out wrong, the CLI discards it.
 """
 
 from __future__ import annotations
