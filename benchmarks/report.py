@@ -1,9 +1,14 @@
 """Cost of the HTML report: `grade all --html` against `grade all`, both on the reference solutions.
 
+Three cases of the report, as a learner meets them (grader.render.figure_cache):
+- first run: nothing kept, every figure drawn (GRADER_CACHE_DIR empty: no cache);
+- one chapter changed: every chapter's figures kept from the last run but ch06's, which is drawn;
+- nothing changed: every figure reused from the last run, nothing drawn.
+
 Interleaved repetitions in one run (each `--html` run right after its plain one, so both meet the same
-machine: on shared cores its speed drifts by a quarter within minutes); the figure is the median of
-those paired ratios, with the ratio of the two medians beside it. The grader's files are compiled
-first, as a learner's install has them. Target: at most 2x.
+machine: on shared cores its speed drifts by a quarter within minutes); each figure is the median of those
+paired ratios, with the ratio of the two medians beside it. The grader's files are compiled first, as a
+learner's install has them. Target: at most 2x.
 
     python benchmarks/report.py [--repeat 9]
 """
@@ -12,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import compileall
+import os
 import statistics
 import subprocess
 import sys
@@ -22,9 +28,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def timed(command: list[str]) -> float:
+def timed(command: list[str], cache: str) -> float:
+    environment = {**os.environ, "GRADER_CACHE_DIR": cache}
     started = time.perf_counter()
-    subprocess.run(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    subprocess.run(command, cwd=ROOT, env=environment, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   check=True)
     return time.perf_counter() - started
 
 
@@ -34,25 +42,32 @@ def main() -> None:
     args = parser.parse_args()
     for folder in ("grader", "solutions", "exercises"):  # the steady state a learner sees
         compileall.compile_dir(str(ROOT / folder), quiet=1)
-    out = Path(tempfile.mkdtemp()) / "report.html"
-    commands = {
-        "grade all --solutions": [sys.executable, "-m", "grader", "all", "--solutions"],
-        "grade all --solutions --html": [sys.executable, "-m", "grader", "all", "--solutions", "--html", str(out)],
+    scratch = Path(tempfile.mkdtemp())
+    out, kept = scratch / "report.html", scratch / "cache"
+    plain = [sys.executable, "-m", "grader", "all", "--solutions"]
+    html = [*plain, "--html", str(out)]
+    cases = {  # name: (command, GRADER_CACHE_DIR, what to do before each run)
+        "grade all --solutions": (plain, "", None),
+        "--html, first run": (html, "", None),
+        "--html, one chapter changed": (html, str(kept), lambda: (kept / "figures" / "ch06.json").unlink()),
+        "--html, nothing changed": (html, str(kept), None),
     }
-    for command in commands.values():
-        timed(command)
-    samples: dict[str, list[float]] = {name: [] for name in commands}
+    timed(html, str(kept))  # keeps every chapter's figures
+    samples: dict[str, list[float]] = {name: [] for name in cases}
     for _ in range(args.repeat):
-        for name, command in commands.items():
-            samples[name].append(timed(command))
-    plain, html = samples["grade all --solutions"], samples["grade all --solutions --html"]
+        for name, (command, cache, before) in cases.items():
+            if before:
+                before()
+            samples[name].append(timed(command, cache))
     for name, values in samples.items():
         print(f"{name:<32} median {statistics.median(values):6.3f} s  min {min(values):6.3f} s")
-    paired = statistics.median(h / p for h, p in zip(html, plain))
-    print(f"\n--html / plain = {paired:.2f}x, the median of {len(plain)} paired runs (ratio of the medians "
-          f"{statistics.median(html) / statistics.median(plain):.2f}x; target <= 2x); report size "
-          f"{out.stat().st_size / 1024:.0f} KiB")
-
+    print()
+    base = samples["grade all --solutions"]
+    for name, values in list(samples.items())[1:]:
+        paired = statistics.median(h / p for h, p in zip(values, base))
+        print(f"{name:<32} {paired:.2f}x grade all, the median of {len(base)} paired runs (ratio of the medians "
+              f"{statistics.median(values) / statistics.median(base):.2f}x; target <= 2x)")
+    print(f"report size {out.stat().st_size / 1024:.0f} KiB")
 
 if __name__ == "__main__":
     main()

@@ -213,9 +213,9 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     finally:
         session.close()
     if html_path is not None:
-        from grader.render import html
+        from grader.render import figure_cache, html
 
-        write_atomically(html_path, html.render(report))
+        write_atomically(html_path, html.render(report, figure_cache.default()))
     _emit(report, output_format, verbose)
 
 

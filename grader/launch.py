@@ -86,6 +86,8 @@ def main() -> None:
         code = exc.code
     finally:
         take(Submission(None))  # stops a prestarted child nobody took
+        if "grader.render.drawer" in sys.modules:  # and a drawing process nobody used (no atexit after os._exit)
+            sys.modules["grader.render.drawer"].stop_unused()
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):
     # everything is written and every child is stopped by now.
     if isinstance(code, str):

@@ -100,9 +100,10 @@ class Server:
                                                quiz=not options["no_quiz"] and not functions,
                                                plots=html or options["html_path"] is not None, functions=functions))
         if options["html_path"] is not None:
+            from grader.render import figure_cache
             from grader.render import html as page
 
-            cli.write_atomically(options["html_path"], page.render(report))
+            cli.write_atomically(options["html_path"], page.render(report, figure_cache.default()))
         if options["output_format"] == "json":
             from grader.render import json_report
 
@@ -110,9 +111,10 @@ class Server:
                     "max_score": report.max_score, "all_passed": report.all_passed}
         fragment = ""
         if html:
+            from grader.render import figure_cache
             from grader.render.html import render_fragment
 
-            fragment = render_fragment(report)
+            fragment = render_fragment(report, kept=figure_cache.default())
         return {"text": text.render(report, colour=False, unicode_ok=True, verbose=options["verbose"]),
                 "html": fragment, "score": report.score, "max_score": report.max_score,
                 "all_passed": report.all_passed}

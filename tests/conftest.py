@@ -15,6 +15,10 @@ REPO = Path(__file__).resolve().parents[1]
 if str(REPO) not in sys.path:
     sys.path.insert(0, str(REPO))
 
+# The HTML report's figure cache (grader.render.figure_cache) is off in tests: a figure kept by one test
+# would be reused by the next, and tests never touch the tester's own cache. Its tests turn it on.
+os.environ["GRADER_CACHE_DIR"] = ""
+
 HAVE_JAX = importlib.util.find_spec("jax") is not None  # found, not imported: importing it takes a second
 # the autograd route's tests need jax (CI installs it with the test extras)
 needs_jax = pytest.mark.skipif(not HAVE_JAX and not os.environ.get("CI"),

@@ -5,11 +5,13 @@ So where forking is safe, `grade ... --html` calls `start` before it grades: the
 forks imports matplotlib and forks its own two drawing processes on the other core while the grader
 grades, then draws the chapters it is sent. Without it (not started, or it failed) two processes are
 forked when the figures are due; where forking is not safe (Windows, macOS) the figures are drawn in
-the grader's own process. This module imports nothing heavy."""
+the grader's own process. A drawing process with nothing to draw (every figure reused, see
+grader.render.figure_cache, or the command ended early) is stopped. This module imports nothing heavy."""
 
 from __future__ import annotations
 
 import os
+import signal
 
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
 
@@ -35,15 +37,17 @@ def start() -> bool:
     _STARTED.append((process, ours))
     import atexit
 
-    atexit.register(_stop)  # before multiprocessing's own exit handler, which would wait for it
+    atexit.register(stop_unused)  # before multiprocessing's own exit handler, which would wait for it
     return True
 
 
-def _stop() -> None:
-    """End a drawing process nobody used: it reads the end of its pipe."""
+def stop_unused() -> None:
+    """Stop the drawing process if nothing was sent to it, rather than let it import matplotlib for nobody:
+    at once while it imports, else as soon as its drawing processes have ended (see _draw_what_comes)."""
     while _STARTED:
         process, ours = _STARTED.pop()
         ours.close()
+        process.terminate()
         _ended(process)
 
 
@@ -72,12 +76,21 @@ def _draw_what_comes(connection) -> None:
     os.closerange(keep + 1, 1 << 16)
     try:
         preload()
+        # Until here SIGTERM (stop_unused) ends this process at once. From here it waits (blocked): ending now
+        # would leave the drawing processes waiting for work forever, while the pipe's end (EOF) ends them
+        # and this process in order.
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
         with _two_processes() as pool:
             list(pool.map(int, range(2)))  # both drawing processes forked now, not when the figures are due
             chapters = connection.recv()
             connection.send(_draw_with(pool, chapters))
     except Exception:  # noqa: BLE001  the grader ended (EOF), or draws the figures itself as we send none
         return
+
+
+def _take_sigterm() -> None:
+    """A drawing process dies of SIGTERM as usual (the process that forked it may have blocked it)."""
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
 
 
 def _draw_with(pool, chapters: list) -> list[list]:
@@ -95,7 +108,8 @@ def _two_processes():
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1), mp_context=multiprocessing.get_context("fork"))
+    return ProcessPoolExecutor(max_workers=min(2, os.cpu_count() or 1), mp_context=multiprocessing.get_context("fork"),
+                               initializer=_take_sigterm)
 
 
 def _draw_in_two(chapters: list) -> list[list]:
@@ -110,6 +124,8 @@ def figures_due(chapters: list):
     from grader.render.html import figures, preload
     from grader.spawn import fork_is_safe
 
+    if not chapters:
+        stop_unused()
     sent = None
     if chapters and _STARTED:
         process, ours = _STARTED.pop()

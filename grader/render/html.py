@@ -17,10 +17,14 @@ import base64
 import functools
 import io
 import re
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from grader.model import ChapterResult, CheckResult, Report
+
+if TYPE_CHECKING:
+    from grader.render.figure_cache import FigureCache
 
 # Plot colours, each at least 5:1 on white (WCAG 2.1 1.4.11 asks 3:1 for graphics); series are also
 # told apart by marker or line style, never by colour alone.
@@ -175,7 +179,9 @@ class _Figure:
 
 def svg_uri(fig) -> str:
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="svg")  # fixed margins: bbox_inches="tight" would draw everything twice
+    # no date in the file: a reused figure is the same figure; fixed margins: bbox_inches="tight" would
+    # draw everything twice
+    fig.savefig(buffer, format="svg", metadata={"Date": None})
     return "data:image/svg+xml;base64," + base64.b64encode(buffer.getvalue()).decode("ascii")
 
 
@@ -506,7 +512,7 @@ def _light_ticks(fig) -> None:
 
 
 def preload() -> None:
-    """Import matplotlib (about 0.4 s); called in a thread while grading waits on the child."""
+    """Import matplotlib (about 0.3 s); called in a thread while grading waits on the child."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -578,7 +584,8 @@ def _verdict(report: Report, verdict_line) -> str:
     return verdict_line(report)
 
 
-def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int) -> str:
+def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int,
+            kept: FigureCache | None) -> str:
     from markupsafe import Markup
 
     from grader import provenance, safe_text
@@ -594,27 +601,39 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
 
     from grader.render import drawer
 
+    figures: dict[str, list[_Figure]] = {c.chapter: [] for c in report.chapters}
     plotted = [c for c in report.chapters if c.plots]
+    if kept is not None:
+        for chapter in plotted:
+            found = kept.load(chapter.chapter, chapter.plots)
+            if found is not None:
+                figures[chapter.chapter] = [_Figure(**figure) for figure in found]
+        plotted = [c for c in plotted if not figures[c.chapter]]
     drawn = drawer.figures_due(plotted)  # drawn elsewhere while the template compiles
     template = _template(source)
-    figures = {c.chapter: [] for c in report.chapters} | dict(zip([c.chapter for c in plotted], drawn()))
+    for chapter, its_figures in zip(plotted, drawn()):
+        figures[chapter.chapter] = its_figures
+        if kept is not None:
+            kept.store(chapter.chapter, chapter.plots, [vars(figure) for figure in its_figures])
     return template.render(report=report, figures=figures, num=_num, values=_values,
                            verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
                            kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report),
                            adjustments=report.all_adjustments())
 
 
-def render(report: Report) -> str:
+def render(report: Report, kept: FigureCache | None = None) -> str:
     """The report as one self-contained HTML page. Learner text is escaped by the template and has
-    no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes."""
-    return _render(TEMPLATE, report, "", "main", "page", 1)
+    no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes.
+    Figures found in `kept` for the same plot data are reused, the others drawn and kept there."""
+    return _render(TEMPLATE, report, "", "main", "page", 1, kept)
 
 
-def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2) -> str:
+def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2,
+                    kept: FigureCache | None = None) -> str:
     """The report as an HTML fragment for a notebook's output (no <html>, <head> or <body>): one <div>
     with its own <style>, every rule scoped to that div's id, and every id starting with `id_prefix`
     (a fresh one if None, so several reports can share a page). Headings start at `heading_level`,
-    below the notebook's own title. Escaped and self-contained like the page."""
+    below the notebook's own title. Escaped and self-contained like the page; figures as in `render`."""
     if id_prefix is None:
         import uuid
 
@@ -623,4 +642,4 @@ def render_fragment(report: Report, id_prefix: str | None = None, heading_level:
         raise ValueError(f"id_prefix must be letters, digits, '-' or '_', starting with a letter: {id_prefix!r}")
     if not 1 <= heading_level <= 4:
         raise ValueError(f"heading_level must be 1 to 4 (the report uses three levels): {heading_level}")
-    return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level)
+    return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level, kept)
