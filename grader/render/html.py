@@ -511,8 +511,10 @@ def _light_ticks(fig) -> None:
             axis.set_minor_locator(NullLocator())
 
 
+@functools.cache
 def preload() -> None:
-    """Import matplotlib (about 0.3 s); called in a thread while grading waits on the child."""
+    """Import matplotlib (about 0.3 s), once; called in a thread while grading waits on the child. Figures
+    are made without pyplot (its registry of open figures is for interactive use)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -520,24 +522,20 @@ def preload() -> None:
     # titles just above the axes (no ticks are on top): else matplotlib measures every tick label of each
     # axes to place its title, a quarter of a figure's cost
     matplotlib.rcParams["axes.titley"] = 1.0
-    import matplotlib.pyplot  # noqa: F401
+    import matplotlib.backends.backend_svg  # noqa: F401
+    import matplotlib.figure  # noqa: F401
 
 
 def draw(chapter_id: str, data: dict):
-    """One plot of a chapter as a matplotlib figure, with its caption: (figure, caption). The caller
-    closes the figure (matplotlib.pyplot.close)."""
+    """One plot of a chapter as a matplotlib figure, with its caption: (figure, caption)."""
     preload()
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
-    fig = plt.figure(figsize=(9, 3.4) if chapter_id in TWO_PANELS else (6, 3.6))
-    try:
-        target = fig if chapter_id in TWO_PANELS else fig.add_subplot()
-        _, caption = (_NAMED[data["plot"]][0] if "plot" in data else _DRAW[chapter_id])(target, data)
-        _light_ticks(fig)
-        fig.subplots_adjust(left=0.12, right=0.97, bottom=0.15, top=0.9, wspace=0.3)
-    except BaseException:
-        plt.close(fig)
-        raise
+    fig = Figure(figsize=(9, 3.4) if chapter_id in TWO_PANELS else (6, 3.6))
+    target = fig if chapter_id in TWO_PANELS else fig.add_subplot()
+    _, caption = (_NAMED[data["plot"]][0] if "plot" in data else _DRAW[chapter_id])(target, data)
+    _light_ticks(fig)
+    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.15, top=0.9, wspace=0.3)
     return fig, caption
 
 
@@ -546,8 +544,6 @@ def figures(chapter: ChapterResult) -> list[_Figure]:
     the learner's functions gave; a plot that cannot be drawn becomes a caption only."""
     if chapter.chapter not in _DRAW or not chapter.plots:
         return []
-    import matplotlib.pyplot as plt
-
     out = []
     for data in chapter.plots.values():
         numbers = gave(chapter.chapter, data)
@@ -562,8 +558,6 @@ def figures(chapter: ChapterResult) -> list[_Figure]:
                                numbers))
         except Exception as exc:
             out.append(_Figure("", "", f"This plot could not be drawn ({type(exc).__name__}: {exc}).", gave=numbers))
-        finally:
-            plt.close(fig)
     return out
 
 
