@@ -53,9 +53,11 @@ def test_figures_are_reused_while_a_chapters_plot_data_is_unchanged_and_drawn_wh
     assert again.count(SVG_MARK) == 2  # both taken from the cache
 
     # a learner's ch06 whose measurement_covariance is off by a factor: ch06's plot data changes, ch07's not
+    doubled = ("def measurement_covariance(x, y, sigma):\n"
+               "    H = H_jacobian(x, y)\n"
+               "    return 2 * float(sigma) ** 2 * (H @ H.T)\n")
     learner = build_submission(tmp_path / "learner", {"ch06_measurement": replace_function(
-        "ch06_measurement", "measurement_covariance",
-        "def measurement_covariance(x, y, sigma):\n    H = H_jacobian(x, y)\n    return 2 * float(sigma) ** 2 * (H @ H.T)\n")})
+        "ch06_measurement", "measurement_covariance", doubled)})
     edited = _grade_html(["ch06", "ch07", "--submission", str(learner)], tmp_path / "edited.html", str(cache))
     assert edited.count(SVG_MARK) == 1  # ch07's kept figure ...
     assert edited.count("data:image/svg+xml;base64,") == 2  # ... and ch06 drawn again from the learner's values
