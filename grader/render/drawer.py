@@ -120,7 +120,8 @@ def _draw_in_two(chapters: list) -> list[list]:
 def figures_due(chapters: list):
     """Start drawing the figures of `chapters` (grader.model.ChapterResult); returns the function that
     waits for them, one list of figures per chapter: drawn by the started drawing process, else by two
-    processes forked then, where forking is safe, else by this process."""
+    processes forked then, where forking is safe, else by this process. With no chapters, the started
+    drawing process is stopped."""
     from grader.render.html import figures, preload
     from grader.spawn import fork_is_safe
 
@@ -132,8 +133,9 @@ def figures_due(chapters: list):
         try:
             ours.send(chapters)
             sent = (process, ours)
-        except (OSError, ValueError):
+        except (OSError, ValueError):  # it has died: drawn below instead
             ours.close()
+            _ended(process)
 
     def wait() -> list[list]:
         if sent is not None:
