@@ -502,7 +502,7 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
 @click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
               help="The course configuration (default: solutions/course.yaml beside the references).")
 @click.option("--no-html", is_flag=True, help="Skip the per-learner report.html.")
-@click.option("--plots", is_flag=True, help="Draw plots in each report.html (about 2 s per learner).")
+@click.option("--plots", is_flag=True, help="Draw plots in each report.html (about 0.5 s of CPU per learner).")
 @click.option("--no-sandbox", is_flag=True,
               help="Run learner code without bubblewrap even where it is installed (the isolation line says so).")
 @click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
