@@ -88,3 +88,30 @@ def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
         assert proc.returncode == 0, text[-2000:]
         assert out.read_text(encoding="utf-8").count("data:image/svg+xml;base64,") == 2  # one plot each
     assert not processes_with(str(out))  # stopped, not left to end by itself
+
+
+def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_same(tmp_path):
+    """If the drawing process is gone before the chapters reach it, the grader draws them itself and
+    leaves no zombie behind (its /proc entry is gone, not in state Z)."""
+    script = textwrap.dedent("""
+        import os, signal, sys
+        from pathlib import Path
+        from grader.render import drawer
+        assert drawer.start()
+        process = drawer._STARTED[0][0]
+        os.kill(process.pid, signal.SIGKILL)
+        while Path(f"/proc/{process.pid}/stat").read_text().split()[2] != "Z":
+            pass  # dead and unreaped: a zombie until someone waits for it
+
+        from grader.grading import grade
+        from grader.runner import Session
+        from grader.submission import Submission
+        report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
+        drawn = drawer.figures_due([c for c in report.chapters if c.plots])()
+        print(os.path.exists(f"/proc/{process.pid}"), [len(f) for f in drawn],
+              all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script, str(REPO)], cwd=REPO, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["False", "[1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]

@@ -133,9 +133,9 @@ def figures_due(chapters: list):
         try:
             ours.send(chapters)
             sent = (process, ours)
-        except (OSError, ValueError):  # it has died: drawn below instead
-            ours.close()
-            _ended(process)
+        except Exception:  # noqa: BLE001  it died, or the chapters would not pickle: drawn below instead
+            _STARTED.append((process, ours))
+            stop_unused()
 
     def wait() -> list[list]:
         if sent is not None:
