@@ -207,6 +207,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         threading.Thread(target=preload, daemon=True).start()
     from grader.pipeline import Request, build_report
 
+    session.meanwhile.append(lambda: _renderer(output_format))  # its imports, while the child runs the calls
     try:
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
                                                plots=html_path is not None, functions=functions))
@@ -316,22 +317,30 @@ def write_atomically(path: str, text: str) -> None:
     os.replace(temporary, path)
 
 
+def _renderer(output_format: str):
+    """The module that prints a report in `output_format` (grader.render.json_report or .text)."""
+    if output_format == "json":
+        from grader.render import json_report
+
+        return json_report
+    from grader.render import text
+
+    return text
+
+
 def _emit(report, output_format: str, verbose: bool) -> None:
     """Print the report in the chosen format and exit 0 (all passed) or 1."""
     if verbose:
         from grader.sandbox import Sandbox
 
         click.echo(Sandbox().describe(), err=True)
+    renderer = _renderer(output_format)
     if output_format == "json":
-        from grader.render import json_report
-
-        click.echo(json_report.render(report), nl=False)
+        click.echo(renderer.render(report), nl=False)
     else:
-        from grader.render import text
-
         stream = sys.stdout
-        click.echo(text.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream),
-                               verbose=verbose), nl=False, color=_use_colour(stream))
+        click.echo(renderer.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream),
+                                   verbose=verbose), nl=False, color=_use_colour(stream))
     sys.exit(EXIT_ALL_PASSED if report.all_passed else EXIT_NOT_ALL_PASSED)
 
 

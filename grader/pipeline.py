@@ -89,7 +89,8 @@ def build_report(session: Session, request: Request, course: courses.Course | No
             except Exception:  # noqa: BLE001  judged again below, where what it raises is the report's to meet
                 pass
 
-        session.meanwhile = quiz_meanwhile
+        session.meanwhile.append(quiz_meanwhile)
+    session.meanwhile.append(_version_ready)
     report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
                    submission_label=request.label,
                    exclude=hidden | switched_off(course, request.chapters) | others)
@@ -116,6 +117,17 @@ def build_report(session: Session, request: Request, course: courses.Course | No
 
     provenance.stamp(report, course, learner_id)
     return report
+
+
+def _version_ready() -> None:
+    """Work out the grader's version for the report's stamp now (it is kept): on the instructor's side a hash
+    of the grader's files."""
+    from grader import provenance
+
+    try:
+        provenance.grader_version()
+    except Exception:  # noqa: BLE001  worked out again when the report is stamped, which meets what it raises
+        pass
 
 
 def quiz_report(session: Session, request: Request, course: courses.Course, chapters: list[str]) -> Report:

@@ -170,8 +170,9 @@ class Session:
         self.output = ""
         self._prepared: Prepared | None = None
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
-        # work of the grader's own (no learner code) done once, while the first child runs the calls
-        self.meanwhile: Callable[[], None] | None = None
+        # work of the grader's own (no learner code) done once, in order, while the first child starts and
+        # runs the calls: whatever does not need their results (the quiz, the output's modules)
+        self.meanwhile: list[Callable[[], None]] = []
         self._child: _Child | None = _Child(started or self.launcher(submission))
 
     @property
@@ -227,16 +228,17 @@ class Session:
             self._child = _Child(self.launcher(self.submission))
         child = self._child
         request = self._request(pending, runs)
-        work, self.meanwhile = self.meanwhile, None
+        work, self.meanwhile = self.meanwhile, []
         sender = None
-        if work is None:
+        if not work:
             child.send(request)
         else:  # a thread writes the request (a child still starting reads it only when ready) while we work
             import threading
 
             sender = threading.Thread(target=child.send, args=(request,), daemon=True)
             sender.start()
-            work()  # the child runs on the other core meanwhile; its lines wait in the pipe
+            for job in work:  # the child runs on the other core meanwhile; its lines wait in the pipe
+                job()
         by_name = {r.chapter: r for r in pending}
         limits = self.limits
         state = {"deadline": time.monotonic() + limits.startup_seconds, "chapter_end": float("inf"),

@@ -218,7 +218,7 @@ def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submiss
         "    return float(np.hypot(x, y))\n")})
     session = Session(Submission(root, "exercises"))  # no sandbox: the learner's module sees tmp_path
     ran = []
-    session.meanwhile = lambda: (ran.append(True), signal_file.write_text("yes", encoding="utf-8"))
+    session.meanwhile.append(lambda: (ran.append(True), signal_file.write_text("yes", encoding="utf-8")))
     report = grade(session, ["ch00"])
     chapter = report.chapters[0]
     assert ran == [True]
