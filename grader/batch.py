@@ -477,7 +477,8 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     if html:
         from grader.render import html as html_renderer
 
-        write_atomically(folder / "report.html", html_renderer.render(report))
+        # this worker draws its learner's figures itself: the other workers keep the other cores busy
+        write_atomically(folder / "report.html", html_renderer.render(report, draw_here=True))
     write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
     _settle_heap()
     problems = sum(bool(c.problems) for c in report.chapters)

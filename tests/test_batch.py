@@ -94,6 +94,35 @@ def test_batch_outputs_every_format(submissions, tmp_path):
     assert worked["status"] == "fail" and html.escape(worked["message"].splitlines()[0][:160]) in summary
 
 
+def test_batch_plots_draw_each_learners_figures_from_their_own_values(tmp_path):
+    """`--plots`: each learner's report.html has a figure per plotted chapter, drawn from what that learner's
+    functions returned: a doubled measurement_covariance changes only ch06's figure."""
+    import base64
+
+    folder = tmp_path / "submissions"
+    folder.mkdir()
+    build_submission(folder / "alice")
+    doubled = ("def measurement_covariance(x, y, sigma):\n"
+               "    H = H_jacobian(x, y)\n"
+               "    return 2 * float(sigma) ** 2 * (H @ H.T)\n")
+    build_submission(folder / "erin", {"ch06_measurement": replace_function(
+        "ch06_measurement", "measurement_covariance", doubled)})
+    out = tmp_path / "out"
+    result = _invoke(folder, "--out", out, "--chapters", "ch06,ch07", "--plots", "--jobs", "2")
+    assert result.exit_code in (0, 1), result.output
+
+    def figures(learner: str) -> dict[str, bytes]:
+        page = (out / learner / "report.html").read_text(encoding="utf-8")
+        uris = __import__("re").findall(r"data:image/svg\+xml;base64,([A-Za-z0-9+/=]+)", page)
+        assert len(uris) == 2, (learner, len(uris))  # one plot each for ch06 and ch07, in page order
+        return dict(zip(["ch06", "ch07"], (base64.b64decode(u) for u in uris)))
+
+    alice, erin = figures("alice"), figures("erin")
+    assert all(svg.lstrip().startswith(b"<?xml") and b"<svg" in svg for svg in [*alice.values(), *erin.values()])
+    assert alice["ch07"] == erin["ch07"]  # the same values: the same figure
+    assert alice["ch06"] != erin["ch06"]  # erin's own covariance
+
+
 def test_roster_names_learners(submissions, tmp_path):
     roster = tmp_path / "roster.csv"
     roster.write_text("submission,learner\nalice,s1001\ncarol.zip,s1003\n")

@@ -115,3 +115,31 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
                           timeout=120)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert proc.stdout.split() == ["False", "[1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]
+
+
+def test_figures_due_here_draws_them_in_this_process_alone():
+    """`here` (a batch worker's report): every figure drawn by the calling process, neither by a started
+    drawing process (which keeps its place, unsent) nor by two processes forked for it."""
+    script = textwrap.dedent("""
+        import sys
+        from pathlib import Path
+        from grader.render import drawer
+
+        assert drawer.start()
+        from grader.grading import grade
+        from grader.runner import Session
+        from grader.submission import Submission
+        report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
+
+        def must_not_run(*args, **kwargs):
+            raise AssertionError("the figures were drawn by processes forked for them")
+
+        drawer._draw_in_two = drawer._two_processes = must_not_run
+        drawn = drawer.figures_due([c for c in report.chapters if c.plots], here=True)()
+        print(len(drawer._STARTED), [len(f) for f in drawn],
+              all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))
+    """)
+    proc = subprocess.run([sys.executable, "-c", script, str(REPO)], cwd=REPO, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["1", "[1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]

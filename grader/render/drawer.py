@@ -117,18 +117,19 @@ def _draw_in_two(chapters: list) -> list[list]:
         return _draw_with(pool, chapters)
 
 
-def figures_due(chapters: list):
+def figures_due(chapters: list, here: bool = False):
     """Start drawing the figures of `chapters` (grader.model.ChapterResult); returns the function that
     waits for them, one list of figures per chapter: drawn by the started drawing process, else by two
     processes forked then, where forking is safe, else by this process. With no chapters, the started
-    drawing process is stopped."""
+    drawing process is stopped. `here`: drawn by this process in any case (a batch worker, one of as many
+    as there are cores: forking more for each learner only costs forks)."""
     from grader.render.html import figures, preload
     from grader.spawn import fork_is_safe
 
     if not chapters:
         stop_unused()
     sent = None
-    if chapters and _STARTED:
+    if chapters and _STARTED and not here:
         process, ours = _STARTED.pop()
         try:
             ours.send(chapters)
@@ -147,7 +148,7 @@ def figures_due(chapters: list):
             finally:
                 ours.close()
                 _ended(process)
-        if len(chapters) > 1 and fork_is_safe():
+        if len(chapters) > 1 and fork_is_safe() and not here:
             try:
                 preload()
                 return _draw_in_two(chapters)

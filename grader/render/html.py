@@ -522,6 +522,9 @@ def preload() -> None:
     # titles just above the axes (no ticks are on top): else matplotlib measures every tick label of each
     # axes to place its title, a quarter of a figure's cost
     matplotlib.rcParams["axes.titley"] = 1.0
+    # the SVG's ids from a fixed salt, not a fresh random one: the same values draw the same file (each figure
+    # is an image of its own, so equal ids in two figures never meet)
+    matplotlib.rcParams["svg.hashsalt"] = "jacobians-grader"
     import matplotlib.backends.backend_svg  # noqa: F401
     import matplotlib.figure  # noqa: F401
 
@@ -579,7 +582,7 @@ def _verdict(report: Report, verdict_line) -> str:
 
 
 def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int,
-            kept: FigureCache | None) -> str:
+            kept: FigureCache | None, draw_here: bool = False) -> str:
     from markupsafe import Markup
 
     from grader import provenance, safe_text
@@ -603,7 +606,7 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
             if found is not None:
                 figures[chapter.chapter] = [_Figure(**figure) for figure in found]
         plotted = [c for c in plotted if not figures[c.chapter]]
-    drawn = drawer.figures_due(plotted)  # drawn elsewhere while the template compiles
+    drawn = drawer.figures_due(plotted, here=draw_here)  # drawn elsewhere while the template compiles
     template = _template(source)
     for chapter, its_figures in zip(plotted, drawn()):
         figures[chapter.chapter] = its_figures
@@ -615,11 +618,12 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
                            adjustments=report.all_adjustments())
 
 
-def render(report: Report, kept: FigureCache | None = None) -> str:
+def render(report: Report, kept: FigureCache | None = None, draw_here: bool = False) -> str:
     """The report as one self-contained HTML page. Learner text is escaped by the template and has
     no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes.
-    Figures found in `kept` for the same plot data are reused, the others drawn and kept there."""
-    return _render(TEMPLATE, report, "", "main", "page", 1, kept)
+    Figures found in `kept` for the same plot data are reused, the others drawn and kept there; with
+    `draw_here`, drawn by this process alone (see grader.render.drawer.figures_due)."""
+    return _render(TEMPLATE, report, "", "main", "page", 1, kept, draw_here)
 
 
 def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2,
