@@ -98,6 +98,7 @@ def test_batch_plots_draw_each_learners_figures_from_their_own_values(tmp_path):
     """`--plots`: each learner's report.html has a figure per plotted chapter, drawn from what that learner's
     functions returned: a doubled measurement_covariance changes only ch06's figure."""
     import base64
+    import re
 
     folder = tmp_path / "submissions"
     folder.mkdir()
@@ -113,7 +114,7 @@ def test_batch_plots_draw_each_learners_figures_from_their_own_values(tmp_path):
 
     def figures(learner: str) -> dict[str, bytes]:
         page = (out / learner / "report.html").read_text(encoding="utf-8")
-        uris = __import__("re").findall(r"data:image/svg\+xml;base64,([A-Za-z0-9+/=]+)", page)
+        uris = re.findall(r"data:image/svg\+xml;base64,([A-Za-z0-9+/=]+)", page)
         assert len(uris) == 2, (learner, len(uris))  # one plot each for ch06 and ch07, in page order
         return dict(zip(["ch06", "ch07"], (base64.b64decode(u) for u in uris)))
 
