@@ -86,9 +86,21 @@ STYLED = [
 ]
 
 
+def own_answers(answers: Path, learner: str) -> None:
+    """The right quiz answers for `learner`'s own numbers and option letters, and learner.yaml naming them."""
+    from grader.chapters import CHAPTERS
+    from grader.quiz.templates import reference_answers
+    from grader.submit import write_learner_yaml
+
+    for chapter in CHAPTERS:
+        (answers / f"{chapter.id}.yaml").write_text(reference_answers(chapter.id, learner), encoding="utf-8")
+    write_learner_yaml(answers, learner)
+
+
 def make(folder: Path, count: int, styles: bool = False) -> None:
     """`count` submissions: right, buggy and hostile in turn; with `styles`, right ones in the learners' styles
-    (STYLED) as a fourth kind, and every third submission zipped."""
+    (STYLED) as a fourth kind, and every third submission zipped. Four in five answer the quiz with their own
+    numbers; every fifth with the reference's, as a learner whose learner.yaml names someone else."""
     draw = random.Random(1)
     answers = ROOT / "solutions" / "answers"
     kinds = ("right", "styled", "buggy", "hostile") if styles else ("right", "buggy", "hostile")
@@ -103,6 +115,8 @@ def make(folder: Path, count: int, styles: bool = False) -> None:
             replacements[module] = replace_function(module, function, source)
         root = build_submission(folder / f"{kind}{i:04d}", replacements)
         shutil.copytree(answers, root / "exercises" / "answers")
+        if i % 5 != 4:  # most learners answer their own quiz; every fifth with the reference's numbers (flagged)
+            own_answers(root / "exercises" / "answers", root.name)
         if styles and i % 3 == 2:
             shutil.make_archive(str(root), "zip", root)
             shutil.rmtree(root)
