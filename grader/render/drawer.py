@@ -126,8 +126,11 @@ def figures_due(chapters: list, here: bool = False):
     from grader.render.html import figures, preload
     from grader.spawn import fork_is_safe
 
+    def drawn_here() -> list[list]:
+        return [figures(chapter) for chapter in chapters]
+
     if here:
-        return lambda: [figures(chapter) for chapter in chapters]
+        return drawn_here
     if not chapters:
         stop_unused()
     sent = None
@@ -156,6 +159,6 @@ def figures_due(chapters: list, here: bool = False):
                 return _draw_in_two(chapters)
             except (OSError, ValueError, ImportError, RuntimeError):
                 pass
-        return [figures(chapter) for chapter in chapters]
+        return drawn_here()
 
     return wait
