@@ -9,7 +9,7 @@ CLI, and the same batch with a fresh sandboxed interpreter per learner instead o
 --rss grades 250, 500 and 1000 generated submissions instead (--rss-counts) and prints, against the count,
 the peak resident memory of the batch's own process and of its process tree (workers, fork servers,
 learner children: /proc polled), and the ratio of each at the largest count to at the smallest (flat: near
-1). --discovery times grader.batch.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
+1). --discovery times grader.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
 giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
 the seconds at 10,000 against the 3.4 s the issue measured. --repeat N runs each N times: medians.
 """
@@ -253,10 +253,10 @@ DISCOVERY_BASELINE = 3.4  # seconds for 10,000 empty folders, as issue 14 measur
 
 
 def discovery_figures(work: Path, counts: list[int], repeat: int) -> None:
-    """grader.batch.discover on empty folders (by name, and with a roster giving every one the same id, which
+    """grader.staging.discover on empty folders (by name, and with a roster giving every one the same id, which
     makes each id unique in turn): seconds per count (medians), the cost per folder at the largest count
     against at the smallest, and the largest against the issue's baseline."""
-    from grader.batch import discover
+    from grader.staging import discover
 
     for label, with_roster in (("by folder name", False), ("one id for all, from a roster", True)):
         seconds = {}

@@ -28,7 +28,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from grader.spawn import SINGLE_THREADED_BLAS  # noqa: E402
+from grader.system import SINGLE_THREADED_BLAS  # noqa: E402
 
 
 def timed(command: list[str]) -> float:

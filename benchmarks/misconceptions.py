@@ -579,8 +579,8 @@ def quiz_diagnoses_on_right_answers(folder: Path) -> list[tuple[str, str, str, s
 
 
 def grade_one(root: Path, chapter: str):
+    from grader.boundary.session import Session
     from grader.grading import grade
-    from grader.runner import Session
     from grader.submission import Submission
 
     return grade(Session(Submission(root, "exercises")), [chapter]).chapters[0]

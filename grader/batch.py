@@ -1,8 +1,8 @@
 """Batch grading of a folder of submissions: discover, stage, grade in parallel, write every output.
 
 Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied
-or safely extracted into OUT/.staging/<folder>/exercises/ and graded by a worker process, in a
-child forked by that worker's sandboxed fork server (grader.forkserver), and its outputs are written
+or safely extracted into OUT/.staging/<folder>/exercises/ (grader.staging) and graded by a worker process, in a
+child forked by that worker's sandboxed fork server (grader.boundary.forkserver), and its outputs are written
 atomically into OUT/<folder>/, where <folder> is the learner's id kept as given where it is plain
 and percent-encoded otherwise (folder_name): no id can name a class output, a hidden folder or a
 path outside OUT. A learner whose staged files hash the same as last time is not graded again. The
@@ -17,55 +17,40 @@ graded again by the next run.
 
 from __future__ import annotations
 
-import functools
 import gc
 import hashlib
 import json
 import marshal
 import os
-import re
 import sys
 import tempfile
 import time
-import unicodedata
-import zipfile
 import zlib
 from collections.abc import Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, fields
+from dataclasses import fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from grader.chapters import CHAPTERS
 from grader.render import plural
-from grader.safe_text import for_json, unicode_clean
-from grader.submit import MANIFEST
+from grader.safe_text import for_json
+from grader.staging import (  # noqa: F401  (RosterError, StagingError: what run_batch raises and reports)
+    STAGING,
+    Entry,
+    RosterError,
+    Skipped,
+    StagingError,
+    folder_name,
+    stage,
+    survey,
+)
 
 if TYPE_CHECKING:
     from grader.course import Course
 
-CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.(py|ipynb)$")  # a chapter may be kept as a notebook
-ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
-MAX_FILE_BYTES = 1 << 20
-MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged without them (grader.notebook)
-MAX_TOTAL_BYTES = 16 << 20
-MAX_FILES = 200
-STAGING = ".staging"
-CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
-                 "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
-_PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
-_MAX_FOLDER = 160
-_BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 RETRY_PAUSE = 1.0  # seconds before a learner whose child could not start is tried again
 HELD_REPORTS = 32  # reports graded before their turn in the class outputs kept meanwhile; others are read again
-
-
-class StagingError(ValueError):
-    """A submission that cannot be staged (the message says why)."""
-
-
-class RosterError(ValueError):
-    """A roster that cannot be read (the message names the file and line)."""
 
 
 class InfrastructureError(RuntimeError):
@@ -74,217 +59,6 @@ class InfrastructureError(RuntimeError):
 
 class NoSubmissions(ValueError):
     """The submissions folder holds nothing to grade (the message says what it holds instead)."""
-
-
-@dataclass
-class Entry:
-    learner: str
-    source: Path
-    origin: str = ""  # where the id comes from, for messages: "its name" or "roster.csv, line 3"
-    submitted: str = ""  # when it was submitted, from the roster's `submitted` column (for late penalties)
-
-
-@dataclass
-class Skipped:
-    """Something in the submissions folder that is not graded, and why."""
-
-    name: str
-    reason: str
-    submission: bool = False  # a learner's folder or zip, skipped because its id is unusable
-
-
-def folder_name(learner: str) -> str:
-    """The learner's folder in OUT (and OUT/.staging): the id itself where it has only letters, digits
-    and _ . @ + -, else each other character percent-encoded as UTF-8 (zoë -> zo%C3%AB); a leading '.'
-    and the names of the class outputs get their dots encoded (%2E), a leading '-' too (%2D), and a long
-    id is shortened with a hash. Different ids never share a folder; no id names a class output or a
-    hidden folder."""
-    encoded = "".join(ch if ch in _PLAIN else "".join(f"%{b:02X}" for b in ch.encode("utf-8", "surrogatepass"))
-                      for ch in learner)
-    if encoded.casefold() in CLASS_OUTPUTS or encoded.casefold() == STAGING or encoded.startswith("."):
-        encoded = encoded.replace(".", "%2E")
-    if encoded.startswith("-"):  # not an option to the shell tools that will handle the folder
-        encoded = "%2D" + encoded[1:]
-    if len(encoded) > _MAX_FOLDER:  # '~' never appears otherwise
-        digest = hashlib.sha256(learner.encode("utf-8", "surrogatepass")).hexdigest()[:20]
-        encoded = f"{encoded[:_MAX_FOLDER - 21]}~{digest}"
-    return encoded
-
-
-def id_problem(learner: str) -> str | None:
-    """Why `learner` cannot be a learner id (empty, '.' or '..', a path separator, a control
-    character), or None. Any other text is an id, kept exactly as given."""
-    if not learner.strip():
-        return "is empty"
-    if learner in (".", ".."):
-        return f"is {learner!r}"
-    if "/" in learner or "\\" in learner:
-        return "contains a path separator (/ or \\)"
-    for ch in learner:
-        if ch in _BIDI or unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp"):
-            return f"contains the control character U+{ord(ch):04X}"
-    return None
-
-
-def read_roster(roster: Path) -> dict[str, tuple[str, int, str]]:
-    """The roster CSV as {submission: (learner id, line, submitted)}: columns `submission` and `learner` (and
-    optionally `submitted`, the time of submission as the LMS gives it, ISO 8601) in any order and case,
-    separated by ',' or ';' (or a tab), UTF-8 with or without a byte-order mark (grader.csvtable)."""
-    from grader.csvtable import TableError, read_table
-
-    try:
-        rows = read_table(roster, ("submission", "learner"))
-    except TableError as exc:
-        raise RosterError(str(exc)) from None
-    return {row["submission"]: (row["learner"], line, row.get("submitted", "")) for line, row in rows
-            if row["submission"]}
-
-
-def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[Skipped]]:
-    """The submissions in `folder` (learner folders and .zip files) with their learner ids, and what
-    is skipped with the reason: other files, hidden (dot-named) entries the roster does not name,
-    ids that cannot be ids (id_problem). An id comes from the roster (--roster), else from the name;
-    two submissions with one id become id and id-2."""
-    names = read_roster(roster) if roster is not None else {}
-    entries: list[Entry] = []
-    skipped: list[Skipped] = []
-    taken: set[str] = set()
-    suffix: dict[str, int] = {}  # id -> the n of id-n to try next: a name once taken stays taken
-    with os.scandir(folder) as listing:  # the types come with the listing: no stat per entry
-        items = sorted(listing, key=lambda item: os.path.normcase(item.name))  # the order of sorted Paths
-    for item in items:
-        path = folder / item.name
-        shown = unicode_clean(item.name)
-        if not (item.is_symlink() or item.is_dir(follow_symlinks=False)
-                or (item.is_file(follow_symlinks=False) and path.suffix.lower() == ".zip")):
-            skipped.append(Skipped(shown, "not a folder or a .zip file"))
-            continue
-        stem = path.stem if item.is_file() else path.name  # a link: what it points at
-        named = names.get(path.name) or names.get(stem)
-        if named is None and path.name.startswith("."):
-            skipped.append(Skipped(shown, "a hidden (dot-named) entry, as tools leave behind (.git, .DS_Store, "
-                                          "._name); to grade it, rename it or name it in a roster (--roster)"))
-            continue
-        if named is not None:
-            learner, line, _ = named
-            problem = id_problem(learner)
-            why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
-            origin = f"the roster {roster.name}, line {line}"
-        else:
-            learner = unicode_clean(stem)  # bytes that are not UTF-8 become U+FFFD
-            problem = id_problem(learner)
-            why = f"its name, the learner id, {problem}; rename it or give its id in a roster (--roster)"
-            origin = f"the name of {shown}"
-        if problem is not None:
-            skipped.append(Skipped(shown, why, submission=True))
-            continue
-        unique, n = learner, suffix.get(learner, 2)
-        while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
-            unique, n = f"{learner}-{n}", n + 1
-        suffix[learner] = n  # the next submission with this id starts here, not at id-2 again
-        taken.add(unique)
-        entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique",
-                             named[2] if named is not None else ""))
-    return entries, skipped
-
-
-def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
-    """Learner folders and .zip files in `folder` with their ids (survey, without what is skipped)."""
-    return survey(folder, roster)[0]
-
-
-def _wanted(relative: str) -> str | None:
-    """Where a file of the submission goes in the staged package, or None to leave it out."""
-    parts = relative.replace("\\", "/").split("/")
-    name = parts[-1]
-    if CHAPTER_FILE.match(name):
-        return name
-    if ANSWER_FILE.match(name) and len(parts) >= 2 and parts[-2] == "answers":
-        return f"answers/{name}"
-    if name == MANIFEST:  # written by grade submit (grader.submit): checked, never graded
-        return name
-    return None
-
-
-def _limit(target: str) -> int:
-    return MAX_NOTEBOOK_BYTES if target.endswith(".ipynb") else MAX_FILE_BYTES
-
-
-def _staged(target: str, data: bytes) -> bytes:
-    """What is staged of a file: a notebook without its outputs (grading reads its code cells only)."""
-    if not target.endswith(".ipynb"):
-        return data
-    from grader.notebook import without_outputs
-
-    return without_outputs(data)
-
-
-def stage(entry: Entry, staging: Path) -> Path:
-    """Copy the submission's chapter and answer files into staging/<folder>/exercises/ (a file
-    already staged with the same bytes is left as it is; files no longer submitted are removed)."""
-    root = staging / folder_name(entry.learner)
-    package = root / "exercises"
-    files: dict[str, bytes] = {"__init__.py": b""}
-    total = 0
-    if entry.source.is_symlink():
-        raise StagingError("is a symbolic link; a submission is a real folder or .zip file (links are never "
-                           "followed: one could point at the references)")
-    if entry.source.is_dir():
-        for folder, subfolders, names in os.walk(entry.source):  # never into a symlinked folder
-            subfolders.sort()
-            for name in sorted(names):
-                path = Path(folder) / name
-                if path.is_symlink() or not path.is_file():
-                    continue
-                target = _wanted(str(path.relative_to(entry.source)))
-                if target is None:
-                    continue
-                size = path.stat().st_size
-                if size > _limit(target):
-                    raise StagingError(f"{path.name} is {size} bytes; at most {_limit(target)} are read")
-                files[target] = _staged(target, path.read_bytes())
-                total += len(files[target])
-    else:
-        try:
-            archive = zipfile.ZipFile(entry.source)
-        except zipfile.BadZipFile:
-            raise StagingError(f"{entry.source.name} is not a valid zip file") from None
-        with archive:
-            infos = archive.infolist()
-            if len(infos) > 10 * MAX_FILES:
-                raise StagingError(f"{entry.source.name} holds {len(infos)} entries")
-            for info in infos:
-                name = info.filename
-                if name.startswith("/") or ".." in name.split("/") or (info.external_attr >> 16) & 0o170000 == 0o120000:
-                    continue  # absolute paths, parent references and symlinks are never extracted
-                target = _wanted(name)
-                if target is None or info.is_dir():
-                    continue
-                if info.file_size > _limit(target):
-                    raise StagingError(f"{name} is {info.file_size} bytes unpacked; at most {_limit(target)}")
-                with archive.open(info) as handle:
-                    data = handle.read(_limit(target) + 1)
-                if len(data) > _limit(target):
-                    raise StagingError(f"{name} unpacks to more than {_limit(target)} bytes")
-                files[target] = _staged(target, data)
-                total += len(files[target])
-    if total > MAX_TOTAL_BYTES or len(files) > MAX_FILES:
-        raise StagingError("the submission is too large")
-    if not any(CHAPTER_FILE.match(name) for name in files):
-        raise StagingError("no chapter files (chNN_*.py or chNN_*.ipynb) found, neither in exercises/ nor at the top")
-    (package / "answers").mkdir(parents=True, exist_ok=True)
-    for path in package.rglob("*"):
-        if path.is_file() and path.relative_to(package).as_posix() not in files:
-            path.unlink()
-    for target, data in files.items():
-        path = package / target
-        try:
-            if path.read_bytes() == data:
-                continue
-        except OSError:
-            pass
-        path.write_bytes(data)
-    return root
 
 
 def content_hash(root: Path, chapters: list[str], seed: int, settings: str = "") -> str:
@@ -335,51 +109,31 @@ def _settle_heap() -> None:
         gc.freeze()
 
 
-def isolation_line(sandboxed: bool = True) -> str:
-    """What holds for learner code in this batch (grader.sandbox.Sandbox.describe, or why there is no
-    sandbox when the instructor turned it off)."""
-    from grader.sandbox import Sandbox
+def choose_boundary(sandboxed: bool = True, probe: bool = False):
+    """How this batch runs learner code (grader.boundary.choose): bubblewrap required, or off with
+    --no-sandbox; a resident fork server per worker where the system allows. With `probe`, one child
+    interpreter is started first the way the workers will start theirs: InfrastructureError with the reason
+    when it does not start, so that no learner is graded on a broken sandbox."""
+    from grader import boundary
 
-    if sandboxed:
-        return Sandbox().describe()
-    return ("isolation: no sandbox (turned off with --no-sandbox): learner code runs as you, with resource limits "
-            "only, and can read every file you can (answers included, wherever the references and keys are "
-            "installed)")
-
-
-def check_infrastructure(sandboxed: bool = True) -> None:
-    """Start one child interpreter the way the workers will (grader.sandbox.probe); InfrastructureError
-    with the reason when it does not start, so that no learner is graded on a broken sandbox."""
-    from grader.sandbox import Sandbox, probe
-
-    reason = probe(Sandbox() if sandboxed else None)
-    if reason is not None:
-        raise InfrastructureError(reason)
+    try:
+        return boundary.choose("required" if sandboxed else "off", resident=True, probe=probe)
+    except boundary.BoundaryUnavailable as exc:
+        raise InfrastructureError(str(exc)) from None
 
 
-def _launcher(sandboxed: bool):
-    """This worker's way to start a child: its fork server (started on first use), or a fresh
-    interpreter per learner with GRADER_FORK_SERVER=off (slower)."""
-    if "launcher" not in _worker_state:
-        from grader.forkserver import ForkServer
-        from grader.sandbox import Sandbox
-        from grader.spawn import start_child
-
-        wrap = Sandbox() if sandboxed else None
-        if os.environ.get("GRADER_FORK_SERVER") == "off":
-            _worker_state["launcher"] = functools.partial(start_child, wrap=wrap)
-        else:  # one fork server per worker; it sees no learner's files, they come with each request
-            server = ForkServer(wrap)
-            _worker_state.update(launcher=server.start, server=server)
-    return _worker_state["launcher"]
+def _boundary(sandboxed: bool):
+    """This worker's boundary (its fork server started on first use), kept for every learner it grades."""
+    if "boundary" not in _worker_state:
+        _worker_state["boundary"] = choose_boundary(sandboxed)
+    return _worker_state["boundary"]
 
 
-def _drop_launcher() -> None:
+def _drop_boundary() -> None:
     """Stop this worker's fork server: the next learner gets a new one."""
-    _worker_state.pop("launcher", None)
-    server = _worker_state.pop("server", None)
-    if server is not None:
-        server.close()
+    chosen = _worker_state.pop("boundary", None)
+    if chosen is not None:
+        chosen.close()
 
 
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
@@ -387,13 +141,13 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
     """One learner's report, as `course` has it (grader.pipeline.build_report); tried a second time, with a new
     fork server, when the first attempt failed for a reason outside the learner's code (Report.infrastructure,
     or no process could be started at all: an OSError, raised again if the second attempt meets it too)."""
+    from grader.boundary import Limits
     from grader.pipeline import Request, build_report
-    from grader.runner import Limits, Session
     from grader.submission import Submission
 
     for attempt in (1, 2):
         try:
-            session = Session(Submission(root, "exercises"), Limits(**limits), launcher=_launcher(sandboxed))
+            session = _boundary(sandboxed).open_session(Submission(root, "exercises"), Limits(**limits))
         except OSError:
             if attempt == 2:
                 raise
@@ -402,7 +156,7 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
                                                    label=learner, other_ids=other_ids), course)
             if not report.infrastructure:
                 break
-        _drop_launcher()
+        _drop_boundary()
         if attempt == 1:
             time.sleep(RETRY_PAUSE)
     return report
@@ -534,7 +288,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
               limits: dict | None = None, progress=None, sandboxed: bool = True,
               hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = (),
-              course: Course | None = None, overrides: Path | None = None, similarity: bool = False) -> dict:
+              course: Course | None = None, overrides: Path | None = None, similarity: bool = False,
+              announce=None) -> dict:
     """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
     learner, what was skipped, what was flagged, the isolation line, the changes since the last run and
     the problems of overrides.csv, for the end summary.
@@ -544,7 +299,8 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     (results.json shows them after grades are published); `lms_layouts` ("canvas", "moodle") adds those
     gradebooks; `course` (grader.course.Course) leaves out the checks it switches off and gives the late
     penalty and the current handout; `overrides` is the overrides file (default OUT/overrides.csv);
-    `similarity` ranks pairs of learners by the similarity of their code (grader.similarity).
+    `similarity` ranks pairs of learners by the similarity of their code (grader.similarity); `announce` is
+    given the isolation line once the boundary is chosen, before anyone is graded.
     Every learner's result goes into OUT/gradebook.db (grader.history) as soon as it is graded."""
     from grader import history as histories
     from grader import provenance
@@ -559,7 +315,9 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                             + (f"; it holds only what is skipped: {what}" if what else ": it is empty"))
     rows, override_problems = read_overrides(overrides or out / "overrides.csv", [e.learner for e in entries],
                                              chapters)
-    check_infrastructure(sandboxed)
+    isolation = choose_boundary(sandboxed, probe=True).isolation
+    if announce is not None:
+        announce(isolation)
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}
@@ -568,7 +326,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     done = 0
     limits = limits or {}
     history = histories.History(out / histories.FILE_NAME)
-    collected = ClassOutputs(out, [e.learner for e in entries], statuses, messages)
+    collected = ClassOutputs(out, [e.learner for e in entries], statuses, messages, chapters)
     run = history.start(provenance.grader_version(), course.current_handout if course else None,
                         course.id if course else None, seed, chapters)
     by_learner: dict[str, list] = {}  # each learner's overrides, in the file's order
@@ -591,7 +349,6 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                 done += 1
                 if progress:
                     progress(done, len(entries), time.monotonic() - started)
-        isolation = isolation_line(sandboxed)
         summary = rebuild(out, history, run, chapters, collected, skipped, isolation, lms_layouts, rows,
                           override_problems, similarity=similarity, deadline=bool(course and course.late))
     finally:
@@ -702,7 +459,9 @@ class ClassOutputs:
     report of any other is read again from report.json when its turn comes. So the memory of a batch does not
     grow with its reports."""
 
-    def __init__(self, out: Path, learners: list[str], statuses: dict, messages: dict) -> None:
+    def __init__(self, out: Path, learners: list[str], statuses: dict, messages: dict,
+                 chapters: list[str] = ()) -> None:
+        from grader.quiz import class_questions
         from grader.render import lms, summary
 
         self.out, self.learners, self.statuses, self.messages = out, learners, statuses, messages
@@ -714,7 +473,7 @@ class ClassOutputs:
         self.not_graded: dict[str, str] = {}
         self.graded: list[str] = []
         self.untimed: list[str] = []  # graded without a submission time
-        self.tally = summary.Tally()
+        self.tally = summary.Tally(class_questions(list(chapters)))  # the summary reads no bank or key
         # no name in OUT: gone even when the batch is killed; closed by close()
         self.scratch = tempfile.TemporaryFile("w+", encoding="utf-8", newline="", dir=out)  # noqa: SIM115
         self.junit = lms.JUnit(self.scratch)
@@ -806,7 +565,7 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
         from grader import similarity as similarities
 
         similar = similarities.rank(out / STAGING, graded)
-    view = summary.Summary(collected.tally, collected.not_graded, isolation or isolation_line(),
+    view = summary.Summary(collected.tally, collected.not_graded, isolation,
                            [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
                            similar)
     write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))

@@ -18,7 +18,6 @@ auto, the default) and its isolation line, on stderr and in the results' message
 from __future__ import annotations
 
 import base64
-import os
 from pathlib import Path
 
 WORKFLOW = Path(".github") / "workflows" / "classroom.yml"
@@ -90,18 +89,18 @@ def github_output_line(results_json: str) -> str:
 
 
 def sandbox_for(mode: str):
-    """(the sandbox to grade in or None, the isolation line, why there is none or ""), after starting one
-    interpreter in bubblewrap to see that it runs here (grader.sandbox.probe)."""
-    from grader.sandbox import Sandbox, probe
+    """(the grader.boundary.Boundary to grade in, the isolation line, why there is no sandbox or ""), after
+    starting one interpreter the way grading will (grader.boundary.choose with probe); BoundaryUnavailable
+    where `mode` is "required" and the sandbox does not start."""
+    from grader import boundary
 
-    if mode == "off" or os.environ.get("GRADER_SANDBOX") == "off":
-        return None, ("isolation: no sandbox (turned off): learner code runs as you, with resource limits only"), \
+    chosen = boundary.choose(mode, probe=True)
+    if chosen.sandboxed:
+        return chosen, chosen.isolation, ""
+    if chosen.turned_off:
+        return chosen, "isolation: no sandbox (turned off): learner code runs as you, with resource limits only", \
             "turned off"
-    sandbox = Sandbox()
-    reason = "bubblewrap is not installed" if not sandbox.available else probe(sandbox)
-    if not reason:
-        return sandbox, sandbox.describe(), ""
-    return None, (f"isolation: no sandbox: bubblewrap cannot run here ({' '.join(reason.split())[:300]}); learner "
-                  "code runs as you, with resource limits only (on GitHub's runners: allow user namespaces, "
-                  "`sudo sysctl -w kernel.apparmor_restrict_unprivileged_userns=0`, as the release's workflow "
-                  "does)"), reason
+    return chosen, (f"isolation: no sandbox: bubblewrap cannot run here ({chosen.why_not}); learner code runs as you, "
+                    "with resource limits only (on GitHub's runners: allow user namespaces, "
+                    "`sudo sysctl -w kernel.apparmor_restrict_unprivileged_userns=0`, as the release's workflow "
+                    "does)"), chosen.why_not

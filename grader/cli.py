@@ -15,10 +15,9 @@ import sys
 
 import click
 
-from grader import launch
+from grader import prestart
 from grader.chapters import CHAPTERS, ChapterInfo, resolve
 from grader.render import plural
-from grader.runner import Session
 from grader.submission import Submission, SubmissionNotFound, locate
 
 EXIT_ALL_PASSED, EXIT_NOT_ALL_PASSED, EXIT_USAGE = 0, 1, 2
@@ -189,20 +188,18 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
         drawing = drawer.start()
     # the child may already run (grader.launch); else start it now, to overlap our imports below
-    session = launch.take(submission)
-    if session is not None and no_sandbox and session.wrap is not None:
-        session.close()
-        session = None
+    sandbox = "off" if no_sandbox else "auto"
+    session = prestart.take(submission, sandbox)
     if session is None:
-        from grader.sandbox import learner_sandbox
+        from grader import boundary
 
-        session = Session(submission, wrap=None if no_sandbox else learner_sandbox())
+        session = boundary.open_session(submission, sandbox=sandbox)
     # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
     # matplotlib is imported in a thread, which makes progress while grading waits on the child.
     if html_path is not None and not drawing:
         import threading
 
-        from grader.render.html import preload
+        from grader.render.figures import preload
 
         threading.Thread(target=preload, daemon=True).start()
     from grader.pipeline import Request, build_report
@@ -217,35 +214,23 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.render import figure_cache, html
 
         write_atomically(html_path, html.render(report, figure_cache.default()))
-    _emit(report, output_format, verbose)
+    _emit(report, output_format, verbose, session.isolation)
 
 
 def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,
            no_sandbox: bool, verbose: bool, functions: tuple[str, ...] = ()) -> None:
-    """`--watch`: a resident fork server grades each saved chapter again (grader.watch)."""
-    import functools
+    """`--watch`: a resident fork server (where the system has one) grades each saved chapter again
+    (grader.watch)."""
     import time
 
-    from grader import watch
+    from grader import boundary, watch
     from grader.pipeline import Request
     from grader.render import text
-    from grader.sandbox import learner_sandbox
-    from grader.spawn import fork_is_safe, start_child
 
-    prestarted = launch.take(submission)
-    if prestarted is not None:
-        prestarted.close()
-    sandbox = None if no_sandbox else learner_sandbox()
-    from grader.forkserver import ForkServer
-
-    server = None
-    if fork_is_safe():
-        server = ForkServer(sandbox)
-        launcher = server.start
-    else:  # no safe fork here (Windows, macOS): a fresh interpreter per run
-        launcher = functools.partial(start_child, wrap=sandbox)
+    prestart.take(None, "")  # stops a child grader.launch started: the watch's come from its own boundary
+    door = boundary.choose("off" if no_sandbox else "auto", resident=True)
     watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz,
-                                                          functions=functions), launcher)
+                                                          functions=functions), door)
     stream = sys.stdout
 
     def show(report, changes: list[str], seconds: float, saved: list[str]) -> None:
@@ -261,8 +246,7 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
     try:
         watch.run(watcher, show)
     finally:
-        if server is not None:
-            server.close()
+        door.close()
 
 
 def _seed_here(seed: int | None) -> int:
@@ -328,12 +312,11 @@ def _renderer(output_format: str):
     return text
 
 
-def _emit(report, output_format: str, verbose: bool) -> None:
-    """Print the report in the chosen format and exit 0 (all passed) or 1."""
-    if verbose:
-        from grader.sandbox import Sandbox
-
-        click.echo(Sandbox().describe(), err=True)
+def _emit(report, output_format: str, verbose: bool, isolation: str = "") -> None:
+    """Print the report in the chosen format and exit 0 (all passed) or 1; with `verbose`, the isolation line
+    (what held for the learner's code) first, on stderr."""
+    if verbose and isolation:
+        click.echo(isolation, err=True)
     renderer = _renderer(output_format)
     if output_format == "json":
         click.echo(renderer.render(report), nl=False)
@@ -551,8 +534,6 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
             similarities._engine()
         except similarities.SimilarityUnavailable as exc:
             raise click.UsageError(str(exc)) from None
-    isolation = batch.isolation_line(sandboxed=not no_sandbox)
-    click.echo(isolation, err=True)
     try:
         result = batch.run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
                                  roster=Path(roster) if roster else None, jobs=jobs,
@@ -560,7 +541,8 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                  plots=plots, limits={"learner_seconds": time_budget}, sandboxed=not no_sandbox,
                                  progress=batch.progress_bar(), hidden=the_course.hidden,
                                  lms_layouts=tuple(lms_layouts), course=the_course,
-                                 overrides=Path(overrides_file) if overrides_file else None, similarity=similarity)
+                                 overrides=Path(overrides_file) if overrides_file else None, similarity=similarity,
+                                 announce=lambda line: click.echo(line, err=True))
     except batch.RosterError as exc:
         hint = "--overrides" if "overrides" in str(exc) else "--roster"
         raise click.BadParameter(for_terminal(str(exc)), param_hint=hint) from None
@@ -657,17 +639,13 @@ def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use
     picked = chapters_from(chapters)
     submission = find_submission(submission_dir, use_solutions)
     seed = _seed_here(None)
-    session = launch.take(submission)
-    wrap, isolation, reason = classroom.sandbox_for(sandbox)
-    if reason and sandbox == "required":
-        if session is not None:
-            session.close()
-        raise click.UsageError(f"the sandbox is required and does not start here: {reason}")
-    if session is not None and (wrap is None) != (session.wrap is None):
-        session.close()
-        session = None
-    if session is None:
-        session = Session(submission, wrap=wrap)
+    from grader.boundary import BoundaryUnavailable
+
+    try:
+        door, isolation, reason = classroom.sandbox_for(sandbox)
+    except BoundaryUnavailable as exc:
+        raise click.UsageError(f"the sandbox is required and does not start here: {exc}") from None
+    session = door.open_session(submission)
     from grader.pipeline import Request, build_report
 
     try:

@@ -13,8 +13,9 @@ from typing import Callable
 
 import numpy as np
 
+from grader.boundary.wire import RAISED, Returned
 from grader.diagnose import SMALL, Mistake, diagnose, shape_mistake, within
-from grader.wire import RAISED, Returned
+from grader.numbers import fmt, fmt_array  # noqa: F401  (the checks' messages import them from here)
 
 SHOWN_ENTRIES = 3
 
@@ -69,23 +70,6 @@ class Label:
 
     def __format__(self, spec: str) -> str:
         return format(str(self), spec)
-
-
-def fmt(value: float, zero_below: float = 0.0, digits: int = 6) -> str:
-    """A number as a learner reads it: up to `digits` significant digits; 0 for anything no larger than
-    `zero_below` (a value meant as 0 that rounding left at 3.8e-17)."""
-    value = float(value)
-    if value == 0 or abs(value) <= zero_below:
-        return "0"
-    return f"{value:.{digits}g}"
-
-
-def fmt_array(values: np.ndarray) -> str:
-    values = np.asarray(values, dtype=float)
-    if values.ndim == 0:
-        return fmt(values)
-    return np.array2string(values, precision=6, separator=", ", suppress_small=False,
-                           formatter={"float_kind": fmt})
 
 
 SINGLE_PRECISION = 2e-6  # about 16 units in the last place of a float32: a few operations' round-off

@@ -182,7 +182,7 @@ def describe(out: Path, settings: Settings) -> str:
 
 def learner_from_metadata(root: Path, learner_field: str) -> tuple[str | None, str]:
     """(the learner id from submission_metadata.json, or None; a sentence saying where it came from or why not)."""
-    from grader.batch import id_problem
+    from grader.staging import id_problem
 
     path = root / "submission_metadata.json"
     try:
@@ -205,19 +205,19 @@ def learner_from_metadata(root: Path, learner_field: str) -> tuple[str | None, s
 
 def _sandbox_state(mode: str) -> tuple[bool, str, str]:
     """(sandboxed, isolation line, reason it is not); with mode "required" and no sandbox the reason is fatal."""
-    from grader.batch import isolation_line
-    from grader.sandbox import Sandbox, probe
+    from grader import boundary
 
-    if os.environ.get("GRADER_SANDBOX") == "off":
-        reason = "turned off (GRADER_SANDBOX=off)"
-    elif not Sandbox().available:
-        reason = "bubblewrap is not installed"
+    try:
+        chosen = boundary.choose(mode, probe=True, turned_off="by GRADER_SANDBOX=off")
+    except boundary.BoundaryUnavailable as exc:
+        reason = str(exc)
     else:
-        reason = probe(Sandbox()) or ""
-        if not reason:
-            return True, isolation_line(True), ""
+        if chosen.sandboxed:
+            return True, chosen.isolation, ""
+        reason = chosen.why_not
+    root = hasattr(os, "geteuid") and os.geteuid() == 0
     line = (f"isolation: no sandbox: bubblewrap cannot run on this image ({' '.join(reason.split())[:300]}); "
-            f"learner code runs as {'root' if os.geteuid() == 0 else 'the autograder user'} in this submission's own "
+            f"learner code runs as {'root' if root else 'the autograder user'} in this submission's own "
             "container, with resource limits and a process-tree kill only, and could read what the autograder "
             "holds (the references and the course config)")
     return False, line, reason
@@ -226,7 +226,7 @@ def _sandbox_state(mode: str) -> tuple[bool, str, str]:
 def _stage(root: Path, learner: str, staging: Path) -> Path:
     """The submission staged as grade batch stages one (chapter and answer files only); an upload that is
     one .zip is read from inside it. StagingError when there is nothing to grade."""
-    from grader.batch import Entry, StagingError, stage
+    from grader.staging import Entry, StagingError, stage
 
     submission = root / "submission"
     if not submission.is_dir():
@@ -273,6 +273,7 @@ def run(root: Path) -> int:
         from grader import batch
         from grader import course as courses
         from grader.render import lms
+        from grader.staging import StagingError
 
         course = courses.current(str(root / "source" / COURSE_FILE))
         learner, source = learner_from_metadata(root, settings.learner_field)
@@ -282,7 +283,7 @@ def run(root: Path) -> int:
             os.chmod(staging, 0o755)
             try:
                 staged = _stage(root, learner or "submission", Path(staging))
-            except batch.StagingError as exc:
+            except StagingError as exc:
                 message = (f"Your submission could not be graded: {exc}. Submit your chapter files (exercises/chNN_*.py,"
                            " or the files at the top of the upload) and your quiz answers (answers/chNN.yaml).")
                 _write(results, lms.gradescope_not_graded(message, execution_time=time.monotonic() - started))
@@ -307,7 +308,7 @@ def run(root: Path) -> int:
                                              {"learner_seconds": settings.time_budget}, sandboxed, course,
                                              other_ids=(str(manifest.get("learner")),) if manifest else ())
             finally:
-                batch._drop_launcher()
+                batch._drop_boundary()
             warnings += report.flags
         if report.infrastructure:
             _write(results, _not_graded(report.infrastructure, started, heading, isolation))

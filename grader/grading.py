@@ -9,13 +9,13 @@ from typing import Generator
 
 from grader import checks as check_registry
 from grader import expected
-from grader.checks.base import Check, ChapterChecks, Context, Skip
+from grader.boundary import ChapterRequest, ChapterRun, Session
+from grader.boundary.wire import NOT_IMPLEMENTED, Call, Returned
+from grader.checks.base import ChapterChecks, Check, Context, Skip
 from grader.compare import Verdict
 from grader.course import PUBLIC_SEED
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.notebook import KERNEL, relocate
-from grader.runner import ChapterRequest, ChapterRun, Session
-from grader.wire import NOT_IMPLEMENTED, Call, Returned
 
 DEFAULT_SEED = PUBLIC_SEED
 
@@ -233,8 +233,8 @@ def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
 
 
 def _plots(chapter_id: str) -> list:
-    """The plot-data gatherers of a chapter (grader/plots.py), for the HTML report."""
-    from grader.plots import PLOTS
+    """The plot-data gatherers of a chapter (grader/checks/plots.py), for the HTML report."""
+    from grader.checks.plots import PLOTS
 
     return PLOTS.get(chapter_id, [])
 

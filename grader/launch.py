@@ -9,26 +9,20 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import TYPE_CHECKING
 
-from grader.spawn import SINGLE_THREADED_BLAS
-from grader.submission import Submission
-
-if TYPE_CHECKING:
-    from grader.runner import Session
+from grader.system import SINGLE_THREADED_BLAS
 
 _OTHER_COMMANDS = {"list", "quiz", "batch", "release", "gradescope", "classroom", "submit", "--help", "-h",
                    "--version"}
-_prestarted: tuple | None = None  # (submission, what grader.spawn.start_child returned, its sandbox)
 
 
-def _guess(args: list[str]) -> tuple | None:
+def _prestart(args: list[str]) -> None:
+    """Start the learner's child for the submission the command line names, held in grader.prestart."""
     if not args or args[0] in _OTHER_COMMANDS or any(a in ("--help", "-h") for a in args):
-        return None
+        return
     if args[0] == "run":
         args = args[1:]
-    from grader.sandbox import learner_sandbox
-    from grader.spawn import start_child
+    from grader import boundary, prestart
     from grader.submission import SubmissionNotFound, locate
 
     directory = None
@@ -39,10 +33,10 @@ def _guess(args: list[str]) -> tuple | None:
             directory = arg.split("=", 1)[1]
     try:
         submission = locate(directory, "--solutions" in args)
-        wrap = None if "--no-sandbox" in args else learner_sandbox()
-        return submission, start_child(submission, wrap), wrap
+        mode = "off" if "--no-sandbox" in args else "auto"
+        prestart.hold(submission, mode, boundary.open_session(submission, sandbox=mode))
     except (SubmissionNotFound, OSError):
-        return None
+        pass
 
 
 def _draws_figures(args: list[str]) -> bool:
@@ -52,31 +46,14 @@ def _draws_figures(args: list[str]) -> bool:
     return any(a == "--html" or a.startswith("--html=") for a in args)
 
 
-def take(submission: Submission, **session_options) -> Session | None:
-    """A Session around the prestarted child if it serves `submission`; otherwise None."""
-    global _prestarted
-    prestarted, _prestarted = _prestarted, None
-    if prestarted is None:
-        return None
-    from grader.runner import Session
-
-    submission_started, started, wrap = prestarted
-    session = Session(submission_started, started=started, wrap=wrap, **session_options)
-    if submission_started == submission:
-        return session
-    session.close()
-    return None
-
-
 def main() -> None:
-    global _prestarted
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
     if _draws_figures(sys.argv[1:]):  # matplotlib's import, the report's longest step, starts first
         from grader.render import drawer
 
         drawer.start()
-    _prestarted = _guess(sys.argv[1:])
+    _prestart(sys.argv[1:])
     from grader.cli import main as cli_main
 
     code: int | str | None = 0
@@ -85,7 +62,9 @@ def main() -> None:
     except SystemExit as exc:
         code = exc.code
     finally:
-        take(Submission(None))  # stops a prestarted child nobody took
+        from grader import prestart
+
+        prestart.take(None, "")  # stops a prestarted child nobody took
         if "grader.render.drawer" in sys.modules:  # and a drawing process nobody used (no atexit after os._exit)
             sys.modules["grader.render.drawer"].stop_unused()
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):

@@ -24,7 +24,7 @@ import sys
 import threading
 from dataclasses import dataclass, field
 
-ANSWER_SECONDS = 600.0  # a run is bounded far below this (grader.runner.Limits); past it the process is replaced
+ANSWER_SECONDS = 600.0  # a run is bounded far below this (grader.boundary.session.Limits); past it the process is replaced
 
 
 @dataclass
@@ -63,7 +63,9 @@ class _Process:
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (grader_parent, env.get("PYTHONPATH", "")) if p)
         env.pop("MPLBACKEND", None)  # the kernel's inline backend is not the report's
-        options: dict = {"start_new_session": True} if os.name == "posix" else {
+        from grader.system import process_groups
+
+        options: dict = {"start_new_session": True} if process_groups() else {
             "creationflags": getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0)}
         self.process = subprocess.Popen([sys.executable, "-m", "grader.notebook_server", "--warm"],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
@@ -105,9 +107,9 @@ class _Process:
 
 def _read_line(stream, timeout: float) -> bytes:
     """One line from the grading process (b"" if it ended), TimeoutError past `timeout`."""
-    from grader.spawn import StreamReader
-
     import time
+
+    from grader.system import StreamReader
 
     reader = StreamReader(stream)
     buffer = b""

@@ -40,6 +40,9 @@ class CheckResult:
     mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
     practice: bool = False  # a quiz question of a practice quiz (immediate feedback): judged, never counted
     upstream: list[str] = field(default_factory=list)  # failing helpers this failure may come from (point_upstream)
+    # a judged quiz answer in the quiz's own terms, for the class summary: {"options": [canonical options
+    # chosen]} (the letters are each learner's own) or {"form": the answer's form, its numbers by name}
+    answer: dict = field(default_factory=dict)
 
     def to_dict(self, chapter: str = "") -> dict:
         return {
@@ -57,6 +60,7 @@ class CheckResult:
             "mistake": self.mistake or None,
             "practice": self.practice,
             "upstream": list(self.upstream),
+            **({"answer": self.answer} if self.answer else {}),
         }
 
 
@@ -216,7 +220,8 @@ class Report:
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
                                   kind=c.get("kind", "code"), mistake=c.get("mistake") or "",
-                                  practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []))
+                                  practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []),
+                                  answer=dict(c.get("answer") or {}))
                       for c in ch.get("checks", [])]
             chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                                           hidden_checks=int(ch.get("hidden_checks", 0)),

@@ -187,7 +187,7 @@ _FRAME = re.compile(r'^(\s*File ")([^"]+)(", line )(\d+)', re.M)
 
 
 def relocate(error: dict | None, sources: dict[str, ModuleSource]) -> None:
-    """Point an error description from the child (grader.wire.clean_error) at notebook cells: every
+    """Point an error description from the child (grader.boundary.wire.clean_error) at notebook cells: every
     traceback frame in a module made from cells names the notebook and "cell N, line M", and
     error["where"] says where the innermost frame of the learner's files is. In place."""
     if not error or not sources:

@@ -4,9 +4,9 @@ kernel, so that the kernel imports nothing of the grader but a small client and 
 It reads one JSON request per line on stdin (the `%grade` arguments, the kernel's working folder, the
 names of functions the notebook itself defined and the cells the kernel ran) and answers one JSON line
 on its real stdout: the report as text, as an HTML fragment (grader.render.html.render_fragment, with
-plots) where the front end shows HTML, and the score. Learner code runs only in the sandboxed children
-of its resident fork server (grader.forkserver, where grader.spawn.fork_is_safe; else a fresh child per
-run), exactly as under `grade chNN`; the checks and references stay imported here between runs, so
+plots) where the front end shows HTML, and the score. Learner code runs only in the sandboxed children of
+its resident boundary (grader.boundary.choose, resident: a fork server where the system allows, else a fresh
+child per run), exactly as under `grade chNN`; the checks and references stay imported here between runs, so
 a second `%grade` costs the run itself. It ends when the kernel closes its stdin.
 """
 
@@ -19,26 +19,18 @@ from pathlib import Path
 
 
 class Server:
-    """One kernel's grading process: its launchers (a fork server per sandbox setting) and requests."""
+    """One kernel's grading process: its boundaries (one per sandbox setting, kept between runs) and requests."""
 
     def __init__(self) -> None:
-        self.servers: dict[bool, object] = {}
+        self.boundaries: dict[bool, object] = {}
 
-    def launcher(self, sandboxed: bool):
-        """Children for a run: the resident fork server where forking is safe, else fresh interpreters."""
-        import functools
+    def boundary(self, sandboxed: bool):
+        """Where a run's children come from: the resident grader.boundary.Boundary for this sandbox setting."""
+        if sandboxed not in self.boundaries:
+            from grader import boundary
 
-        from grader.sandbox import learner_sandbox
-        from grader.spawn import fork_is_safe, start_child
-
-        wrap = learner_sandbox() if sandboxed else None
-        if not fork_is_safe():
-            return functools.partial(start_child, wrap=wrap)
-        if sandboxed not in self.servers:
-            from grader.forkserver import ForkServer
-
-            self.servers[sandboxed] = ForkServer(wrap)
-        return self.servers[sandboxed].start
+            self.boundaries[sandboxed] = boundary.choose("auto" if sandboxed else "off", resident=True)
+        return self.boundaries[sandboxed]
 
     def warm_up(self) -> None:
         """Import what grading needs and start the fork server, before the first `%grade` asks."""
@@ -50,14 +42,11 @@ class Server:
         import grader.pipeline  # noqa: F401
         import grader.render.text  # noqa: F401
 
-        start = self.launcher(True)
-        server = getattr(start, "__self__", None)
-        if server is not None and server.process is None:
-            server._launch()
+        self.boundary(True).warm_up()
 
     def close(self) -> None:
-        for server in self.servers.values():
-            server.close()
+        for boundary in self.boundaries.values():
+            boundary.close()
 
     def handle(self, request: dict) -> dict:
         """Grade as `grade run` would with request["args"]; {"error": why} for arguments it cannot take."""
@@ -82,7 +71,6 @@ class Server:
         from grader import cli
         from grader.pipeline import Request, build_report
         from grader.render import text
-        from grader.runner import Session
 
         if options["watch"]:
             raise click.UsageError("%grade has no --watch: run the cell again after an edit (it stays fast)")
@@ -95,7 +83,7 @@ class Server:
         seed = cli._seed_here(options["seed"])
         submission = self._submission(options, [c.id for c in picked], defined, request.get("cells", []))
         html = bool(request.get("html"))
-        session = Session(submission, launcher=self.launcher(not options["no_sandbox"]))
+        session = self.boundary(not options["no_sandbox"]).open_session(submission)
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=options["learner"],
                                                quiz=not options["no_quiz"] and not functions,
                                                plots=html or options["html_path"] is not None, functions=functions))
@@ -126,7 +114,12 @@ class Server:
         import click
 
         from grader.chapters import BY_ID
-        from grader.submission import Submission, SubmissionNotFound, folder_submission, locate
+        from grader.submission import (
+            Submission,
+            SubmissionNotFound,
+            folder_submission,
+            locate,
+        )
 
         if options["use_solutions"] or options["submission_dir"] is not None:
             return cli_submission(options)

@@ -12,10 +12,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from grader import course as courses
 from grader.model import Report
-from grader.runner import Session
+
+if TYPE_CHECKING:
+    from grader.boundary import Session
 
 
 @dataclass(frozen=True)

@@ -127,7 +127,7 @@ def _shared_lines(fingerprint, slices, limit: int = 3) -> list[str]:
 
 def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int = TOP) -> list[Pair]:
     """The `top` pairs of `learners` whose staged code (staging/<folder>/exercises/chNN_*.py) is most alike."""
-    from grader.batch import folder_name
+    from grader.staging import folder_name
 
     _, compare_files = _engine()
     if stubs is None:

@@ -2,7 +2,7 @@
 
 The archive is exactly what `grade batch`, the Gradescope autograder and the GitHub Classroom workflow
 read: `exercises/` with the chapter files and `exercises/answers/` (the files grade batch stages,
-selected by the same rules, grader.batch.stage), plus `exercises/submission-manifest.json`:
+selected by the same rules, grader.staging.stage), plus `exercises/submission-manifest.json`:
 
     {"format": 1, "course": ..., "handout": ..., "handout_released": ..., "grader": ...,
      "learner": "ann", "packed": "2026-05-01T21:14:03+00:00",
@@ -30,7 +30,8 @@ import zipfile
 from datetime import datetime, timezone
 from pathlib import Path
 
-MANIFEST = "submission-manifest.json"
+from grader.staging import MANIFEST
+
 FORMAT = 1
 LEARNER_ID = re.compile(r"^[\w.@+-]{1,100}$")  # as learner.yaml takes it (grader.quiz)
 
@@ -113,7 +114,7 @@ def pack(folder: Path, learner: str, out: Path, chapters: tuple[str, ...] = ("al
     archive cannot be graded here."""
     from grader import course as courses
     from grader import provenance
-    from grader.batch import Entry, StagingError, stage
+    from grader.staging import Entry, StagingError, stage
 
     with tempfile.TemporaryDirectory(prefix="grade-submit-") as temporary:
         work = Path(temporary)

@@ -1,8 +1,8 @@
 """`grade ch06 --watch`: stay running and grade a chapter again each time its file is saved.
 
-One resident fork server (grader.forkserver: a sandboxed interpreter with numpy and the child side
-already imported) forks a fresh, confined child per run, and this process keeps the checks and the
-references imported, so a save costs only the run itself. The files are polled (a stat of a dozen
+A resident boundary (grader.boundary.choose with resident=True: where the system allows, a fork server, a
+sandboxed interpreter with numpy and the child side already imported) starts a fresh, confined child per
+run, and this process keeps the checks and the references imported, so a save costs only the run itself. The files are polled (a stat of a dozen
 files every 50 ms: portable, no watcher library). After each run it prints the chapter's report and
 what changed since the last run of that chapter: checks newly passing, newly failing. A syntax error
 or an endless loop in the saved file is reported like any run and the watch goes on; Ctrl-C ends it.
@@ -16,10 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from grader.boundary import Boundary, Limits
 from grader.chapters import BY_ID
 from grader.model import Report, Status
 from grader.pipeline import Request, build_report
-from grader.runner import Limits, Session
 from grader.submission import Submission
 
 POLL_SECONDS = 0.05
@@ -40,7 +40,7 @@ class Watcher:
     submission: Submission
     chapters: list[str]
     request: Request
-    launcher: Callable
+    boundary: Boundary  # where each run's child comes from (grader.boundary.choose, resident)
     limits: Limits = field(default_factory=Limits)
     last: dict[str, dict[str, Status]] = field(default_factory=dict)  # chapter -> check id -> status
 
@@ -76,7 +76,7 @@ class Watcher:
 
     def grade(self, chapters: list[str]) -> tuple[Report, float]:
         started = time.perf_counter()
-        session = Session(self.submission, self.limits, launcher=self.launcher)
+        session = self.boundary.open_session(self.submission, self.limits)
         request = Request(tuple(chapters), self.request.seed, learner=self.request.learner, quiz=self.request.quiz,
                           functions=self.request.functions)
         report = build_report(session, request)

@@ -321,10 +321,10 @@ def notebook_page(path: Path, fragments: list[str], theme: str) -> Path:
 def in_process(repo_root, reports) -> dict:
     """Report objects with their plot data (what `%grade` would render), graded in this process's
     child like the CLI: the stubs, the reference solutions and the partly right submission."""
+    from grader.boundary.session import Session
     from grader.chapters import CHAPTERS as chapters
     from grader.grading import DEFAULT_SEED
     from grader.pipeline import Request, build_report
-    from grader.runner import Session
     from grader.submission import Submission, solutions_submission
 
     partly = reports["partly"][0].parent / "partly"
@@ -415,7 +415,7 @@ def _contrast(colour) -> float:
 def test_plots_keep_series_apart_without_colour(in_process, name):
     """In every plot, the series in a legend differ by marker or line style, not by colour alone, and
     every line, marker and contour has 3:1 against white (WCAG 1.4.11)."""
-    from grader.render.html import draw
+    from grader.render.figures import draw
 
     drawn = 0
     for chapter in in_process[name].chapters:

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from grader.batch import run_batch
-from grader.spawn import GRADER_PARENT
+from grader.system import GRADER_PARENT
 from tests.conftest import build_submission, processes_with, replace_function
 
 MARKER = "313.131"  # sleep duration used by hostile children, to find strays in /proc

@@ -18,9 +18,14 @@ from xml.etree import ElementTree
 import pytest
 from click.testing import CliRunner
 
-from grader.batch import StagingError, discover, stage
+from grader.staging import StagingError, discover, stage
 from grader.cli import main
-from tests.conftest import build_submission, code_points, replace_function, run_on_terminal
+from tests.conftest import (
+    build_submission,
+    code_points,
+    replace_function,
+    run_on_terminal,
+)
 
 CHAPTERS = "ch03,ch06"
 
@@ -178,7 +183,7 @@ def test_zip_entries_outside_the_archive_are_never_extracted(tmp_path):
         archive.writestr("../../ch06_measurement.py", "x = 1\n")
         archive.writestr("/abs/ch03_jacobian.py", "x = 1\n")
         archive.writestr("exercises/ch00_range_sensor.py", "x = 1\n")
-    from grader.batch import Entry
+    from grader.staging import Entry
 
     root = stage(Entry("evil", target), tmp_path / "staging")
     assert sorted(p.name for p in (root / "exercises").glob("ch*.py")) == ["ch00_range_sensor.py"]
@@ -189,7 +194,7 @@ def test_oversized_zip_member_is_refused(tmp_path):
     target = tmp_path / "bomb.zip"
     with zipfile.ZipFile(target, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         archive.writestr("ch06_measurement.py", "#" * (4 << 20))
-    from grader.batch import Entry
+    from grader.staging import Entry
 
     with pytest.raises(StagingError, match="bytes"):
         stage(Entry("bomb", target), tmp_path / "staging")
@@ -301,7 +306,7 @@ def test_the_summary_counts_failure_messages_as_a_counter_does():
 
 
 def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
-    from grader.batch import Entry
+    from grader.staging import Entry
 
     source = build_submission(tmp_path / "learner")
     staged = stage(Entry("learner", source), tmp_path / "staging") / "exercises"

@@ -15,12 +15,12 @@ import pytest
 
 from grader import checks as check_registry
 from grader import expected
+from grader.boundary.session import Session
+from grader.boundary.wire import Array
 from grader.chapters import BY_ID
 from grader.grading import DEFAULT_SEED, ChapterPlan, grade
 from grader.model import Status
-from grader.runner import Session
 from grader.submission import Submission
-from grader.wire import Array
 from tests.conftest import (
     BEYOND_THE_WORKED_EXAMPLES,
     REPO,
@@ -125,7 +125,7 @@ def test_graded_inputs_keep_away_from_the_singular_points(seed):
 def test_the_lidar_scan_is_drawn_in_the_world_frame_from_the_learners_lidar_to_world(tmp_path):
     """ch04's second plot: the learner's lidar_to_world moves a scan into the world (a point not rotated by the
     heading lands elsewhere, and the text says where); without a usable function the reference is drawn."""
-    from grader.render.html import figures
+    from grader.render.figures import figures
 
     module, function, source, _ = CODE["lidar point not rotated"]
     unrotated = build_submission(tmp_path / "bug", {module: replace_function(module, function, source)})

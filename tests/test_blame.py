@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from grader.boundary.sandbox import Sandbox
+from grader.boundary.session import Session
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Session
-from grader.sandbox import Sandbox
 from grader.submission import Submission
 from tests.conftest import build_submission, checks_by_id, replace_function
 

@@ -8,8 +8,14 @@ import numpy as np
 import pytest
 
 from grader.catalogue import CALLABLES
-from solutions import (ch00_range_sensor, ch02_gradient, ch03_jacobian, ch04_chain_rule, ch06_measurement,
-                       ch07_dynamics)
+from solutions import (
+    ch00_range_sensor,
+    ch02_gradient,
+    ch03_jacobian,
+    ch04_chain_rule,
+    ch06_measurement,
+    ch07_dynamics,
+)
 
 # every exercise function of one or two numbers or of one vector, as a function of one vector
 EXERCISES = {

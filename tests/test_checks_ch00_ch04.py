@@ -7,12 +7,12 @@ import numpy as np
 import pytest
 
 from grader import checks as check_registry
+from grader.boundary.session import Session
 from grader.chapters import BY_ID
-from solutions.oracle.ch00 import rice_moments
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Session
 from grader.submission import Submission
+from solutions.oracle.ch00 import rice_moments
 from tests.conftest import BEYOND_THE_WORKED_EXAMPLES, checks_by_id, replace_function
 
 CHAPTERS = ["ch00", "ch01", "ch02", "ch03", "ch04"]

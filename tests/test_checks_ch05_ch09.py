@@ -9,11 +9,11 @@ import pytest
 
 import solutions.ch08_lab as ch08_ref
 from grader import checks as check_registry
+from grader.boundary.session import Session
 from grader.chapters import BY_ID
 from grader.checks import ch05, ch08, ch09
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Session
 from grader.submission import Submission
 from tests.conftest import BEYOND_THE_WORKED_EXAMPLES, checks_by_id, replace_function
 

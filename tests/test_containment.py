@@ -1,4 +1,4 @@
-"""One learner can never cost another a mark (grader.confine, grader.runner): each learner's run has its
+"""One learner can never cost another a mark (grader.boundary.confine, grader.boundary.session): each learner's run has its
 own user, mount, IPC and PID namespaces, a fresh /tmp, a cap on its processes and on the memory of all
 of them together, and one time budget; nothing it leaves (a process, a file, a SysV message queue or
 shared-memory segment, a key in the user's keyring) reaches the next learner on the same fork server
@@ -18,12 +18,12 @@ from pathlib import Path
 
 import pytest
 
-from grader.forkserver import ForkServer
+from grader.boundary.forkserver import ForkServer
+from grader.boundary.sandbox import Sandbox
+from grader.boundary.session import Limits, Session
+from grader.boundary.wire import MAX_LINE, clean_error
 from grader.grading import grade
-from grader.runner import Limits, Session
-from grader.sandbox import Sandbox
 from grader.submission import Submission
-from grader.wire import MAX_LINE, clean_error
 from tests.conftest import REPO, build_submission, processes_with, replace_function
 
 BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
@@ -217,7 +217,7 @@ def test_a_malformed_or_forged_result_line_is_a_protocol_violation_not_an_except
 
 
 def test_result_lines_are_read_without_trusting_their_types():
-    from grader.runner import MALFORMED, _parse
+    from grader.boundary.session import MALFORMED, _parse
 
     assert _parse(b"[" * 200_000) is MALFORMED and _parse(b"3") is MALFORMED
     assert _parse(b"x" * (MAX_LINE + 1)) is MALFORMED
@@ -236,7 +236,7 @@ def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tm
 
 
 def test_the_isolation_line_says_which_guarantees_hold_here():
-    from grader.sandbox import user_namespaces
+    from grader.boundary.sandbox import user_namespaces
 
     line = Sandbox().describe()
     assert "an allow-list" in line

@@ -279,9 +279,9 @@ def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
 @pytest.fixture(scope="module")
 def solutions_report():
     """ch05 and ch06 of the references, graded once in a course whose ch06 quiz is practice."""
+    from grader.boundary.session import Session
     from grader.course import Course
     from grader.pipeline import Request, build_report
-    from grader.runner import Session
     from grader.submission import solutions_submission
 
     course = Course(id="practice-course", quiz_feedback="recorded", quiz_feedback_by={"ch06": "immediate"})

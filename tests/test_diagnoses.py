@@ -8,9 +8,9 @@ import sys
 
 import pytest
 
+from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
 from grader.grading import grade
-from grader.runner import Session
 from grader.submission import Submission
 from tests.conftest import REPO, build_submission, replace_function
 

@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from grader.spawn import fork_is_safe
+from grader.system import fork_is_safe
 from tests.conftest import REPO
 
 pytestmark = pytest.mark.skipif(not fork_is_safe(), reason="the drawing process is forked (Linux)")
@@ -19,8 +19,8 @@ pytestmark = pytest.mark.skipif(not fork_is_safe(), reason="the drawing process 
 SCRIPT = textwrap.dedent("""
     import os, sys
     from pathlib import Path
-    from grader import spawn
-    from grader.render import drawer, html
+    from grader.boundary import spawn
+    from grader.render import drawer, figures
 
     spawn.become_subreaper()
     assert drawer.start()
@@ -28,14 +28,14 @@ SCRIPT = textwrap.dedent("""
     spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
 
     from grader.grading import grade
-    from grader.runner import Session
+    from grader.boundary.session import Session
     from grader.submission import Submission
     report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch01", "ch06", "ch08"], with_plots=True)
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the figures were drawn here, not by the drawing process")
 
-    drawer._draw_in_two = html.figures = must_not_run  # in this process only: the drawer forked before
+    drawer._draw_in_two = figures.figures = must_not_run  # in this process only: the drawer forked before
     chapters = [c for c in report.chapters if c.plots]
     drawn = drawer.figures_due(chapters)()
     print(process.is_alive() or process.exitcode == 0, [len(f) for f in drawn],
@@ -104,7 +104,7 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
             pass  # dead and unreaped: a zombie until someone waits for it
 
         from grader.grading import grade
-        from grader.runner import Session
+        from grader.boundary.session import Session
         from grader.submission import Submission
         report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
         drawn = drawer.figures_due([c for c in report.chapters if c.plots])()
@@ -127,7 +127,7 @@ def test_figures_due_here_draws_them_in_this_process_alone():
 
         assert drawer.start()
         from grader.grading import grade
-        from grader.runner import Session
+        from grader.boundary.session import Session
         from grader.submission import Submission
         report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
 

@@ -13,11 +13,11 @@ import pytest
 
 from grader import checks as check_registry
 from grader import course as courses
+from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
 from grader.grading import grade
 from grader.model import Status
 from grader.pipeline import Request, build_report
-from grader.runner import Session
 from grader.submission import Submission
 from tests.conftest import (
     HAVE_JAX,

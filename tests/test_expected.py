@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 from grader import expected
+from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
 from grader.grading import grade
-from grader.runner import Session
 from grader.submission import Submission
 from tests.conftest import build_submission, replace_function
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from grader.render.figure_cache import FigureCache, default_folder
-from grader.spawn import fork_is_safe
+from grader.system import fork_is_safe
 from tests.conftest import REPO, build_submission, processes_with, replace_function
 
 SVG_MARK = "data:image/svg+xml;base64," + base64.b64encode(b"<svg xmlns='http://www.w3.org/2000/svg'>"

@@ -1,4 +1,4 @@
-"""The batch fork server (grader.forkserver): one sandboxed interpreter forks a child per learner.
+"""The batch fork server (grader.boundary.forkserver): one sandboxed interpreter forks a child per learner.
 Nothing of one learner's run (files, processes) reaches the next, and a learner who kills the
 server ends only their own run. Real processes and, where installed, real bubblewrap."""
 
@@ -12,11 +12,11 @@ from pathlib import Path
 
 import pytest
 
-from grader.forkserver import ForkServer
+from grader.boundary.forkserver import ForkServer
+from grader.boundary.sandbox import Sandbox
+from grader.boundary.session import Limits, Session
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Limits, Session
-from grader.sandbox import Sandbox
 from grader.submission import Submission
 from tests.conftest import processes_with, replace_function
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
+from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
 from grader.grading import DEFAULT_SEED, grade
 from grader.model import Status
-from grader.runner import Session
 from grader.submission import Submission
 
 ALL = [c.id for c in CHAPTERS]

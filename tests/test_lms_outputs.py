@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.batch import folder_name
+from grader.staging import folder_name
 from grader.render import lms
 from tests.conftest import REPO, build_submission, replace_function
 from tests.test_outputs_safety import hostile_module

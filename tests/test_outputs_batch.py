@@ -19,7 +19,7 @@ from xml.etree import ElementTree
 
 import pytest
 
-from grader.batch import folder_name, id_problem
+from grader.staging import folder_name, id_problem
 from tests.conftest import REPO, build_submission, code_points
 from tests.test_outputs_safety import hostile_module
 

@@ -77,7 +77,7 @@ def test_xml_json_and_html_text_always_encode():
 
 
 def test_a_report_is_cleaned_as_a_copy(hostile):
-    from grader.model import CheckResult, ChapterResult, Report, Status
+    from grader.model import ChapterResult, CheckResult, Report, Status
 
     check = CheckResult("c", "f", "d", Status.FAIL, 0, 1, message="\x1b[2Jx\udcff", details={"traceback": "\x1b[H"})
     report = Report("s\udcff", [ChapterResult("ch06", "t", [check], ["\x1b[2J"])], learner_output="\x1b[2J")

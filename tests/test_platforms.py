@@ -105,11 +105,11 @@ def _emulated(prelude: str, code: str) -> str:
 
 def test_each_route_takes_its_own_mechanism():
     """What the emulations exercise: Windows gets the portable boundary and no sandbox, macOS no fork."""
-    probe = ("from grader.spawn import strategy, fork_is_safe\nfrom grader.sandbox import Sandbox\n"
+    probe = ("from grader.spawn import strategy, fork_is_safe\nfrom grader.boundary.sandbox import Sandbox\n"
              "print(strategy(), fork_is_safe(), Sandbox().available)")
     assert _emulated(WINDOWS, probe) == "portable False False"
     assert _emulated(MACOS, probe) == "posix False False"
-    line = _emulated(WINDOWS, "from grader.sandbox import Sandbox\nprint(Sandbox().describe())")
+    line = _emulated(WINDOWS, "from grader.boundary.sandbox import Sandbox\nprint(Sandbox().describe())")
     assert "killed on a timeout" in line and "no sandbox" in line
 
 

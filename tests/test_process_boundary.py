@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
+from grader.boundary.session import Limits, Session
 from grader.grading import grade
 from grader.model import Status
-from grader.runner import Limits, Session
 from grader.submission import Submission
 from tests.conftest import checks_by_id
 
@@ -177,7 +177,7 @@ def test_child_runs_in_another_process(submission_factory):
     np.array([np.nan, np.inf, -0.0] * 7),
 ])
 def test_arrays_cross_the_process_boundary_exactly(value):
-    from grader.wire import VALUE, Returned, encode_value
+    from grader.boundary.wire import VALUE, Returned, encode_value
 
     wire = json.loads(json.dumps(encode_value(value)))  # what the pipe carries
     got = Returned(VALUE, "f", wire).as_array()
@@ -187,7 +187,7 @@ def test_arrays_cross_the_process_boundary_exactly(value):
 
 
 def test_a_malformed_array_from_the_child_is_no_value():
-    from grader.wire import VALUE, Returned
+    from grader.boundary.wire import VALUE, Returned
 
     for encoded in ({"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "not base64!"},
                     {"t": "ndarray", "dtype": "float64", "shape": [3], "f8": "AAAA"},
@@ -200,8 +200,8 @@ def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submiss
     """The quiz is judged while the child runs the code's calls (Session.meanwhile): here the learner's module
     waits, at import, for a file that only the meanwhile work writes, so grading finishes only if that work runs
     after the request is sent and before the results are awaited."""
+    from grader.boundary.session import Session
     from grader.grading import grade
-    from grader.runner import Session
     from grader.submission import Submission
 
     signal_file = tmp_path / "meanwhile-ran"

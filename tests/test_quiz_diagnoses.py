@@ -15,13 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from test_quiz import REPO, run_grade
 
 from grader.chapters import CHAPTERS
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import right_numbers
 from grader.quiz.templates import reference_answers
-from test_quiz import REPO, run_grade
 
 
 def _question(chapter, qid):

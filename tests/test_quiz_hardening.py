@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
 
 from grader.chapters import CHAPTERS
 from grader.cli import main
@@ -21,7 +22,6 @@ from grader.model import Status
 from grader.quiz import bank, grade_quiz, learner_id, symbolic
 from grader.quiz.judge import judge
 from grader.quiz.symbolic import AnswerError, equivalent, number, parse
-from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
 
 ALL = [c.id for c in CHAPTERS]
 SYMBOLIC = [(c, q) for c in ALL for q in bank.questions(c) if q.kind == "symbolic"]

@@ -14,13 +14,13 @@ import sys
 import time
 
 import pytest
+from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
+from test_quiz_hardening import _sympy_workers
+from test_quiz_recorded import handout  # noqa: F401  (a fixture: the banks without their keys)
 
 from grader.chapters import BY_ID
 from grader.model import ChapterResult, Report, Status
 from grader.quiz import OUT_OF_TIME, add_quiz_results, grade_quiz, symbolic
-from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
-from test_quiz_hardening import _sympy_workers
-from test_quiz_recorded import handout  # noqa: F401  (a fixture: the banks without their keys)
 from tests.conftest import REPO, build_submission, code_points
 
 # Allowed, and undefined (overflowing) at every point, so numbers cannot decide; sympy's simplify of it

@@ -9,12 +9,12 @@ import re
 from collections import Counter
 
 import pytest
+from test_quiz import _grade, run_grade
 
 from grader.chapters import CHAPTERS
 from grader.model import Status
 from grader.quiz import bank
 from grader.quiz.templates import template
-from test_quiz import _grade, run_grade
 
 CHOICES = [(c.id, q) for c in CHAPTERS for q in bank.questions(c.id) if q.kind == "choice"]
 LETTERED = [(c.id, q) for c in CHAPTERS for q in bank.questions(c.id) if q.options]

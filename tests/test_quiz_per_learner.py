@@ -13,12 +13,12 @@ import shutil
 
 import pytest
 import yaml
+from test_quiz import REPO, run_grade
 
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import right_answer
 from grader.quiz.symbolic import AnswerError, check_text, equivalent, substitute
-from test_quiz import REPO, run_grade
 
 # chapter -> (question, a right answer written unlike the key, the lesson's own derivative, its mistake's name);
 # {name} stands for the learner's number of that parameter

@@ -14,11 +14,11 @@ import sys
 import time
 
 import pytest
+from test_quiz import REPO, run_grade
 
 from grader.model import Status
 from grader.quiz import grade_quiz
 from grader.quiz.symbolic import AnswerError, check_text, normalize, parse
-from test_quiz import REPO, run_grade
 
 
 def _grade(tmp_path, chapter, lines, learner="alice"):

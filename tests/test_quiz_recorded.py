@@ -10,12 +10,12 @@ import shutil
 
 import pytest
 import yaml
+from test_quiz import run_grade
 
 from grader import expected
 from grader.model import ChapterResult, Status
 from grader.quiz import RECORDED_MESSAGE, bank, grade_quiz
 from grader.quiz.templates import template
-from test_quiz import run_grade
 
 SHOWN = "exercises/answers/ch06.yaml"
 # well-formed answers of every kind, right or wrong: nothing here says which

@@ -16,7 +16,7 @@ import sys
 import pytest
 
 from grader.batch import run_batch
-from grader.sandbox import CHILD_MODULES
+from grader.boundary.sandbox import CHILD_MODULES
 from tests.conftest import REPO, build_submission, replace_function
 
 BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")

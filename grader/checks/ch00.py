@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import call
 from grader.checks.base import chapter_checks
-from grader.diagnose import Mistake
-from grader.expected import reference
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
 from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_problem
-from grader.wire import call
+from grader.diagnose import Mistake
+from grader.expected import reference
 
 CHECKS = chapter_checks("ch00")
 CHECKS.uses("superposition_gap", "range_reading")

@@ -13,11 +13,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
+from grader.compare import (
+    Entries,
+    all_of,
+    expect,
+    fail,
+    fmt,
+    fmt_array,
+    passed,
+    value_problem,
+)
 from grader.diagnose import Mistake
 from grader.expected import reference
-from grader.compare import Entries, all_of, expect, fail, fmt, fmt_array, passed, value_problem
-from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch01")
 REF = reference("ch01")

@@ -11,13 +11,30 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Fn, call
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
-                                       planar_point, vector_form)
-from grader.compare import Entries, all_of, compare_arrays, expect, expect_raises, fail, fmt, fmt_array, value_problem
+from grader.checks.derivatives import (
+    INSIDE,
+    Derivative,
+    add_derivative_checks,
+    add_exact_check,
+    angle,
+    planar_point,
+    vector_form,
+)
+from grader.compare import (
+    Entries,
+    all_of,
+    compare_arrays,
+    expect,
+    expect_raises,
+    fail,
+    fmt,
+    fmt_array,
+    value_problem,
+)
 from grader.diagnose import Mistake, known
 from grader.expected import reference
-from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch02")
 CHECKS.uses("contour_direction", "bowl_gradient")

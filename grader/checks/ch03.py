@@ -9,13 +9,30 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, call
 from grader.checks.base import Skip, chapter_checks
-from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
-                                       elevation, polar_point, wound)
-from grader.compare import SINGLE_PRECISION, Entries, all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.checks.derivatives import (
+    INSIDE,
+    Derivative,
+    add_derivative_checks,
+    add_exact_check,
+    angle,
+    elevation,
+    polar_point,
+    wound,
+)
+from grader.compare import (
+    SINGLE_PRECISION,
+    Entries,
+    all_of,
+    compare_arrays,
+    expect,
+    fail,
+    fmt,
+    value_problem,
+)
 from grader.diagnose import Mistake, known
 from grader.expected import reference
-from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch03")
 CHECKS.uses("area_scale", "polar_to_cartesian_jacobian")

@@ -11,13 +11,31 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Fn, call
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
-                                       planar_point, polar_point, vector_form, wound)
-from grader.compare import Entries, all_of, compare_arrays, expect, fail, fmt, fmt_array, value_problem
+from grader.checks.derivatives import (
+    INSIDE,
+    Derivative,
+    add_derivative_checks,
+    add_exact_check,
+    angle,
+    planar_point,
+    polar_point,
+    vector_form,
+    wound,
+)
+from grader.compare import (
+    Entries,
+    all_of,
+    compare_arrays,
+    expect,
+    fail,
+    fmt,
+    fmt_array,
+    value_problem,
+)
 from grader.diagnose import known
 from grader.expected import reference
-from grader.wire import Fn, call
 
 CHECKS = chapter_checks("ch04")
 CHECKS.uses("pipeline_jacobian", "polar_to_cartesian", "polar_to_cartesian_jacobian", "g_stage", "g_jacobian",

@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
 from grader.compare import Entries, all_of, fail, fmt, fmt_array, passed, value_problem
 from grader.compare import expect as _expect
 from grader.diagnose import Mistake
 from grader.expected import reference
-from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch05")
 CHECKS.uses("max_jacobian_error", "jacobian_fd")

@@ -4,13 +4,29 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, call
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
-                                       elevation, planar_point)
-from grader.compare import Entries, Verdict, all_of, compare_arrays, expect, expect_raises, fmt, value_problem
+from grader.checks.derivatives import (
+    INSIDE,
+    Derivative,
+    add_derivative_checks,
+    add_exact_check,
+    angle,
+    elevation,
+    planar_point,
+)
+from grader.compare import (
+    Entries,
+    Verdict,
+    all_of,
+    compare_arrays,
+    expect,
+    expect_raises,
+    fmt,
+    value_problem,
+)
 from grader.diagnose import Mistake, known
 from grader.expected import reference
-from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch06")
 CHECKS.uses("measurement_covariance", "H_jacobian")

@@ -16,13 +16,30 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, call
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import (INSIDE, Derivative, add_derivative_checks, add_exact_check, angle,
-                                       time_step, vector_form, wound)
-from grader.compare import SINGLE_PRECISION, Entries, all_of, expect, fail, fmt, passed, value_problem
+from grader.checks.derivatives import (
+    INSIDE,
+    Derivative,
+    add_derivative_checks,
+    add_exact_check,
+    angle,
+    time_step,
+    vector_form,
+    wound,
+)
+from grader.compare import (
+    SINGLE_PRECISION,
+    Entries,
+    all_of,
+    expect,
+    fail,
+    fmt,
+    passed,
+    value_problem,
+)
 from grader.diagnose import Mistake, known
 from grader.expected import reference
-from grader.wire import Array, call
 
 CHECKS = chapter_checks("ch07")
 CHECKS.uses("bicycle_control_jacobian", "bicycle_model")

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, Rng, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
@@ -42,7 +43,6 @@ from grader.compare import (
 )
 from grader.diagnose import Mistake
 from grader.expected import reference
-from grader.wire import Array, Rng, call
 
 CHECKS = chapter_checks("ch08")
 CHECKS.uses("linearized_measurement_cov", "H_jacobian")

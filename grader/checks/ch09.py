@@ -26,12 +26,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, planar_point, vector_form
-from grader.compare import Entries, Verdict, all_of, expect, fail, fmt, fmt_array, passed, value_problem
+from grader.compare import (
+    Entries,
+    Verdict,
+    all_of,
+    expect,
+    fail,
+    fmt,
+    fmt_array,
+    passed,
+    value_problem,
+)
 from grader.diagnose import Mistake
 from grader.expected import reference
-from grader.wire import Array, Fn, call
 
 CHECKS = chapter_checks("ch09")
 CHECKS.uses("hessian_fd", "gradient_fd", "jacobian_fd")

@@ -34,10 +34,19 @@ from typing import Callable
 
 import numpy as np
 
+from grader.boundary.wire import Array, Returned, call
 from grader.checks.base import ChapterChecks, Context, Skip
-from grader.compare import Entries, Label, Verdict, all_of, compare_arrays, fmt, fmt_array, value_problem
+from grader.compare import (
+    Entries,
+    Label,
+    Verdict,
+    all_of,
+    compare_arrays,
+    fmt,
+    fmt_array,
+    value_problem,
+)
 from grader.diagnose import Mistake
-from grader.wire import Array, Returned, call
 
 STEP = 1e-5
 FD_RTOL = 1e-6

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from grader.boundary.wire import Returned
 from grader.compare import Verdict, fail, passed, value_problem
-from grader.wire import Returned
 
 
 def same_seed_same_value(got: list[Returned], label: str, seed: int, other: int) -> Verdict:

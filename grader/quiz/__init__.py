@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from grader.chapters import BY_ID
@@ -93,7 +94,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     judged fails with file, line and why; one not judged by `deadline` (time.monotonic()) is SKIP
     with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED. `only` (question
     ids) grades those questions alone."""
-    from grader.quiz.judge import fmt_value, judge, read_answer, right_answer, shown_key
+    from grader.quiz.judge import answer_terms, fmt_value, judge, read_answer, right_answer, shown_key
 
     questions = bank.questions(chapter, quiz_dir)
     keys = bank.keys(chapter, quiz_dir) or {}
@@ -158,6 +159,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
         result.status = Status.PASS if verdict.right else Status.FAIL
         result.message = verdict.feedback
         result.mistake = verdict.mistake
+        result.answer = answer_terms(question, answer.value, lettering, answer.text, values)
         if verdict.right:  # the key appears in the output only once the learner has it
             result.expected = fmt_value(shown_key(question, right_answer(question, key, right_value, values),
                                                   lettering))
@@ -195,3 +197,34 @@ def quiz_report(chapters: list[str], root: Path, package: str, label: str, learn
     report = Report(label, [ChapterResult(c, BY_ID[c].title) for c in chapters])
     who = add_quiz_results(report, root, package, learner)
     return report, who
+
+
+@dataclass(frozen=True)
+class ClassQuestion:
+    """A quiz question as every learner has it, for the class summary (grader.render.summary.Tally)."""
+
+    template: str  # its prompt, each per-learner number shown as its range
+    options: dict  # canonical option -> its text (choice questions)
+    right: frozenset  # the canonical options that are right, where the key is here
+
+
+def class_questions(chapters: list[str]) -> dict[tuple[str, str], ClassQuestion]:
+    """Every quiz question of `chapters` as the class summary shows it, by (chapter, question id); a chapter
+    whose bank cannot be read is left out (its checks show their own descriptions)."""
+    found = {}
+    for chapter in chapters:
+        try:
+            questions = bank.questions(chapter)
+            keys = bank.keys(chapter) or {}
+        except (OSError, ValueError, bank.BankError):
+            continue
+        for question in questions:
+            text = question.prompt
+            for name, (low, high) in question.params.items():
+                text = text.replace("{" + name + "}", f"<{name}: {low:g} to {high:g}, per learner>")
+            answer = getattr(keys.get(question.id), "answer", None)
+            right = ({x.strip() for x in answer.split(",") if x.strip()} if isinstance(answer, str)
+                     else {str(x) for x in answer} if isinstance(answer, list) else set())
+            found[(chapter, question.id)] = ClassQuestion(" ".join(text.split()), dict(question.options or {}),
+                                                          frozenset(right))
+    return found

@@ -15,7 +15,12 @@ import numpy as np
 
 from grader.compare import tolerance_text
 from grader.quiz.bank import Key, Question
-from grader.quiz.mistakes import expression_mistake, learner_names, numbers, numbers_mistake
+from grader.quiz.mistakes import (
+    expression_mistake,
+    learner_names,
+    numbers,
+    numbers_mistake,
+)
 from grader.quiz.symbolic import (
     MAX_LENGTH,
     SIMPLIFY_SECONDS,
@@ -138,6 +143,26 @@ def read_answer(question: Question, value: object, lettering: dict[str, str] | N
         check_text(str(value), question.symbols + tuple(question.derived))
         return str(value)
     raise AnswerError(f"unknown question kind {kind}")
+
+
+def answer_terms(question: Question, value: object, lettering: dict[str, str], text: str,
+                 values: dict[str, float]) -> dict:
+    """A judged answer in the quiz's own terms, kept with its verdict for the class summary: the canonical
+    options a choice answer names (the letters are each learner's own), or a symbolic answer's form (as
+    written, without its spacing, x^2 and x**2 alike, each of the learner's own numbers shown as its name:
+    -(y-2.3)/... as -(y-<b>)/...), so that answers of one form count together; {} for other kinds."""
+    if question.kind in ("choice", "multi"):
+        try:
+            chosen = read_answer(question, value, lettering, text)
+        except AnswerError:
+            return {}
+        return {"options": sorted({chosen} if isinstance(chosen, str) else chosen)}
+    if question.kind != "symbolic" or not isinstance(text, str):
+        return {}
+    form = re.sub(r"\s+", "", text).replace("**", "^")
+    for name, number in sorted(values.items(), key=lambda kv: -len(f"{kv[1]:g}")):
+        form = re.sub(rf"(?<![\d.^]){re.escape(f'{number:g}')}(?![\d.])", f"<{name}>", form)
+    return {"form": form}
 
 
 def right_numbers(right_value: object, key: Key, values: dict[str, float] | None = None) -> np.ndarray:

@@ -22,7 +22,15 @@ import numpy as np
 from grader.compare import Entries, fmt
 from grader.diagnose import Mistake, diagnose
 from grader.quiz.bank import Key, Question
-from grader.quiz.symbolic import AnswerError, Undefined, check_text, equivalent, evaluate, ratio, substitute
+from grader.quiz.symbolic import (
+    AnswerError,
+    Undefined,
+    check_text,
+    equivalent,
+    evaluate,
+    ratio,
+    substitute,
+)
 
 DEGREES = Mistake("degrees", "The answer is in degrees: give the angle in radians (times pi/180).")
 SYMBOLS = {"numeric": "your answer", "vector": "your vector", "matrix": "your matrix"}

@@ -474,7 +474,7 @@ class Simplifier:
     seconds in C-level big-number code that no thread can interrupt. So it runs in a child
     interpreter of its own, started on first use (importing sympy there does not count against
     SIMPLIFY_SECONDS), with CPU-time and memory limits (resource.setrlimit where the platform has
-    it), and killed with its process group (grader.spawn.stop_helper) when an answer takes longer than SIMPLIFY_SECONDS or the
+    it), and killed with its process group (grader.helpers.stop_helper) when an answer takes longer than SIMPLIFY_SECONDS or the
     learner's `deadline` (a time.monotonic() value) passes (then `out_of_time`). After a kill every
     further question to this Simplifier is undecided at once. Use it as a context manager: the process
     ends with the block."""
@@ -485,7 +485,7 @@ class Simplifier:
         self.stopped = False
         self.out_of_time = False  # stopped because the learner's deadline came first
         self._buffer = b""
-        self._reader = None  # a grader.spawn.StreamReader on the worker's output
+        self._reader = None  # a grader.system.StreamReader on the worker's output
 
     def __enter__(self) -> Simplifier:
         return self
@@ -503,9 +503,10 @@ class Simplifier:
         return line or None
 
     def _start(self) -> bool:
-        from grader.spawn import StreamReader, child_path, start_helper
+        from grader.helpers import start_helper
+        from grader.system import StreamReader, child_path
 
-        # no -I/-E: the environment is grader.spawn's own (no PYTHONPATH), and its PYTHONHASHSEED=0 makes
+        # no -I/-E: the environment is grader.system's child_environment (no PYTHONPATH), and its PYTHONHASHSEED=0 makes
         # sympy's term order, and so its verdict, the same on every run
         try:
             self.process = start_helper([sys.executable, "-S", "-c", _WORKER_BOOT.format(child_path())])
@@ -556,7 +557,7 @@ class Simplifier:
         """Kill the worker and everything it started."""
         if self.process is None:
             return
-        from grader.spawn import stop_helper
+        from grader.helpers import stop_helper
 
         stop_helper(self.process)
         self.process = None

@@ -19,7 +19,7 @@ _STARTED: list = []  # the drawing process and our end of its pipe, until they a
 def start() -> bool:
     """Fork the drawing process now. Call it before any thread starts (a fork copies only the calling
     thread). False where forking is not safe or fails."""
-    from grader.spawn import fork_is_safe, own
+    from grader.system import fork_is_safe, keep
 
     if _STARTED or not fork_is_safe():
         return bool(_STARTED)
@@ -33,7 +33,7 @@ def start() -> bool:
     except OSError:
         return False
     theirs.close()
-    own(process.pid)  # the grader's own process: grader.spawn.kill_orphans leaves it alone
+    keep(process.pid)  # the grader's own process: the boundary's clean-up of orphans leaves it alone
     _STARTED.append((process, ours))
     import atexit
 
@@ -53,7 +53,7 @@ def stop_unused() -> None:
 
 def _ended(process) -> None:
     """Wait for the drawing process to end (killed if it does not), and forget it: its pid may be reused."""
-    from grader.spawn import forget
+    from grader.system import forget
 
     process.join(5)
     if process.is_alive():
@@ -66,7 +66,7 @@ def _draw_what_comes(connection) -> None:
     """The drawing process: only its pipe stays open (no copy of the grader's pipes to the learner's
     child, nor of its output: a pipeline `grade ... | less` ends with the grader); it ends when the pipe
     closes."""
-    from grader.render.html import preload
+    from grader.render.figures import preload
 
     keep = connection.fileno()
     null = os.open(os.devnull, os.O_RDWR)
@@ -94,9 +94,9 @@ def _take_sigterm() -> None:
 
 
 def _draw_with(pool, chapters: list) -> list[list]:
-    """Each chapter's figures (grader.render.html.figures), drawn by `pool`'s processes, the two-panel
+    """Each chapter's figures (grader.render.figures.figures), drawn by `pool`'s processes, the two-panel
     figures first (they take longest)."""
-    from grader.render.html import TWO_PANELS, figures
+    from grader.render.figures import TWO_PANELS, figures
 
     order = sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS)
     futures = {i: pool.submit(figures, chapters[i]) for i in order}
@@ -123,8 +123,8 @@ def figures_due(chapters: list, here: bool = False):
     processes forked then, where forking is safe, else by this process. With no chapters, the started
     drawing process is stopped. `here`: drawn by this process in any case (a batch worker, one of as many
     as there are cores: forking more for each learner only costs forks)."""
-    from grader.render.html import figures, preload
-    from grader.spawn import fork_is_safe
+    from grader.render.figures import figures, preload
+    from grader.system import fork_is_safe
 
     def drawn_here() -> list[list]:
         return [figures(chapter) for chapter in chapters]

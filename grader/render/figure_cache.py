@@ -3,7 +3,7 @@ plot data is unchanged.
 
 A learner re-runs `grade all --html` after each edit, and most chapters then return what they returned
 before; drawing them again (matplotlib's import and about 27 ms a figure) is most of the report's cost.
-An entry's key covers the chapter's plot data, the drawing code (grader/render/html.py) and the installed
+An entry's key covers the chapter's plot data, the drawing code (grader/render/figures.py) and the installed
 matplotlib; each chapter keeps only its last entry, so the cache holds one file per chapter at most.
 Anything missing, unreadable or malformed is a miss: the cache never breaks a report, and an entry can
 only ever give SVG data URIs and text (the page escapes the text)."""
@@ -60,9 +60,9 @@ def _drawing_version() -> str:
     (found, not imported)."""
     import importlib.util
 
-    from grader.render import html
+    from grader.render import figures
 
-    digest = hashlib.sha256(Path(html.__file__).read_bytes())
+    digest = hashlib.sha256(Path(figures.__file__).read_bytes())
     spec = importlib.util.find_spec("matplotlib")
     if spec is not None and spec.origin:
         stat = os.stat(spec.origin)

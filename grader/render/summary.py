@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import functools
 import json
-import re
 import sqlite3
 import statistics
 from collections import Counter, defaultdict
@@ -63,58 +62,6 @@ class Summary:
 
 # ------------------------------------------------------------------------------------ what is counted
 
-def _question(chapter: str, question_id: str):
-    from grader.quiz import bank
-
-    try:
-        return next((q for q in bank.questions(chapter) if q.id == question_id), None)
-    except (OSError, ValueError):
-        return None
-
-
-def template(chapter: str, question_id: str, fallback: str) -> str:
-    """A quiz question as every learner has it: each per-learner number shown as its range."""
-    question = _question(chapter, question_id)
-    if question is None:
-        return fallback
-    text = question.prompt
-    for name, (low, high) in question.params.items():
-        text = text.replace("{" + name + "}", f"<{name}: {low:g} to {high:g}, per learner>")
-    return " ".join(text.split())
-
-
-def _options_chosen(chapter: str, check, learner: str) -> list[str]:
-    """The canonical options a learner's choice answer names (their letters are their own)."""
-    question = _question(chapter, check.function)
-    if question is None or not question.options or not isinstance(check.got, str):
-        return []
-    lettering = question.lettering(learner, chapter)
-    letters = re.findall(r"(?<![a-z])[a-z](?![a-z])", check.got.lower())  # "a, c", "[a, c]", "(b)"
-    return sorted({lettering[x] for x in letters if x in lettering})
-
-
-def _right_options(chapter: str, question_id: str) -> set[str]:
-    from grader.quiz import bank
-
-    try:
-        key = (bank.keys(chapter) or {}).get(question_id)
-    except (OSError, ValueError):
-        return set()
-    answer = getattr(key, "answer", None)
-    if isinstance(answer, str):
-        return {x.strip() for x in answer.split(",") if x.strip()}
-    return {str(x) for x in answer} if isinstance(answer, list) else set()
-
-
-def _form(text: str, values: dict[str, float]) -> str:
-    """An answer as written, without its spacing (x^2 and x**2 read alike), each of the learner's own numbers
-    shown as its name (-(y-2.3)/... as -(y-<b>)/...), so that answers of one form are counted together."""
-    form = re.sub(r"\s+", "", text).replace("**", "^")
-    for name, value in sorted(values.items(), key=lambda kv: -len(f"{kv[1]:g}")):
-        form = re.sub(rf"(?<![\d.^]){re.escape(f'{value:g}')}(?![\d.])", f"<{name}>", form)
-    return form
-
-
 class Tally:
     """What the class summary counts, added learner by learner in the batch's order (add) and read at the end
     (counts): the counts summary.html and summary.json show, the scores, the first learner's provenance and
@@ -122,7 +69,10 @@ class Tally:
     messages (many hold a learner's own numbers: tens of distinct ones per learner) in a private temporary
     SQLite database (Messages): a class of any size is summarised in the memory of a few reports."""
 
-    def __init__(self) -> None:
+    def __init__(self, questions: dict | None = None) -> None:
+        # each quiz question as every learner has it (grader.quiz.class_questions): its template, its options'
+        # texts and which are right; given by the batch, so that nothing here reads a bank or a key
+        self.questions = questions or {}
         self.seen, self.own, self.upstream, self.errors = Counter(), Counter(), Counter(), Counter()
         self.names: dict[str, str] = {}
         self.kinds: dict[str, str] = {}
@@ -147,13 +97,12 @@ class Tally:
         self.max_score = report.max_score if self.max_score is None else max(self.max_score, report.max_score)
         manifest = (extra or {}).get("manifest")
         self.handouts[(manifest or {}).get("handout") or ("none" if manifest is None else "the project")] += 1
-        who = report.learner_id or learner
         for chapter in report.chapters:
             for check in chapter.checks:
                 key = f"{chapter.chapter}/{check.id}"
                 self.kinds[key] = check.kind
-                self.names[key] = template(chapter.chapter, check.function, check.description) \
-                    if check.kind == "quiz" else check.description
+                question = self.questions.get((chapter.chapter, check.function)) if check.kind == "quiz" else None
+                self.names[key] = question.template if question else check.description
                 self.seen[key] += 1
                 caused_upstream = bool(check.upstream) or (check.status == Status.SKIP
                                                            and check.points < check.max_points)
@@ -167,13 +116,12 @@ class Tally:
                         self.mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
                     if check.message:
                         self.messages.add(chapter.chapter, check.message.splitlines()[0][:160])
-                if check.kind == "quiz" and check.got is not None and check.status in (Status.PASS, Status.FAIL):
-                    for option in _options_chosen(chapter.chapter, check, who):
+                if check.kind == "quiz" and check.status in (Status.PASS, Status.FAIL):  # judged: `answer` says
+                    for option in check.answer.get("options", ()):
                         self.chosen[(chapter.chapter, check.function, option)] += 1
-                    question = _question(chapter.chapter, check.function)
-                    if question is not None and question.kind == "symbolic" and isinstance(check.got, str):
-                        form = _form(check.got, question.values_for(who, chapter.chapter))
-                        entry = self.forms.setdefault((chapter.chapter, check.function, form, check.status.value),
+                    if "form" in check.answer:
+                        entry = self.forms.setdefault((chapter.chapter, check.function, check.answer["form"],
+                                                       check.status.value),
                                                       {"learners": 0, "verdict": check.status.value,
                                                        "mistake": check.mistake or None})
                         entry["learners"] += 1
@@ -183,10 +131,10 @@ class Tally:
         seen, own, upstream, errors = self.seen, self.own, self.upstream, self.errors
         options = []
         for (chapter, question_id, option), count in sorted(self.chosen.items()):
-            question = _question(chapter, question_id)
+            question = self.questions.get((chapter, question_id))
             options.append({"question": f"{chapter}/quiz_{question_id}", "option": option,
                             "text": question.options.get(option, "") if question else "",
-                            "right": option in _right_options(chapter, question_id), "chosen": count})
+                            "right": option in question.right if question else False, "chosen": count})
         return {
             "checks": [{"id": key, "description": self.names[key], "kind": self.kinds[key], "seen": seen[key],
                         "failed": own[key], "failed_upstream": upstream[key], "errors": errors[key]}

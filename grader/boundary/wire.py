@@ -109,7 +109,7 @@ def decode_argument(arg: object, callables) -> object:
 
 def show_argument(arg: object) -> str:
     """How an argument reads in a learner-facing label: 0.5, (3, 4), sqrt, np.array([1, 2])."""
-    from grader.compare import fmt, fmt_array
+    from grader.numbers import fmt, fmt_array
 
     if isinstance(arg, Fn):
         return arg.name

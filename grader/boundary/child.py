@@ -1,7 +1,7 @@
 """The child side of the process boundary: import the learner's module, call it, report plain data.
 
-This file runs in a separate interpreter (`python -I -S -c ...`, see grader.spawn), or in a child
-forked from grader.forkserver. It reads one JSON request (grader.wire), writes the learner's files
+This file runs in a separate interpreter (`python -I -S -c ...`, see grader.boundary.spawn), or in a child
+forked from grader.boundary.forkserver. It reads one JSON request (grader.boundary.wire), writes the learner's files
 that came with it into a fresh folder, points stdout/stderr at the capture file the parent opened,
 and for each chapter imports the learner's module and calls the named functions on the arguments
 the parent chose. Every outcome is written to the result pipe as one JSON line. Only numbers,
@@ -21,8 +21,16 @@ import sys
 
 import numpy as np  # noqa: F401  (loaded before any learner code, and before the request arrives)
 
-from grader.wire import (
-    DONE, IMPORT, IMPORT_FAILED, IMPORTED, MISSING_EVENT, RAISED_EVENT, RETURNED, T_OTHER, decode_argument,
+from grader.boundary.wire import (
+    DONE,
+    IMPORT,
+    IMPORT_FAILED,
+    IMPORTED,
+    MISSING_EVENT,
+    RAISED_EVENT,
+    RETURNED,
+    T_OTHER,
+    decode_argument,
     encode_value,
 )
 
@@ -116,7 +124,7 @@ def _apply_limits(limits: dict) -> None:
         "file_size": resource.RLIMIT_FSIZE,
         "open_files": resource.RLIMIT_NOFILE,
         "core": resource.RLIMIT_CORE,
-        "processes": resource.RLIMIT_NPROC,  # counted in the learner's own user namespace (grader.confine)
+        "processes": resource.RLIMIT_NPROC,  # counted in the learner's own user namespace (grader.boundary.confine)
     }
     for key, which in table.items():
         value = limits.get(key)
@@ -226,8 +234,8 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
     """Grade one request and leave the process (never returns)."""
     request = json.loads(request_text)
     limits = dict(request.get("limits", {}))
-    if request.get("confine"):  # in a sandbox: the learner's own namespaces, /tmp and caps (grader.confine)
-        from grader.confine import enter
+    if request.get("confine"):  # in a sandbox: the learner's own namespaces, /tmp and caps (grader.boundary.confine)
+        from grader.boundary.confine import enter
 
         if enter(limits, [p for p in sys.path if os.path.isabs(p)]) and limits.get("memory_bytes"):
             # memory used is capped for all processes together (its watchdog names what happened)
@@ -243,7 +251,7 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """A spawned child. argv is [result pipe fd, capture file fd] ("posix" strategy, grader.spawn), or
+    """A spawned child. argv is [result pipe fd, capture file fd] (grader.boundary.spawn, posix), or
     ["--portable", capture file path]: then results go to what was stdout. The request arrives on stdin."""
     argv = sys.argv[1:] if argv is None else argv
     request = sys.stdin.buffer.read().decode("utf-8")

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from grader.boundary.wire import Array, Fn, call
 from grader.compare import value_problem
 from grader.expected import reference
-from grader.wire import Array, Fn, call
 
 
 def _value(returned, shape):

@@ -4,7 +4,7 @@ child per grading run, so a learner costs a fork instead of a new interpreter.
 The server runs inside the sandbox with no learner's files visible. For each run the parent sends,
 over a Unix socket, the child's three descriptors (request pipe, result pipe, capture file); the
 forked child gets the learner's files inside its request, writes them under a fresh folder and then
-behaves exactly like a spawned child (grader.child.serve). When the child is done, or the parent
+behaves exactly like a spawned child (grader.boundary.child.serve). When the child is done, or the parent
 asks, the server kills everything the run started, removes every file it left in the sandbox's
 writable folders, and only then reports the exit status: the next learner finds nothing of the last.
 
@@ -22,24 +22,24 @@ import socket
 import subprocess
 import sys
 import time
-from typing import TYPE_CHECKING
 
-from grader.spawn import (
-    CommandWrapper, become_subreaper, capture_file, child_environment, child_path, kill_orphans, read_capture,
-    read_chunk, temp_dir,
+from grader.boundary.spawn import (
+    CommandWrapper,
+    become_subreaper,
+    capture_file,
+    kill_orphans,
+    read_capture,
 )
+from grader.system import child_environment, child_path, read_chunk, temp_dir
 
-if TYPE_CHECKING:  # the server runs in the sandbox, where only the child's grader modules exist
-    from grader.submission import Submission
-
-_BOOT = "import sys; sys.path[:] = {!r}; from grader.forkserver import serve; serve()"
+_BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
 _MESSAGE = 4096
 _REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
 
 
 class ForkServer:
-    """The parent's end: starts the server (inside `wrap`, e.g. a grader.sandbox.Sandbox) on first use
-    and again whenever it has died; `start` is a grader.runner Launcher."""
+    """The parent's end: starts the server (inside `wrap`, e.g. a grader.boundary.sandbox.Sandbox) on first use
+    and again whenever it has died; `start` is a grader.boundary.session Launcher."""
 
     def __init__(self, wrap: CommandWrapper | None = None) -> None:
         self.wrap = wrap
@@ -48,7 +48,8 @@ class ForkServer:
         self.socket: socket.socket | None = None
         self._runs = 0
 
-    def _launch(self) -> None:
+    def launch(self) -> None:
+        """Start the server now (`start` does it on first use)."""
         parent_end, server_end = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         config = {"scratch": self.wrap.scratch_dirs() if self.sandboxed else [], "pid_namespace": self.sandboxed}
         command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(server_end.fileno()),
@@ -62,8 +63,8 @@ class ForkServer:
         self.socket = parent_end
         become_subreaper()
 
-    def start(self, submission: Submission) -> ForkedChild:
-        """Fork a fresh child for `submission` (a grader.runner Launcher)."""
+    def start(self) -> ForkedChild:
+        """Fork a fresh child (a grader.boundary.session Launcher)."""
         self._runs += 1
         request_read, request_write = os.pipe()
         result_read, result_write = os.pipe()
@@ -74,7 +75,7 @@ class ForkServer:
         for _ in range(2):  # a server that died since the last run (a learner killed it) is replaced
             if self.process is None or self.process.poll() is not None:
                 self.close()
-                self._launch()
+                self.launch()
             try:
                 socket.send_fds(self.socket, [b"run " + root.encode()], [request_read, result_write, capture_fd])
                 sent = True
@@ -83,7 +84,7 @@ class ForkServer:
                 self.close()
         for fd in (request_read, result_write):
             os.close(fd)
-        return ForkedChild(self, submission, request_write, result_read, capture_fd, root, sent)
+        return ForkedChild(self, request_write, result_read, capture_fd, root, sent)
 
     def reply(self, timeout: float) -> int | None:
         """The exit status the server reports for the current run; None if it gave none in time."""
@@ -121,12 +122,11 @@ class ForkServer:
 
 
 class ForkedChild:
-    """One forked child, driven by grader.runner like a spawned one (grader.runner.ChildHandle)."""
+    """One forked child, driven by grader.boundary.session like a spawned one (its ChildHandle)."""
 
-    def __init__(self, server: ForkServer, submission: Submission, request_fd: int, read_fd: int,
-                 capture_fd: int, root: str, sent: bool) -> None:
+    def __init__(self, server: ForkServer, request_fd: int, read_fd: int, capture_fd: int, root: str,
+                 sent: bool) -> None:
         self.server = server
-        self.submission = submission
         self.request_fd = request_fd
         self.read_fd = read_fd
         self.capture_fd = capture_fd
@@ -252,7 +252,7 @@ def _wipe(folder: str, device: int | None = None) -> None:
 def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> int | None:
     """Fork a child for one run, wait for it (or for the parent's kill), clean up; its exit status,
     or None when the parent has gone away."""
-    from grader.child import serve as serve_request
+    from grader.boundary.child import serve as serve_request
 
     request_fd, result_fd, capture_fd = fds
     server_pid = os.getpid()
@@ -330,8 +330,8 @@ def _warm_up() -> None:
     except ImportError:
         pass
 
+    import grader.boundary.child  # noqa: F401
     import grader.catalogue  # noqa: F401
-    import grader.child  # noqa: F401
 
     np.random.default_rng(0).normal(size=2)
 

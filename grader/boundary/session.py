@@ -1,4 +1,4 @@
-"""The parent side of the process boundary: start the child, send calls, collect outcomes in time.
+"""The parent side of the process boundary: send a child the calls, collect outcomes in time.
 
 One child process serves a whole grading run: it imports numpy once, then each chapter's module
 in turn. If a chapter hangs or kills its process, the parent kills the child's whole process group,
@@ -8,24 +8,36 @@ broken chapter never stops the others.
 
 from __future__ import annotations
 
-import functools
+import enum
 import json
 import signal
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
-from grader.spawn import CommandWrapper, start_child
-from grader.submission import Prepared, Submission
-from grader.wire import (
-    CRASHED, DONE, IMPORT, IMPORT_FAILED, IMPORTED, MAX_LINE, MISSING_EVENT, NOT_RUN, RAISED_EVENT, RETURNED, TIMEOUT,
-    Call, Returned, clean_error, from_event,
+from grader.boundary.wire import (
+    CRASHED,
+    DONE,
+    IMPORT,
+    IMPORT_FAILED,
+    IMPORTED,
+    MAX_LINE,
+    MISSING_EVENT,
+    NOT_RUN,
+    RAISED_EVENT,
+    RETURNED,
+    TIMEOUT,
+    Call,
+    Returned,
+    clean_error,
+    from_event,
 )
+from grader.submission import Prepared, Submission
 
 
 class ChildHandle(Protocol):
-    """A started child process as the runner drives it (grader.spawn.SpawnedChild and PortableChild,
-    grader.forkserver.ForkedChild)."""
+    """A started child process as a Session drives it (grader.boundary.spawn.SpawnedChild and PortableChild,
+    grader.boundary.forkserver.ForkedChild)."""
 
     def send(self, request: dict) -> None: ...
 
@@ -39,7 +51,7 @@ class ChildHandle(Protocol):
     def stop(self, output_limit: int) -> str: ...
 
 
-Launcher = Callable[[Submission], ChildHandle]
+Launcher = Callable[[], ChildHandle]  # starts a fresh child (grader.boundary.door.Boundary)
 
 _CAPTURE_LIMIT = 64 * 1024
 
@@ -97,7 +109,7 @@ def _parse(line: bytes) -> dict:
 
 
 class _Child:
-    """One running child (grader.spawn.SpawnedChild or grader.forkserver.ForkedChild) and its result pipe."""
+    """One running child (a ChildHandle) and its result pipe."""
 
     def __init__(self, handle: ChildHandle) -> None:
         self.handle = handle
@@ -128,7 +140,7 @@ class _Child:
         return self.handle.stop(_CAPTURE_LIMIT)
 
     def exit_description(self, limits: Limits) -> str:
-        from grader.confine import OUT_OF_MEMORY
+        from grader.boundary.confine import OUT_OF_MEMORY
 
         code = self.handle.returncode
         if code is None:
@@ -154,26 +166,104 @@ class _Child:
         return f"exit status {code}"
 
 
+class Stage(enum.Enum):
+    """Where the child is in a request, as its lines have told so far."""
+
+    STARTUP = "startup"  # no chapter begun yet (the interpreter, numpy, the learner's files)
+    IMPORT = "import"  # importing a chapter's module
+    CALL = "call"  # a call of a learner function in flight
+    BETWEEN = "between"  # a chapter done, the next not begun
+
+
+class Ending(enum.Enum):
+    """How a child's run ended."""
+
+    FINISHED = "finished"  # every call answered, DONE read
+    TIMED_OUT = "timed out"  # a deadline passed
+    VIOLATED = "violated"  # a line the request did not ask for: learner code wrote to the channel
+    PIPE_CLOSED = "pipe closed"  # the child died
+
+
+@dataclass
+class Progress:
+    """The protocol as a state machine: the child's lines must follow the request exactly (import, imported,
+    then one result per pending call in order, ..., done). The call in flight is always the next pending
+    one, so the child need not announce it. `take` records each line into the runs and says how the run
+    ended, if it did; the deadlines say by when the next line is due."""
+
+    order: list[tuple[ChapterRequest, list[int]]]  # per pending chapter, the indices of its calls still to run
+    limits: Limits
+    deadline: float
+    stage: Stage = Stage.STARTUP
+    chapter_at: int = 0  # position in `order` of the chapter being imported or called
+    call_at: int = 0  # position in that chapter's calls
+    chapter: str | None = None  # the chapter being imported or called (None before the first)
+    index: int | None = None  # the call in flight
+    chapter_end: float = float("inf")
+
+    @classmethod
+    def of(cls, pending: list[ChapterRequest], runs: dict[str, ChapterRun], limits: Limits) -> Progress:
+        order = [(r, [i for i, x in enumerate(runs[r.chapter].results) if x is None]) for r in pending]
+        return cls(order, limits, deadline=time.monotonic() + limits.startup_seconds)
+
+    def _next_call(self, now: float) -> None:
+        calls = self.order[self.chapter_at][1]
+        if self.call_at < len(calls):
+            self.stage, self.index, self.deadline = Stage.CALL, calls[self.call_at], now + self.limits.call_seconds
+        else:  # the chapter is done; the child moves on at once
+            self._next_chapter(now)
+
+    def _next_chapter(self, now: float) -> None:
+        self.chapter_at, self.call_at = self.chapter_at + 1, 0
+        self.stage, self.index, self.deadline = Stage.BETWEEN, None, now + self.limits.call_seconds
+
+    def take(self, event: dict, now: float, runs: dict[str, ChapterRun]) -> Ending | None:
+        """Record one line of the child's; FINISHED after DONE, VIOLATED for a line out of order, else None."""
+        kind, name = event.get("event"), event.get("chapter")
+        if self.stage in (Stage.STARTUP, Stage.BETWEEN):
+            if kind == DONE and self.chapter_at == len(self.order):
+                return Ending.FINISHED
+            if kind == IMPORT and self.chapter_at < len(self.order) and name == self.order[self.chapter_at][0].chapter:
+                self.stage, self.chapter, self.index = Stage.IMPORT, name, None
+                self.deadline, self.chapter_end = now + self.limits.import_seconds, now + self.limits.chapter_seconds
+                return None
+        elif self.stage is Stage.IMPORT and name == self.chapter:
+            if kind == IMPORT_FAILED:
+                runs[name].import_error = clean_error(event.get("error"))
+                self._next_chapter(now)
+                return None
+            if kind == IMPORTED:
+                self._next_call(now)
+                return None
+        elif self.stage is Stage.CALL and kind in (RETURNED, RAISED_EVENT, MISSING_EVENT) and name == self.chapter \
+                and event.get("index") == self.index:
+            request = self.order[self.chapter_at][0]
+            runs[name].results[self.index] = from_event(request.calls[self.index].function, event)
+            self.call_at += 1
+            self._next_call(now)
+            return None
+        return Ending.VIOLATED
+
+
 class Session:
     """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
 
-    def __init__(self, submission: Submission, limits: Limits = Limits(), wrap: CommandWrapper | None = None,
-                 started: ChildHandle | None = None, launcher: Launcher | None = None) -> None:
-        """Start the child now, or adopt one already started (`started`).
-
-        Children come from `launcher` (e.g. grader.forkserver.ForkServer.start); by default each is a
-        fresh interpreter from grader.spawn.start_child, wrapped by `wrap` (e.g. a sandbox)."""
+    def __init__(self, submission: Submission, launcher: Launcher, limits: Limits = Limits(),
+                 started: ChildHandle | None = None, isolation: str = "") -> None:
+        """Start the first child now (or adopt `started`, one the launcher already started); fresh children come
+        from `launcher`. Made by grader.boundary.door.Boundary.open_session, which chose the launcher and says
+        what isolates learner code (`isolation`, the line `-v` and the batch print)."""
         self.submission = submission
         self.limits = limits
-        self.wrap = wrap
-        self.launcher: Launcher = launcher or functools.partial(start_child, wrap=wrap)
+        self.launcher = launcher
+        self.isolation = isolation
         self.output = ""
         self._prepared: Prepared | None = None
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
         # work of the grader's own (no learner code) done once, in order, while the first child starts and
         # runs the calls: whatever does not need their results (the quiz, the output's modules)
         self.meanwhile: list[Callable[[], None]] = []
-        self._child: _Child | None = _Child(started or self.launcher(submission))
+        self._child: _Child | None = _Child(started or launcher())
 
     @property
     def prepared(self) -> Prepared:
@@ -224,9 +314,8 @@ class Session:
 
     def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:
         """Run what is pending in one child; return what still needs a fresh child."""
-        if self._child is None:
-            self._child = _Child(self.launcher(self.submission))
-        child = self._child
+        child = self._child or _Child(self.launcher())
+        self._child = child
         request = self._request(pending, runs)
         work, self.meanwhile = self.meanwhile, []
         sender = None
@@ -239,82 +328,33 @@ class Session:
             sender.start()
             for job in work:  # the child runs on the other core meanwhile; its lines wait in the pipe
                 job()
-        by_name = {r.chapter: r for r in pending}
-        limits = self.limits
-        state = {"deadline": time.monotonic() + limits.startup_seconds, "chapter_end": float("inf"),
-                 "chapter": None, "index": None, "stage": "startup"}
-
-        def deadline() -> float:
-            return min(state["deadline"], state["chapter_end"], self.learner_end)
-
-        # The child's lines must follow the request exactly: import, imported, then one result per
-        # pending call in order, ..., done. Anything else means learner code wrote to the channel
-        # (it runs in the same process): the child is stopped and nothing more is read. The call in
-        # flight is always the next pending one, so the child need not announce it.
-        order = [(r.chapter, [i for i, x in enumerate(runs[r.chapter].results) if x is None]) for r in pending]
-        position = {"chapter": 0, "call": 0}
-        finished = timed_out = violated = False
-
-        def next_call() -> int | None:
-            calls = order[position["chapter"]][1]
-            return calls[position["call"]] if position["call"] < len(calls) else None
-
-        def start_next_call(now: float) -> None:
-            index = next_call()
-            if index is not None:
-                state.update(index=index, stage="call", deadline=now + limits.call_seconds)
-            else:  # the chapter is done; the child moves on at once
-                position.update(chapter=position["chapter"] + 1, call=0)
-                state.update(index=None, stage="between", deadline=now + limits.call_seconds)
-
+        progress = Progress.of(pending, runs, self.limits)
+        ending = Ending.PIPE_CLOSED
         try:
-            for event in child.events(deadline):
-                kind, name, now = event.get("event"), event.get("chapter"), time.monotonic()
-                stage = state["stage"]
-                if stage in ("startup", "between"):
-                    if kind == DONE and position["chapter"] == len(order):
-                        finished = True
-                        break
-                    if kind == IMPORT and position["chapter"] < len(order) and name == order[position["chapter"]][0]:
-                        state.update(chapter=name, index=None, stage="import", deadline=now + limits.import_seconds,
-                                     chapter_end=now + limits.chapter_seconds)
-                        continue
-                elif stage == "import" and name == state["chapter"]:
-                    if kind == IMPORT_FAILED:
-                        runs[name].import_error = clean_error(event.get("error"))
-                        position.update(chapter=position["chapter"] + 1, call=0)
-                        state.update(stage="between", deadline=now + limits.call_seconds)
-                        continue
-                    if kind == IMPORTED:
-                        start_next_call(now)
-                        continue
-                elif stage == "call" and kind in (RETURNED, RAISED_EVENT, MISSING_EVENT) and name == state["chapter"] \
-                        and event.get("index") == state["index"]:
-                    req = by_name[name]
-                    runs[name].results[state["index"]] = from_event(req.calls[state["index"]].function, event)
-                    position["call"] += 1
-                    start_next_call(now)
-                    continue
-                violated = True
-                break
+            for event in child.events(lambda: min(progress.deadline, progress.chapter_end, self.learner_end)):
+                ending = progress.take(event, time.monotonic(), runs)
+                if ending is not None:
+                    break
+            else:
+                ending = Ending.PIPE_CLOSED
         except TimeoutError:
-            timed_out = True
-        if not finished and not timed_out and not violated:  # the pipe closed: let the process finish dying
+            ending = Ending.TIMED_OUT
+        if ending is Ending.PIPE_CLOSED:  # let the process finish dying
             child.handle.wait(2)
         self.output += child.stop()
         self._child = None
         if sender is not None:
             sender.join(5)  # the child is gone: a write still under way has failed by now
-        if finished:
+        if ending is Ending.FINISHED:
             return []
         exit_text = ("it broke the grading protocol: learner code wrote to the grader's result channel"
-                     if violated else child.exit_description(self.limits))
-        return self._recover(state, pending, runs, timed_out, exit_text)
+                     if ending is Ending.VIOLATED else child.exit_description(self.limits))
+        return self._recover(progress, pending, runs, ending is Ending.TIMED_OUT, exit_text)
 
-    def _recover(self, state: dict, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
+    def _recover(self, progress: Progress, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
                  timed_out: bool, exit_text: str) -> list[ChapterRequest]:
         """Record what broke the child and return the requests a fresh child should still run."""
-        name = state["chapter"]
+        name = progress.chapter
         if name is None:  # the child never got to learner code: nothing more can be done
             for req in pending:
                 runs[req.chapter].import_error = {
@@ -324,35 +364,33 @@ class Session:
         run = runs[name]
         req = next(r for r in pending if r.chapter == name)
         if time.monotonic() >= self.learner_end:
-            return self._budget_spent(pending, runs, state)
-        chapter_over = time.monotonic() >= state["chapter_end"]
-        if state["stage"] == "import":
+            return self._budget_spent(pending, runs)
+        chapter_over = time.monotonic() >= progress.chapter_end
+        if progress.stage is Stage.IMPORT:
             why = (f"importing it took longer than {self.limits.import_seconds:g} s" if timed_out
                    else f"the process ended while importing it ({exit_text})")
             run.import_error = {"exception": "TimeoutError" if timed_out else "ProcessExit",
                                 "message": why, "traceback": "", "line": None}
-        elif state["stage"] == "call" and state["index"] is not None:
-            function = req.calls[state["index"]].function
+        elif progress.stage is Stage.CALL and progress.index is not None:
+            function = req.calls[progress.index].function
             if timed_out:
                 note = f"stopped after {self.limits.call_seconds:g} s"
-                run.results[state["index"]] = Returned(TIMEOUT, function, note=note)
+                run.results[progress.index] = Returned(TIMEOUT, function, note=note)
             else:
-                run.results[state["index"]] = Returned(CRASHED, function, note=exit_text)
+                run.results[progress.index] = Returned(CRASHED, function, note=exit_text)
             for i, c in enumerate(req.calls):
                 if run.results[i] is None and c.function == function:
                     run.results[i] = Returned(NOT_RUN, function, note=f"an earlier call of {function} did not return")
-        if chapter_over or state["stage"] in ("import", "between"):
+        if chapter_over or progress.stage in (Stage.IMPORT, Stage.BETWEEN):
             for i, c in enumerate(req.calls):
                 if run.results[i] is None and run.import_error is None:
                     run.results[i] = Returned(TIMEOUT if timed_out else NOT_RUN, c.function,
                                               note=f"the chapter's {self.limits.chapter_seconds:g} s ran out")
         position = pending.index(req)
-        rest = [r for r in pending[position:] if runs[r.chapter].import_error is None
+        return [r for r in pending[position:] if runs[r.chapter].import_error is None
                 and any(x is None for x in runs[r.chapter].results)]
-        return rest
 
-
-    def _budget_spent(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun], state: dict) -> list:
+    def _budget_spent(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list:
         """The learner's whole time is spent: every call not yet answered, in every chapter, timed out."""
         note = f"this learner's {self.limits.learner_seconds:g} s for all chapters ran out"
         for req in pending:

@@ -1,17 +1,14 @@
-"""Start the child interpreter (grader/child.py): the first thing `grade` does, so it imports light.
+"""Start the learner's child interpreter (grader.boundary.child) fresh: one per session.
 
-Two strategies behind one call, `start_child`, chosen in one place (`strategy`) by what the system
-offers, never by its name, so a test can force either:
-- "posix": process groups and descriptors passed to the child (pass_fds): the result pipe and an
-  unnamed capture file are the child's own descriptors; a timeout kills the process group, and on
+Two kinds behind one call, `start_child`; grader.boundary.door.choose says which this system gets:
+- posix (portable=False): process groups and descriptors passed to the child (pass_fds): the result pipe
+  and an unnamed capture file are the child's own descriptors; a timeout kills the process group, and on
   Linux the orphans this process adopted as a subreaper;
-- "portable" (Windows, or wherever process groups are missing): the request goes to the child's
-  stdin, its results come back on its stdout (the child moves learner output to a capture file it
-  is given by name), and a timeout kills the process tree through a Windows job object where there is
-  one, else the process.
-(The batch's and the watch's fork server, grader.forkserver, is a third, where fork is safe.)
-Only os, sys and subprocess here: grader.launch starts the child before the heavy imports
-(click, numpy) and grader.runner adopts it.
+- portable (Windows, or wherever process groups are missing): the request goes to the child's stdin, its
+  results come back on its stdout (the child moves learner output to a capture file it is given by name),
+  and a timeout kills the process tree through a Windows job object where there is one, else the process.
+(grader.boundary.forkserver is the third: a resident interpreter that forks a child per session.)
+Only os, sys and subprocess here: grader.launch starts the child before the heavy imports (click, numpy).
 """
 
 from __future__ import annotations
@@ -21,43 +18,23 @@ import subprocess
 import sys
 from typing import Callable
 
-GRADER_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# The child runs without site (-S, faster start) on the parent's own import path, grader last.
-_BOOT = "import sys; sys.path[:] = {!r}; from grader.child import main; main()"
+from grader.system import (
+    StreamReader,
+    child_environment,
+    child_path,
+    forget,
+    keep,
+    kept,
+    read_chunk,
+    temp_dir,
+)
 
-# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox (grader.sandbox.Sandbox).
+# The child's command line: the interpreter on the grader's own path, without site (-S, faster), isolated.
+_BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.child import main; main()"
+
+# A hook that wraps the child's command line, e.g. in a bubblewrap sandbox (grader.boundary.sandbox.Sandbox).
 CommandWrapper = Callable[[list], list]
 
-
-def child_path() -> list[str]:
-    """The child's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
-    paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]
-    return [*paths, GRADER_PARENT]
-
-
-def temp_dir() -> str:
-    for name in ("TMPDIR", "TEMP", "TMP"):
-        if os.path.isdir(os.environ.get(name, "")):
-            return os.environ[name]
-    if os.path.isdir("/tmp"):
-        return "/tmp"
-    import tempfile
-
-    return tempfile.gettempdir()
-
-
-# numpy on matrices of a few rows gains nothing from a BLAS thread pool, and OpenBLAS' idle threads
-# busy-wait: in the grader they would spin beside the learner's child on the same cores.
-SINGLE_THREADED_BLAS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
-
-
-def child_environment() -> dict:
-    env = {k: os.environ[k] for k in ("PATH", "LANG", "LC_ALL", "SYSTEMROOT") if k in os.environ}
-    env.update(SINGLE_THREADED_BLAS, PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1")
-    return env
-
-
-_LIVE: set[int] = set()  # pids of the children started here and not yet stopped
 _SUBREAPER = False
 
 
@@ -75,19 +52,14 @@ def become_subreaper() -> None:
         pass
 
 
-def own(pid: int) -> None:
-    """A process of the grader's own (the HTML report's drawing process), never learner code: kill_orphans
-    leaves it alone, as it does the children started here, until forget(pid)."""
-    _LIVE.add(pid)
-
-
 def kill_orphans() -> None:
-    """Kill and reap the adopted processes that are not one of our live children."""
+    """Kill and reap the adopted processes that are not one of the grader's own (grader.system.keep)."""
     if not _SUBREAPER:
         return
     me = os.getpid()
+    spared = kept()
     for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) in _LIVE:
+        if not entry.isdigit() or int(entry) in spared:
             continue
         try:
             with open(f"/proc/{entry}/stat", "rb") as handle:
@@ -101,10 +73,6 @@ def kill_orphans() -> None:
                 os.waitpid(pid, os.WNOHANG)
             except (ProcessLookupError, ChildProcessError, PermissionError):
                 pass
-
-
-def forget(pid: int) -> None:
-    _LIVE.discard(pid)
 
 
 def capture_file() -> int:
@@ -128,101 +96,6 @@ def read_capture(fd: int, limit: int) -> str:
         return ""
     finally:
         os.close(fd)
-
-
-def read_chunk(fd: int, timeout: float) -> bytes:
-    """The next bytes from a pipe (b"" at its end); TimeoutError when none come within `timeout`."""
-    import select
-
-    poller = select.poll()
-    poller.register(fd, select.POLLIN | select.POLLHUP | select.POLLERR)
-    if timeout <= 0 or not poller.poll(timeout * 1000):
-        raise TimeoutError
-    return os.read(fd, 1 << 16)
-
-
-class StreamReader:
-    """Chunks from a child's pipe within a timeout, on every system: poll where the system has it, else a
-    thread that reads ahead (Windows pipes can be neither polled nor selected)."""
-
-    def __init__(self, stream) -> None:
-        import select
-
-        self.stream = stream
-        self.chunks = None
-        if not hasattr(select, "poll"):
-            import queue
-            import threading
-
-            self.chunks = queue.Queue()
-            threading.Thread(target=self._pump, daemon=True).start()
-
-    def _pump(self) -> None:
-        while True:
-            chunk = self.stream.read1(1 << 16) if hasattr(self.stream, "read1") else self.stream.read(1 << 16)
-            self.chunks.put(chunk)
-            if not chunk:
-                return
-
-    def read(self, timeout: float) -> bytes:
-        """The next bytes (b"" at the pipe's end); TimeoutError when none come within `timeout`."""
-        if self.chunks is None:
-            return read_chunk(self.stream.fileno(), timeout)
-        import queue
-
-        try:
-            return self.chunks.get(timeout=timeout) if timeout > 0 else self.chunks.get_nowait()
-        except queue.Empty:
-            raise TimeoutError from None
-
-
-def start_helper(command: list[str]) -> subprocess.Popen:
-    """A helper interpreter of the grader's own (e.g. sympy's worker) talking over stdin and stdout, in a
-    process group of its own where the system has them, so that stop_helper ends all it started."""
-    posix = strategy() == "posix"
-    return subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            bufsize=0, env=child_environment(), start_new_session=posix,
-                            creationflags=0 if posix else getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0))
-
-
-def stop_helper(process: subprocess.Popen) -> None:
-    """Kill a start_helper process (with its process group where there is one) and close its pipes."""
-    try:
-        if strategy() == "posix":
-            os.killpg(process.pid, 9)
-        else:
-            process.kill()
-    except (ProcessLookupError, PermissionError, OSError):
-        pass
-    process.wait()
-    for stream in (process.stdin, process.stdout):
-        try:
-            stream.close()
-        except OSError:
-            pass
-
-
-def strategy() -> str:
-    """How children start here: "posix" where process groups and passed descriptors exist, else
-    "portable"; GRADER_LAUNCHER forces one (for tests of the other)."""
-    forced = os.environ.get("GRADER_LAUNCHER", "")
-    if forced in ("posix", "portable"):
-        return forced
-    return "posix" if hasattr(os, "killpg") and hasattr(os, "setsid") and hasattr(os, "fork") else "portable"
-
-
-def fork_is_safe() -> bool:
-    """Whether a process that has loaded numpy may fork here (grader.forkserver, the HTML report's
-    drawing): fork and descriptors over Unix sockets exist and multiprocessing does not default to
-    "spawn" (macOS does: fork after its system libraries is unsafe there); not where GRADER_LAUNCHER
-    forces the portable strategy (Windows' route)."""
-    if os.environ.get("GRADER_LAUNCHER") == "portable":
-        return False
-    import multiprocessing
-    import socket
-
-    return (hasattr(os, "fork") and hasattr(socket, "send_fds") and hasattr(socket, "AF_UNIX")
-            and multiprocessing.get_start_method(allow_none=False) != "spawn")
 
 
 def _scratch(sandboxed: bool) -> tuple[str, str]:
@@ -390,11 +263,11 @@ def _end_job(job: object) -> bool:
     return done
 
 
-def start_child(submission, wrap: CommandWrapper | None = None, memory_bytes: int | None = 1 << 30):
-    """Start a fresh child interpreter for `submission` (the strategy this system offers), wrapped
-    (e.g. sandboxed) by `wrap`; the submission's files reach it in the request (grader.wire),
+def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memory_bytes: int | None = 1 << 30):
+    """Start a fresh child interpreter, wrapped (e.g. sandboxed) by `wrap`; `portable`: without process groups
+    or passed descriptors (Windows). The submission's files reach it in the request (grader.boundary.wire),
     written under a folder of its own."""
-    if strategy() == "portable":  # no bubblewrap where this runs (Windows): the child on the host
+    if portable:  # no bubblewrap where this runs (Windows): the child on the host
         scratch, root = _scratch(False)
         capture = os.path.join(scratch, "printed.txt")
         command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), "--portable", capture]
@@ -415,6 +288,6 @@ def start_child(submission, wrap: CommandWrapper | None = None, memory_bytes: in
         cwd=temp_dir() if sandboxed else scratch,
     )
     os.close(write_fd)
-    _LIVE.add(process.pid)
+    keep(process.pid)
     become_subreaper()  # after the start: the child imports numpy long before learner code runs
     return SpawnedChild(process, read_fd, capture_fd, root, host_root=not sandboxed)

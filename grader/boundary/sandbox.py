@@ -3,7 +3,7 @@
 The sandbox is an allow-list. Its root is an empty file system; into it go, read-only, only what
 the child needs: the system's shared libraries, the interpreter and its standard library, the
 packages learner code may import (numpy, sympy and, where installed, jax or torch with what they
-import), and the few grader modules the child itself runs (grader.child, grader.wire,
+import), and the few grader modules the child itself runs (grader.boundary.child, grader.boundary.wire,
 grader.catalogue, the fork server). Every other Python package folder appears empty. The learner's
 files are not bound at all: they travel inside the request and the child writes them to its own
 fresh /tmp. So no reference solution, quiz key, check or other learner's file exists in there,
@@ -11,7 +11,7 @@ wherever the course keeps them. Also: no network, its own PID and IPC namespaces
 die with it), a new session; run as root, learner code drops to uid/gid 65534 (nobody) with no
 capabilities.
 
-Without bubblewrap the child runs with the resource limits and process-tree kill of grader.runner
+Without bubblewrap the child runs with the resource limits and process-tree kill of grader.boundary.session
 only, as the invoking user, and the isolation line says that it can read what that user can.
 """
 
@@ -20,16 +20,17 @@ from __future__ import annotations
 import functools
 import importlib.util
 import os
-import shutil
 import sys
 import sysconfig
 
-from grader.spawn import child_path
+from grader.system import child_path
 
 NOBODY = 65534
-GRADER_DIR = os.path.dirname(os.path.abspath(__file__))
-# The grader modules the child (and the fork server) import: nothing else of the grader is visible.
-CHILD_MODULES = ("__init__.py", "child.py", "wire.py", "catalogue.py", "confine.py", "forkserver.py", "spawn.py")
+GRADER_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The grader modules the child (and the fork server) import, relative to grader/: nothing else of the grader is
+# visible. The catalogue of callables a check may pass and the system's facts are leaves both sides use.
+CHILD_MODULES = ("__init__.py", "catalogue.py", "system.py", "boundary/__init__.py", "boundary/child.py",
+                 "boundary/confine.py", "boundary/forkserver.py", "boundary/spawn.py", "boundary/wire.py")
 # What learner code may import (the contract: numpy, math, sympy, an autograd library), with what
 # those import in turn.
 LEARNER_PACKAGES = ("numpy", "sympy", "mpmath")
@@ -188,38 +189,20 @@ def _python_files() -> list[str]:
 
 
 class Sandbox:
-    """A grader.spawn CommandWrapper: `start_child(submission, wrap=Sandbox())`."""
+    """bubblewrap around a child's command line (a grader.boundary.spawn CommandWrapper). Made only by
+    grader.boundary.door.choose, which decides whether learner code gets one."""
 
-    def __init__(self) -> None:
-        from grader.spawn import strategy
+    available = True  # a wrapped child has a /tmp of its own
 
-        portable = strategy() == "portable"  # no process groups, no passed descriptors: no bubblewrap either
-        self.bwrap = None if os.environ.get("GRADER_SANDBOX") == "off" or portable else shutil.which("bwrap")
-        self.setpriv = shutil.which("setpriv")
+    def __init__(self, bwrap: str, setpriv: str | None = None) -> None:
+        self.bwrap = bwrap
+        self.setpriv = setpriv
         self.drops_to_nobody = hasattr(os, "geteuid") and os.geteuid() == 0 and self.setpriv is not None
 
-    @property
-    def available(self) -> bool:
-        return self.bwrap is not None
-
     def describe(self) -> str:
-        """The isolation line: what holds for learner code here, per learner as well."""
-        if not self.available:
-            from grader.course import in_handout
-            from grader.spawn import strategy
-
-            readable = ("this handout holds no answers" if in_handout()
-                        else "answers included, wherever the references and keys are installed")
-            why = ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "
-                   "killed on a timeout (a job object, with its memory capped, where Windows offers one)"
-                   if strategy() == "portable" else
-                   "bubblewrap not found; apt-get install bubblewrap: learner code runs with resource limits only"
-                   if os.path.isdir("/proc/self/ns") else  # Linux namespaces exist here: bubblewrap would run
-                   "this system has no bubblewrap; learner code runs in a child process with resource limits, "
-                   "its process group killed on a timeout")
-            return (f"isolation: no sandbox ({why}); it runs as you and can read every file you can ({readable})")
+        """The isolation line: what holds for learner code in here, per learner as well."""
         who = "as uid 65534" if self.drops_to_nobody else "as you"
-        from grader.runner import Limits
+        from grader.boundary.session import Limits
 
         limits = Limits()
         each = (f"; each learner in namespaces of its own (processes, IPC, keyring, a fresh {limits.tmp_bytes >> 20} MiB "
@@ -236,8 +219,6 @@ class Sandbox:
 
     def __call__(self, command: list[str]) -> list[str]:
         """`command` inside the sandbox."""
-        if not self.available:
-            return command
         return [self.bwrap, *self.arguments(), "--", *self._drop(), *command]
 
     def _drop(self) -> list[str]:
@@ -309,7 +290,7 @@ class Sandbox:
 
 
 def user_namespaces() -> bool:
-    """Whether an unprivileged process may create a user namespace here (grader.confine needs one)."""
+    """Whether an unprivileged process may create a user namespace here (grader.boundary.confine needs one)."""
     def read(path: str, default: str) -> str:
         try:
             with open(path, encoding="utf-8") as handle:
@@ -328,7 +309,7 @@ def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
     import subprocess
 
     command = [sys.executable, "-I", "-S", "-c",
-               f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.child; print('ready')"]
+               f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.boundary.child; print('ready')"]
     if sandbox is not None:
         command = sandbox(command)
     try:
@@ -340,9 +321,3 @@ def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
         return None
     said = " ".join((done.stderr or done.stdout).split())[-600:]
     return f"the sandboxed interpreter did not start (exit status {done.returncode}): {said or 'no message'}"
-
-
-def learner_sandbox() -> Sandbox | None:
-    """The sandbox for `grade chNN`, or None where bubblewrap is not installed (or GRADER_SANDBOX=off)."""
-    sandbox = Sandbox()
-    return sandbox if sandbox.available else None

@@ -1,0 +1,162 @@
+"""The one door: how learner code starts here is decided in `choose`, and nowhere else.
+
+From what the system offers (grader.system: process groups, whether a process holding numpy may fork;
+bubblewrap on the PATH) and what the caller asks (a sandbox required, wanted where it starts, or off; a
+resident process kept between sessions), `choose` picks
+- the launcher: a resident fork server (grader.boundary.forkserver; where forking is safe and the caller keeps
+  the Boundary between sessions), a fresh interpreter per session with process groups and passed descriptors
+  (grader.boundary.spawn, POSIX), or the portable one (Windows: request over stdin, a job object);
+- the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts, else none, and the
+  isolation line that says which, and why.
+Environment overrides, for tests and benchmarks: GRADER_SANDBOX=off (no sandbox), GRADER_FORK_SERVER=off (a
+fresh interpreter per session even where a fork server would serve), GRADER_LAUNCHER=fork-server|spawn|portable
+(force one launcher).
+"""
+
+from __future__ import annotations
+
+import enum
+import os
+import shutil
+
+from grader.boundary.session import ChildHandle, Limits, Session
+from grader.boundary.spawn import start_child
+from grader.system import fork_is_safe, process_groups
+
+SANDBOX_MODES = ("auto", "required", "off")
+
+
+class Launch(enum.Enum):
+    """How a session's child starts."""
+
+    FORK_SERVER = "fork server"  # forked from a resident sandboxed interpreter that has numpy loaded
+    SPAWN = "spawn"  # a fresh interpreter in a process group of its own, descriptors passed
+    PORTABLE = "portable"  # a fresh interpreter, request on stdin, results on stdout (Windows)
+
+
+class BoundaryUnavailable(RuntimeError):
+    """Learner code cannot be run here as asked (the sandbox is required and does not start, or no child
+    interpreter starts at all): the message says why. An infrastructure failure, never a grade."""
+
+
+class Boundary:
+    """The chosen way learner code runs here: `open_session` for each submission; `close` when done (it stops a
+    resident fork server). Made by `choose`."""
+
+    def __init__(self, launch: Launch, sandbox, turned_off: str = "", probe_failure: str = "") -> None:
+        self.launch = launch
+        self.sandbox = sandbox  # a grader.boundary.sandbox.Sandbox, or None
+        self.turned_off = turned_off  # how the sandbox was turned off ("" when it was not)
+        self.probe_failure = probe_failure  # why bubblewrap, installed, did not start here ("" when it did)
+        self._server = None
+
+    @property
+    def sandboxed(self) -> bool:
+        return self.sandbox is not None
+
+    @property
+    def why_not(self) -> str:
+        """Why learner code runs without the sandbox, in a few words ("" when it has it)."""
+        if self.sandbox is not None:
+            return ""
+        if self.turned_off:
+            return f"turned off {self.turned_off}"
+        return self.probe_failure or "bubblewrap is not installed"
+
+    @property
+    def isolation(self) -> str:
+        """The isolation line: what holds for learner code here."""
+        if self.sandbox is not None:
+            return self.sandbox.describe()
+        from grader.course import in_handout
+
+        readable = ("this handout holds no answers" if in_handout()
+                    else "answers included, wherever the references and keys are installed")
+        if self.turned_off:
+            return (f"isolation: no sandbox (turned off {self.turned_off}): learner code runs as you, with resource "
+                    f"limits only, and can read every file you can ({readable})")
+        why = (f"bubblewrap cannot start here: {self.probe_failure}" if self.probe_failure
+               else _no_bubblewrap(self.launch is Launch.PORTABLE))
+        return f"isolation: no sandbox ({why}); it runs as you and can read every file you can ({readable})"
+
+    def start_child(self) -> ChildHandle:
+        """A fresh child for one session (a grader.boundary.session Launcher)."""
+        if self.launch is Launch.FORK_SERVER:
+            return self._fork_server().start()
+        return start_child(self.sandbox, portable=self.launch is Launch.PORTABLE)
+
+    def _fork_server(self):
+        if self._server is None:
+            from grader.boundary.forkserver import ForkServer
+
+            self._server = ForkServer(self.sandbox)
+        return self._server
+
+    def warm_up(self) -> None:
+        """Start the resident fork server now, before the first session asks (nothing for the other launchers)."""
+        if self.launch is Launch.FORK_SERVER and self._fork_server().process is None:
+            self._server.launch()
+
+    def open_session(self, submission, limits: Limits = Limits(), started: ChildHandle | None = None) -> Session:
+        """A session for `submission`: its first child starts now (or `started`, one this boundary started)."""
+        return Session(submission, self.start_child, limits, started=started, isolation=self.isolation)
+
+    def close(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            self._server = None
+
+
+def _no_bubblewrap(portable: bool) -> str:
+    if portable:
+        return ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "
+                "killed on a timeout (a job object, with its memory capped, where Windows offers one)")
+    if os.path.isdir("/proc/self/ns"):  # Linux namespaces exist here: bubblewrap would run
+        return "bubblewrap not found; apt-get install bubblewrap: learner code runs with resource limits only"
+    return ("this system has no bubblewrap; learner code runs in a child process with resource limits, its process "
+            "group killed on a timeout")
+
+
+def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
+           turned_off: str = "with --no-sandbox") -> Boundary:
+    """How learner code runs here. `sandbox`: "required" (BoundaryUnavailable where bubblewrap cannot run
+    learner code), "auto" (bubblewrap where it starts, else none, and the isolation line says why) or "off";
+    `resident`: the caller keeps the Boundary for many sessions (a fork server where forking is safe);
+    `probe`: start one interpreter the way sessions will before saying yes (BoundaryUnavailable if none starts
+    at all); `turned_off`: how "off" was asked, for the isolation line."""
+    if sandbox not in SANDBOX_MODES:
+        raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
+    forced = os.environ.get("GRADER_LAUNCHER", "")
+    portable = forced == "portable" or not process_groups()
+    if portable:
+        launch = Launch.PORTABLE
+    elif forced == "fork-server" or (resident and forced != "spawn" and os.environ.get("GRADER_FORK_SERVER") != "off"
+                                      and fork_is_safe()):
+        launch = Launch.FORK_SERVER
+    else:
+        launch = Launch.SPAWN
+    if os.environ.get("GRADER_SANDBOX") == "off" and sandbox != "off":
+        sandbox, turned_off = "off", "by GRADER_SANDBOX=off"
+    bwrap = None if portable or sandbox == "off" else shutil.which("bwrap")
+    if bwrap is None:
+        chosen = Boundary(launch, None, turned_off=turned_off if sandbox == "off" else "")
+    else:
+        from grader.boundary.sandbox import Sandbox
+
+        chosen = Boundary(launch, Sandbox(bwrap, shutil.which("setpriv")))
+    if probe:
+        from grader.boundary.sandbox import probe as try_one
+
+        reason = try_one(chosen.sandbox)
+        if reason is not None and chosen.sandbox is not None and sandbox == "auto":
+            chosen = Boundary(launch, None, probe_failure=" ".join(reason.split())[:300])
+        elif reason is not None:
+            raise BoundaryUnavailable(reason)
+    if sandbox == "required" and chosen.sandbox is None:
+        raise BoundaryUnavailable(chosen.why_not)
+    return chosen
+
+
+def open_session(submission, limits: Limits = Limits(), sandbox: str = "auto") -> Session:
+    """A one-off session for `submission` (e.g. `grade ch06`): a fresh child, sandboxed as `sandbox` asks."""
+    return choose(sandbox).open_session(submission, limits)

@@ -1,0 +1,253 @@
+"""Finding and staging submissions: each learner's folder or .zip in a submissions folder, with its learner
+id (its name, or a roster's), copied or safely extracted into a staging folder of chapter and answer files
+only; and where a learner's outputs go (folder_name). Used by grade batch, grade submit's check of its own
+archive, the Gradescope autograder and --similarity.
+
+Only chNN_*.py, chNN_*.ipynb (without outputs), answers/*.yaml and a grade submit manifest are staged; zip
+entries with absolute paths, '..' or symlinks are never extracted, links inside a folder are never followed,
+and sizes are capped.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import unicodedata
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from grader.safe_text import unicode_clean
+
+MANIFEST = "submission-manifest.json"  # what grade submit writes into an archive (grader.submit)
+CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.(py|ipynb)$")  # a chapter may be kept as a notebook
+ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
+MAX_FILE_BYTES = 1 << 20
+MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged without them (grader.notebook)
+MAX_TOTAL_BYTES = 16 << 20
+MAX_FILES = 200
+STAGING = ".staging"
+CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
+                 "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
+_PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
+_MAX_FOLDER = 160
+_BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+
+class StagingError(ValueError):
+    """A submission that cannot be staged (the message says why)."""
+
+
+class RosterError(ValueError):
+    """A roster that cannot be read (the message names the file and line)."""
+
+
+@dataclass
+class Entry:
+    learner: str
+    source: Path
+    origin: str = ""  # where the id comes from, for messages: "its name" or "roster.csv, line 3"
+    submitted: str = ""  # when it was submitted, from the roster's `submitted` column (for late penalties)
+
+
+@dataclass
+class Skipped:
+    """Something in the submissions folder that is not graded, and why."""
+
+    name: str
+    reason: str
+    submission: bool = False  # a learner's folder or zip, skipped because its id is unusable
+
+
+def folder_name(learner: str) -> str:
+    """The learner's folder in OUT (and OUT/.staging): the id itself where it has only letters, digits
+    and _ . @ + -, else each other character percent-encoded as UTF-8 (zoë -> zo%C3%AB); a leading '.'
+    and the names of the class outputs get their dots encoded (%2E), a leading '-' too (%2D), and a long
+    id is shortened with a hash. Different ids never share a folder; no id names a class output or a
+    hidden folder."""
+    encoded = "".join(ch if ch in _PLAIN else "".join(f"%{b:02X}" for b in ch.encode("utf-8", "surrogatepass"))
+                      for ch in learner)
+    if encoded.casefold() in CLASS_OUTPUTS or encoded.casefold() == STAGING or encoded.startswith("."):
+        encoded = encoded.replace(".", "%2E")
+    if encoded.startswith("-"):  # not an option to the shell tools that will handle the folder
+        encoded = "%2D" + encoded[1:]
+    if len(encoded) > _MAX_FOLDER:  # '~' never appears otherwise
+        digest = hashlib.sha256(learner.encode("utf-8", "surrogatepass")).hexdigest()[:20]
+        encoded = f"{encoded[:_MAX_FOLDER - 21]}~{digest}"
+    return encoded
+
+
+def id_problem(learner: str) -> str | None:
+    """Why `learner` cannot be a learner id (empty, '.' or '..', a path separator, a control
+    character), or None. Any other text is an id, kept exactly as given."""
+    if not learner.strip():
+        return "is empty"
+    if learner in (".", ".."):
+        return f"is {learner!r}"
+    if "/" in learner or "\\" in learner:
+        return "contains a path separator (/ or \\)"
+    for ch in learner:
+        if ch in _BIDI or unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp"):
+            return f"contains the control character U+{ord(ch):04X}"
+    return None
+
+
+def read_roster(roster: Path) -> dict[str, tuple[str, int, str]]:
+    """The roster CSV as {submission: (learner id, line, submitted)}: columns `submission` and `learner` (and
+    optionally `submitted`, the time of submission as the LMS gives it, ISO 8601) in any order and case,
+    separated by ',' or ';' (or a tab), UTF-8 with or without a byte-order mark (grader.csvtable)."""
+    from grader.csvtable import TableError, read_table
+
+    try:
+        rows = read_table(roster, ("submission", "learner"))
+    except TableError as exc:
+        raise RosterError(str(exc)) from None
+    return {row["submission"]: (row["learner"], line, row.get("submitted", "")) for line, row in rows
+            if row["submission"]}
+
+
+def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[Skipped]]:
+    """The submissions in `folder` (learner folders and .zip files) with their learner ids, and what
+    is skipped with the reason: other files, hidden (dot-named) entries the roster does not name,
+    ids that cannot be ids (id_problem). An id comes from the roster (--roster), else from the name;
+    two submissions with one id become id and id-2."""
+    names = read_roster(roster) if roster is not None else {}
+    entries: list[Entry] = []
+    skipped: list[Skipped] = []
+    taken: set[str] = set()
+    suffix: dict[str, int] = {}  # id -> the n of id-n to try next: a name once taken stays taken
+    with os.scandir(folder) as listing:  # the types come with the listing: no stat per entry
+        items = sorted(listing, key=lambda item: os.path.normcase(item.name))  # the order of sorted Paths
+    for item in items:
+        path = folder / item.name
+        shown = unicode_clean(item.name)
+        if not (item.is_symlink() or item.is_dir(follow_symlinks=False)
+                or (item.is_file(follow_symlinks=False) and path.suffix.lower() == ".zip")):
+            skipped.append(Skipped(shown, "not a folder or a .zip file"))
+            continue
+        stem = path.stem if item.is_file() else path.name  # a link: what it points at
+        named = names.get(path.name) or names.get(stem)
+        if named is None and path.name.startswith("."):
+            skipped.append(Skipped(shown, "a hidden (dot-named) entry, as tools leave behind (.git, .DS_Store, "
+                                          "._name); to grade it, rename it or name it in a roster (--roster)"))
+            continue
+        if named is not None:
+            learner, line, _ = named
+            problem = id_problem(learner)
+            why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
+            origin = f"the roster {roster.name}, line {line}"
+        else:
+            learner = unicode_clean(stem)  # bytes that are not UTF-8 become U+FFFD
+            problem = id_problem(learner)
+            why = f"its name, the learner id, {problem}; rename it or give its id in a roster (--roster)"
+            origin = f"the name of {shown}"
+        if problem is not None:
+            skipped.append(Skipped(shown, why, submission=True))
+            continue
+        unique, n = learner, suffix.get(learner, 2)
+        while unique in taken:  # e.g. both alice/ and alice.zip: neither overwrites the other
+            unique, n = f"{learner}-{n}", n + 1
+        suffix[learner] = n  # the next submission with this id starts here, not at id-2 again
+        taken.add(unique)
+        entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique",
+                             named[2] if named is not None else ""))
+    return entries, skipped
+
+
+def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
+    """Learner folders and .zip files in `folder` with their ids (survey, without what is skipped)."""
+    return survey(folder, roster)[0]
+
+
+def _wanted(relative: str) -> str | None:
+    """Where a file of the submission goes in the staged package, or None to leave it out."""
+    parts = relative.replace("\\", "/").split("/")
+    name = parts[-1]
+    if CHAPTER_FILE.match(name):
+        return name
+    if ANSWER_FILE.match(name) and len(parts) >= 2 and parts[-2] == "answers":
+        return f"answers/{name}"
+    if name == MANIFEST:  # written by grade submit (grader.submit): checked, never graded
+        return name
+    return None
+
+
+def _limit(target: str) -> int:
+    return MAX_NOTEBOOK_BYTES if target.endswith(".ipynb") else MAX_FILE_BYTES
+
+
+def _staged(target: str, data: bytes) -> bytes:
+    """What is staged of a file: a notebook without its outputs (grading reads its code cells only)."""
+    if not target.endswith(".ipynb"):
+        return data
+    from grader.notebook import without_outputs
+
+    return without_outputs(data)
+
+
+def stage(entry: Entry, staging: Path) -> Path:
+    """Copy the submission's chapter and answer files into staging/<folder>/exercises/ (a file
+    already staged with the same bytes is left as it is; files no longer submitted are removed)."""
+    root = staging / folder_name(entry.learner)
+    package = root / "exercises"
+    files: dict[str, bytes] = {"__init__.py": b""}
+    total = 0
+    if entry.source.is_symlink():
+        raise StagingError("is a symbolic link; a submission is a real folder or .zip file (links are never "
+                           "followed: one could point at the references)")
+    if entry.source.is_dir():
+        for folder, subfolders, names in os.walk(entry.source):  # never into a symlinked folder
+            subfolders.sort()
+            for name in sorted(names):
+                path = Path(folder) / name
+                if path.is_symlink() or not path.is_file():
+                    continue
+                target = _wanted(str(path.relative_to(entry.source)))
+                if target is None:
+                    continue
+                size = path.stat().st_size
+                if size > _limit(target):
+                    raise StagingError(f"{path.name} is {size} bytes; at most {_limit(target)} are read")
+                files[target] = _staged(target, path.read_bytes())
+                total += len(files[target])
+    else:
+        try:
+            archive = zipfile.ZipFile(entry.source)
+        except zipfile.BadZipFile:
+            raise StagingError(f"{entry.source.name} is not a valid zip file") from None
+        with archive:
+            infos = archive.infolist()
+            if len(infos) > 10 * MAX_FILES:
+                raise StagingError(f"{entry.source.name} holds {len(infos)} entries")
+            for info in infos:
+                name = info.filename
+                if name.startswith("/") or ".." in name.split("/") or (info.external_attr >> 16) & 0o170000 == 0o120000:
+                    continue  # absolute paths, parent references and symlinks are never extracted
+                target = _wanted(name)
+                if target is None or info.is_dir():
+                    continue
+                if info.file_size > _limit(target):
+                    raise StagingError(f"{name} is {info.file_size} bytes unpacked; at most {_limit(target)}")
+                with archive.open(info) as handle:
+                    data = handle.read(_limit(target) + 1)
+                if len(data) > _limit(target):
+                    raise StagingError(f"{name} unpacks to more than {_limit(target)} bytes")
+                files[target] = _staged(target, data)
+                total += len(files[target])
+    if total > MAX_TOTAL_BYTES or len(files) > MAX_FILES:
+        raise StagingError("the submission is too large")
+    if not any(CHAPTER_FILE.match(name) for name in files):
+        raise StagingError("no chapter files (chNN_*.py or chNN_*.ipynb) found, neither in exercises/ nor at the top")
+    (package / "answers").mkdir(parents=True, exist_ok=True)
+    for path in package.rglob("*"):
+        if path.is_file() and path.relative_to(package).as_posix() not in files:
+            path.unlink()
+    for target, data in files.items():
+        path = package / target
+        try:
+            if path.read_bytes() == data:
+                continue
+        except OSError:
+            pass
+        path.write_bytes(data)
+    return root

@@ -1,0 +1,128 @@
+"""What this system offers a process that starts others: facts, read from the running interpreter, never
+from the system's name. A leaf: the learner's boundary (grader.boundary), the grader's own helper processes
+(grader.helpers) and the HTML report's drawing processes all read them here; which launcher learner code
+gets is decided from them in one place, grader.boundary.door.choose.
+
+Only os and sys at import: grader.launch starts the child before the heavy imports (click, numpy), and the
+child's own side (grader.boundary.child, the fork server) imports this inside the sandbox.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+GRADER_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# numpy on matrices of a few rows gains nothing from a BLAS thread pool, and OpenBLAS' idle threads
+# busy-wait: in the grader they would spin beside the learner's child on the same cores.
+SINGLE_THREADED_BLAS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def process_groups() -> bool:
+    """Whether children can get process groups of their own and inherited descriptors (POSIX: not Windows)."""
+    return hasattr(os, "killpg") and hasattr(os, "setsid") and hasattr(os, "fork")
+
+
+def fork_is_safe() -> bool:
+    """Whether a process that has loaded numpy may fork here (a fork server, the HTML report's drawing): fork
+    and descriptors over Unix sockets in sequenced-packet pairs exist, and multiprocessing does not default to
+    "spawn" (macOS does: fork after its system libraries is unsafe there)."""
+    import multiprocessing
+    import socket
+
+    return (hasattr(os, "fork") and hasattr(socket, "send_fds") and hasattr(socket, "AF_UNIX")
+            and hasattr(socket, "SOCK_SEQPACKET") and multiprocessing.get_start_method(allow_none=False) != "spawn")
+
+
+def child_path() -> list[str]:
+    """A grader interpreter's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
+    paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]
+    return [*paths, GRADER_PARENT]
+
+
+def child_environment() -> dict:
+    """The environment of every interpreter the grader starts: no PYTHONPATH, one BLAS thread, a fixed hash
+    seed."""
+    env = {k: os.environ[k] for k in ("PATH", "LANG", "LC_ALL", "SYSTEMROOT") if k in os.environ}
+    env.update(SINGLE_THREADED_BLAS, PYTHONHASHSEED="0", PYTHONDONTWRITEBYTECODE="1")
+    return env
+
+
+def temp_dir() -> str:
+    """The folder for temporary files: TMPDIR, TEMP or TMP where it exists, else /tmp, else Python's choice."""
+    for name in ("TMPDIR", "TEMP", "TMP"):
+        if os.path.isdir(os.environ.get(name, "")):
+            return os.environ[name]
+    if os.path.isdir("/tmp"):
+        return "/tmp"
+    import tempfile
+
+    return tempfile.gettempdir()
+
+
+# ------------------------------------------------------------------------------ the grader's own processes
+
+_KEPT: set[int] = set()  # pids of processes started by the grader itself and not yet ended
+
+
+def keep(pid: int) -> None:
+    """A process of the grader's own (a learner's child while it runs, the report's drawing process): the
+    boundary's clean-up of orphans (grader.boundary.spawn.kill_orphans) leaves it alone until forget(pid)."""
+    _KEPT.add(pid)
+
+
+def forget(pid: int) -> None:
+    _KEPT.discard(pid)
+
+
+def kept() -> frozenset[int]:
+    return frozenset(_KEPT)
+
+
+# ------------------------------------------------------------------------------ reading a pipe in time
+
+def read_chunk(fd: int, timeout: float) -> bytes:
+    """The next bytes from a pipe (b"" at its end); TimeoutError when none come within `timeout`."""
+    import select
+
+    poller = select.poll()
+    poller.register(fd, select.POLLIN | select.POLLHUP | select.POLLERR)
+    if timeout <= 0 or not poller.poll(timeout * 1000):
+        raise TimeoutError
+    return os.read(fd, 1 << 16)
+
+
+class StreamReader:
+    """Chunks from a child's pipe within a timeout, on every system: poll where the system has it, else a
+    thread that reads ahead (Windows pipes can be neither polled nor selected)."""
+
+    def __init__(self, stream) -> None:
+        import select
+
+        self.stream = stream
+        self.chunks = None
+        if not hasattr(select, "poll"):
+            import queue
+            import threading
+
+            self.chunks = queue.Queue()
+            threading.Thread(target=self._pump, daemon=True).start()
+
+    def _pump(self) -> None:
+        while True:
+            chunk = self.stream.read1(1 << 16) if hasattr(self.stream, "read1") else self.stream.read(1 << 16)
+            self.chunks.put(chunk)
+            if not chunk:
+                return
+
+    def read(self, timeout: float) -> bytes:
+        """The next bytes (b"" at the pipe's end); TimeoutError when none come within `timeout`."""
+        if self.chunks is None:
+            return read_chunk(self.stream.fileno(), timeout)
+        import queue
+
+        try:
+            return self.chunks.get(timeout=timeout) if timeout > 0 else self.chunks.get_nowait()
+        except queue.Empty:
+            raise TimeoutError from None
