@@ -1,0 +1,103 @@
+"""The architecture is checked, not only described: the import contracts of pyproject.toml (import-linter)
+hold, each fails when the import it forbids is planted, and how learner code starts is decided in one
+module (grader/boundary/door.py)."""
+
+from __future__ import annotations
+
+import ast
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import REPO
+
+# Each contract with one import that breaks it: (the file it is planted in, the line planted).
+PLANTED = {
+    "no-cycles": ("grader/system.py", "from grader.boundary import door"),
+    "layers": ("grader/pipeline.py", "from grader import cli"),
+    "boundary-holds-no-answer": ("grader/boundary/door.py", "import solutions.ch06_measurement"),
+    "sandboxed-side": ("grader/boundary/child.py", "from grader import course"),
+    "renderers-only-read": ("grader/render/summary.py", "from grader.quiz import bank"),
+    "checks-use-only-the-wire": ("grader/checks/ch06.py", "from grader.boundary.spawn import start_child"),
+    "one-door": ("grader/cli.py", "from grader.boundary.forkserver import ForkServer"),
+}
+
+
+def _lint(tree: Path, *contracts: str) -> subprocess.CompletedProcess:
+    """import-linter on the grader at `tree` (its pyproject.toml's contracts), as the command-line tool runs."""
+    arguments = [a for contract in contracts for a in ("--contract", contract)]
+    code = "import sys; from importlinter.cli import lint_imports_command; sys.exit(lint_imports_command())"
+    env = dict(os.environ, PYTHONPATH=str(tree))  # this tree's grader, not the installed one
+    return subprocess.run([sys.executable, "-c", code, "--no-cache", *arguments], cwd=tree, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_every_import_contract_holds():
+    done = _lint(REPO)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert f"{len(PLANTED)} kept, 0 broken" in done.stdout, done.stdout
+
+
+def test_the_contracts_are_the_ones_planted_here():
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10: import-linter brings tomli
+        import tomli as tomllib
+
+    contracts = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["importlinter"]["contracts"]
+    assert sorted(c["id"] for c in contracts) == sorted(PLANTED)
+
+
+@pytest.fixture(scope="module")
+def tree(tmp_path_factory) -> Path:
+    """A copy of the grader, the references and the contracts, whose files a test may plant an import in."""
+    tree = tmp_path_factory.mktemp("architecture")
+    shutil.copytree(REPO / "grader", tree / "grader", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(REPO / "solutions", tree / "solutions", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(REPO / "pyproject.toml", tree / "pyproject.toml")
+    return tree
+
+
+@pytest.mark.parametrize("contract", sorted(PLANTED))
+def test_each_contract_fails_when_its_import_is_planted(tree, contract):
+    file, line = PLANTED[contract]
+    original = (tree / file).read_text(encoding="utf-8")
+    assert _lint(tree, contract).returncode == 0  # the copy keeps it
+    (tree / file).write_text(f"{original}\n{line}  # planted\n", encoding="utf-8")
+    try:
+        done = _lint(tree, contract)
+    finally:
+        (tree / file).write_text(original, encoding="utf-8")
+    assert done.returncode != 0, done.stdout
+    assert "BROKEN" in done.stdout and "0 kept, 1 broken" in done.stdout, done.stdout
+
+
+# What decides how learner code starts: making a launcher or a sandbox, and the environment overrides.
+_LAUNCH_CALLS = {"ForkServer", "start_child", "Sandbox"}
+_LAUNCH_VARIABLES = {"GRADER_SANDBOX", "GRADER_FORK_SERVER", "GRADER_LAUNCHER"}
+
+
+def _launch_decisions(path: Path) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Call):
+            name = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+            if name in _LAUNCH_CALLS:
+                found.append(f"{name}(...) on line {node.lineno}")
+        elif isinstance(node, ast.Constant) and node.value in _LAUNCH_VARIABLES:
+            found.append(f"{node.value} on line {node.lineno}")
+    return found
+
+
+def test_the_launch_decision_is_made_in_one_module():
+    """Sandbox or none, fork server, spawn or the portable child: only grader/boundary/door.py chooses."""
+    deciding = {}
+    for path in sorted((REPO / "grader").rglob("*.py")):
+        found = _launch_decisions(path)
+        if found:
+            deciding[path.relative_to(REPO).as_posix()] = found
+    assert list(deciding) == ["grader/boundary/door.py"], deciding
