@@ -22,6 +22,7 @@ import shlex
 import subprocess
 import sys
 import threading
+import time
 from dataclasses import dataclass, field
 
 ANSWER_SECONDS = 600.0  # a run is bounded far below this (grader.boundary.session.Limits); past it the process is replaced
@@ -70,6 +71,12 @@ class _Process:
         self.process = subprocess.Popen([sys.executable, "-m", "grader.notebook_server", "--warm"],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                         env=env, **options)
+        from grader.system import StreamReader
+
+        # one reader for the process's life: where pipes cannot be polled (Windows) it is a thread reading ahead,
+        # and a second one would take the next answer from the first
+        self.answers = StreamReader(self.process.stdout)
+        self.unread = b""
 
     def ask(self, request: dict) -> dict:
         with self.lock:
@@ -78,7 +85,7 @@ class _Process:
                 try:
                     self.process.stdin.write((json.dumps(request) + "\n").encode("utf-8"))
                     self.process.stdin.flush()
-                    line = _read_line(self.process.stdout, ANSWER_SECONDS)
+                    line = self._answer(ANSWER_SECONDS)
                 except KeyboardInterrupt:
                     self.stop()
                     raise
@@ -88,6 +95,17 @@ class _Process:
                     return json.loads(line)
                 self.stop()
             return {"error": "the grading process ended without an answer; run %grade again"}
+
+    def _answer(self, timeout: float) -> bytes:
+        """The grading process's next line (b"" if it ended); TimeoutError past `timeout`."""
+        end = time.monotonic() + timeout
+        while b"\n" not in self.unread:
+            chunk = self.answers.read(end - time.monotonic())
+            if not chunk:
+                return b""
+            self.unread += chunk
+        line, self.unread = self.unread.split(b"\n", 1)
+        return line + b"\n"
 
     def stop(self) -> None:
         if self.process is None:
@@ -103,23 +121,6 @@ class _Process:
             except OSError:
                 pass
         self.process = None
-
-
-def _read_line(stream, timeout: float) -> bytes:
-    """One line from the grading process (b"" if it ended), TimeoutError past `timeout`."""
-    import time
-
-    from grader.system import StreamReader
-
-    reader = StreamReader(stream)
-    buffer = b""
-    end = time.monotonic() + timeout
-    while b"\n" not in buffer:
-        chunk = reader.read(end - time.monotonic())
-        if not chunk:
-            return b""
-        buffer += chunk
-    return buffer
 
 
 _PROCESS = _Process()

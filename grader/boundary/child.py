@@ -22,6 +22,7 @@ import sys
 import numpy as np  # noqa: F401  (loaded before any learner code, and before the request arrives)
 
 from grader.boundary.wire import (
+    COMPILING,
     DONE,
     IMPORT,
     IMPORT_FAILED,
@@ -184,7 +185,8 @@ def run(request: dict, out) -> None:
         except BaseException as exc:  # SystemExit and KeyboardInterrupt from learner code too
             _emit(out, {"event": IMPORT_FAILED, "chapter": name, "error": describe_exception(exc, root)})
             continue
-        _emit(out, {"event": IMPORTED, "chapter": name})
+        # the libraries that compile a function on its first call (jax.jit, torch.compile): its first call gets more time
+        _emit(out, {"event": IMPORTED, "chapter": name, "compiling": sorted(COMPILING & set(sys.modules))})
         for call in chapter["calls"]:
             index = call["index"]
             function = getattr(module, call["function"], None)

@@ -24,6 +24,7 @@ import sys
 import time
 
 from grader.boundary.spawn import (
+    INTERPRETER,
     CommandWrapper,
     become_subreaper,
     capture_file,
@@ -52,7 +53,7 @@ class ForkServer:
         """Start the server now (`start` does it on first use)."""
         parent_end, server_end = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         config = {"scratch": self.wrap.scratch_dirs() if self.sandboxed else [], "pid_namespace": self.sandboxed}
-        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(server_end.fileno()),
+        command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), str(server_end.fileno()),
                    json.dumps(config)]
         if self.wrap is not None:
             command = self.wrap(command)

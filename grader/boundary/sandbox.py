@@ -308,7 +308,9 @@ def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
     not, in one paragraph (an infrastructure failure: no learner should be graded then)."""
     import subprocess
 
-    command = [sys.executable, "-I", "-S", "-c",
+    from grader.boundary.spawn import INTERPRETER
+
+    command = [sys.executable, *INTERPRETER, "-c",
                f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.boundary.child; print('ready')"]
     if sandbox is not None:
         command = sandbox(command)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
 from grader.boundary.wire import (
+    COMPILING,
     CRASHED,
     DONE,
     IMPORT,
@@ -200,6 +201,11 @@ class Progress:
     chapter: str | None = None  # the chapter being imported or called (None before the first)
     index: int | None = None  # the call in flight
     chapter_end: float = float("inf")
+    compiling: tuple[str, ...] = ()  # what the chapter's module loaded that compiles on a first call (jax, torch)
+    called: set[str] = field(default_factory=set)  # the chapter's functions called so far
+    first_call: bool = False  # the call in flight is its function's first, with a compiling library loaded
+    call_started: float = 0.0
+    slowest: dict[str, float] = field(default_factory=dict)  # the longest a returned call of each function took
 
     @classmethod
     def of(cls, pending: list[ChapterRequest], runs: dict[str, ChapterRun], limits: Limits) -> Progress:
@@ -207,14 +213,38 @@ class Progress:
         return cls(order, limits, deadline=time.monotonic() + limits.startup_seconds)
 
     def _next_call(self, now: float) -> None:
-        calls = self.order[self.chapter_at][1]
+        request, calls = self.order[self.chapter_at]
         if self.call_at < len(calls):
-            self.stage, self.index, self.deadline = Stage.CALL, calls[self.call_at], now + self.limits.call_seconds
+            self.stage, self.index, self.call_started = Stage.CALL, calls[self.call_at], now
+            function = request.calls[self.index].function
+            self.first_call = bool(self.compiling) and function not in self.called
+            self.called.add(function)
+            self.deadline = now + self.call_budget
         else:  # the chapter is done; the child moves on at once
             self._next_chapter(now)
 
+    @property
+    def call_budget(self) -> float:
+        """The call in flight's time: a call's, or for a first call that may compile (jax, torch) an import's."""
+        return max(self.limits.call_seconds, self.limits.import_seconds) if self.first_call \
+            else self.limits.call_seconds
+
+    def timeout_note(self, function: str) -> str:
+        """Why the call in flight was stopped, and what that says: a limit alone is no proof of an endless loop."""
+        budget = f"stopped after {self.call_budget:g} s"
+        if self.first_call:
+            return (f"{budget}, the time of a first call of a {' or '.join(self.compiling)} function, which includes "
+                    "compiling it; if it is only slow, compile once outside the function, or grade when the machine "
+                    "is less busy")
+        slowest = self.slowest.get(function)
+        if slowest is not None and slowest < self.limits.call_seconds / 10:
+            return (f"{budget}, while its other calls returned within {slowest:.2g} s: for these arguments it most "
+                    "likely never ends (a loop whose condition never changes?)")
+        return f"{budget}: it may never end for these arguments (a loop whose condition never changes), or be too slow"
+
     def _next_chapter(self, now: float) -> None:
-        self.chapter_at, self.call_at = self.chapter_at + 1, 0
+        self.chapter_at, self.call_at, self.compiling, self.first_call = self.chapter_at + 1, 0, (), False
+        self.called = set()
         self.stage, self.index, self.deadline = Stage.BETWEEN, None, now + self.limits.call_seconds
 
     def take(self, event: dict, now: float, runs: dict[str, ChapterRun]) -> Ending | None:
@@ -233,12 +263,16 @@ class Progress:
                 self._next_chapter(now)
                 return None
             if kind == IMPORTED:
+                said = event.get("compiling")
+                self.compiling = tuple(sorted(COMPILING & set(said))) if isinstance(said, list) and all(
+                    isinstance(name, str) for name in said) else ()
                 self._next_call(now)
                 return None
         elif self.stage is Stage.CALL and kind in (RETURNED, RAISED_EVENT, MISSING_EVENT) and name == self.chapter \
                 and event.get("index") == self.index:
-            request = self.order[self.chapter_at][0]
-            runs[name].results[self.index] = from_event(request.calls[self.index].function, event)
+            function = self.order[self.chapter_at][0].calls[self.index].function
+            runs[name].results[self.index] = from_event(function, event)
+            self.slowest[function] = max(self.slowest.get(function, 0.0), now - self.call_started)
             self.call_at += 1
             self._next_call(now)
             return None
@@ -374,7 +408,8 @@ class Session:
         elif progress.stage is Stage.CALL and progress.index is not None:
             function = req.calls[progress.index].function
             if timed_out:
-                note = f"stopped after {self.limits.call_seconds:g} s"
+                note = (f"stopped when the chapter's {self.limits.chapter_seconds:g} s ran out" if chapter_over
+                        else progress.timeout_note(function))
                 run.results[progress.index] = Returned(TIMEOUT, function, note=note)
             else:
                 run.results[progress.index] = Returned(CRASHED, function, note=exit_text)

@@ -29,7 +29,10 @@ from grader.system import (
     temp_dir,
 )
 
-# The child's command line: the interpreter on the grader's own path, without site (-S, faster), isolated.
+# The child's command line: the interpreter isolated (-I), without site (-S, faster), in UTF-8 mode (-X utf8: a
+# learner printing σ on Windows would otherwise fail there, in the console's code page, and pass elsewhere), on
+# the grader's own path.
+INTERPRETER = ("-I", "-S", "-X", "utf8")
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.child import main; main()"
 
 # A hook that wraps the child's command line, e.g. in a bubblewrap sandbox (grader.boundary.sandbox.Sandbox).
@@ -84,7 +87,8 @@ def capture_file() -> int:
             pass
     import tempfile
 
-    return os.dup(tempfile.TemporaryFile(dir=temp_dir()).fileno())  # the dup outlives the file object
+    with tempfile.TemporaryFile(dir=temp_dir()) as handle:  # open until the dup exists, which outlives it
+        return os.dup(handle.fileno())
 
 
 def read_capture(fd: int, limit: int) -> str:
@@ -270,7 +274,7 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
     if portable:  # no bubblewrap where this runs (Windows): the child on the host
         scratch, root = _scratch(False)
         capture = os.path.join(scratch, "printed.txt")
-        command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), "--portable", capture]
+        command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), "--portable", capture]
         process = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                    env=child_environment(), cwd=scratch,
                                    creationflags=getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0))
@@ -279,7 +283,7 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
     scratch, root = _scratch(sandboxed)
     read_fd, write_fd = os.pipe()
     capture_fd = capture_file()
-    command = [sys.executable, "-I", "-S", "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
+    command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
     if wrap is not None:
         command = wrap(command)
     process = subprocess.Popen(

@@ -26,6 +26,9 @@ IMPORT, IMPORTED, IMPORT_FAILED = "import", "imported", "import-failed"
 RETURNED, RAISED_EVENT, MISSING_EVENT = "returned", "raised", "missing"
 DONE = "done"
 MAX_LINE = 64 << 20  # a longer result line is a protocol violation
+# Libraries whose functions may compile on their first call (jax.jit, torch.compile): IMPORTED lists those the
+# learner's module loaded, and the first call of each function then gets the import's time instead of a call's.
+COMPILING = frozenset({"jax", "torch"})
 
 # value tags of encode_value
 T_NDARRAY, T_SCALAR, T_NONE, T_STR = "ndarray", "scalar", "none", "str"
@@ -348,7 +351,7 @@ class Returned:
             where = f" ({err['where']})" if err.get("where") else f" (line {err['line']})" if err.get("line") else ""
             return f"{name} raised {err.get('exception')}: {err.get('message')}{where}"
         if self.kind == TIMEOUT:
-            return f"{name} did not return in time ({self.note}): an endless loop?"
+            return f"{name} did not return in time: {self.note}."
         if self.kind == CRASHED:
             return f"the process running {name} ended abruptly ({self.note})."
         if self.kind == NOT_RUN:

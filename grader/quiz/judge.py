@@ -160,8 +160,8 @@ def answer_terms(question: Question, value: object, lettering: dict[str, str], t
     if question.kind != "symbolic" or not isinstance(text, str):
         return {}
     form = re.sub(r"\s+", "", text).replace("**", "^")
-    for name, number in sorted(values.items(), key=lambda kv: -len(f"{kv[1]:g}")):
-        form = re.sub(rf"(?<![\d.^]){re.escape(f'{number:g}')}(?![\d.])", f"<{name}>", form)
+    for name, its_value in sorted(values.items(), key=lambda kv: -len(f"{kv[1]:g}")):
+        form = re.sub(rf"(?<![\d.^]){re.escape(f'{its_value:g}')}(?![\d.])", f"<{name}>", form)
     return {"form": form}
 
 
