@@ -156,6 +156,8 @@ def _version(stage: Path) -> str:
     return f"{base}+handout.{digest.hexdigest()[:12]}"
 
 
+# The handout's packages: the grader's own, every one (the instructor's also has the references and the keys).
+HANDOUT_PACKAGES = ("grader", "grader.boundary", "grader.checks", "grader.quiz", "grader.render")
 _PYPROJECT = """[build-system]
 requires = ["setuptools>=61"]
 build-backend = "setuptools.build_meta"
@@ -175,7 +177,7 @@ notebook = ["ipython>=8", "nbformat>=5"]
 grade = "grader.launch:main"
 
 [tool.setuptools]
-packages = ["grader", "grader.checks", "grader.quiz", "grader.render"]
+packages = {packages}
 
 [tool.setuptools.package-data]
 grader = ["data/*.json", "data/expected/*.json", "quizzes/*.yaml", "quizzes/practice/*.yaml"]
@@ -304,7 +306,8 @@ def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: 
         (out / "handout.json").write_text(json.dumps(handout, indent=1) + "\n", encoding="utf-8")
         (stage / "README.md").write_text(f"The handout grader of the course {course.id}.\n", encoding="utf-8")
         (stage / "pyproject.toml").write_text(_PYPROJECT.format(
-            name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES)), encoding="utf-8")
+            name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES),
+            packages=json.dumps(list(HANDOUT_PACKAGES))), encoding="utf-8")
         wheel = _build_wheel(stage, out)
     _copy_exercises(out)
     if notebooks:

@@ -101,3 +101,20 @@ def test_the_launch_decision_is_made_in_one_module():
         if found:
             deciding[path.relative_to(REPO).as_posix()] = found
     assert list(deciding) == ["grader/boundary/door.py"], deciding
+
+
+def test_every_package_of_the_grader_is_installed_and_released():
+    """A package missing from pyproject.toml's list (or the handout's) is missing from the wheel: `grade` fails
+    with an ImportError only where it was installed, never in the project."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        import tomli as tomllib
+
+    from grader import release
+
+    packages = {p.parent.relative_to(REPO).as_posix().replace("/", ".")
+                for p in (REPO / "grader").rglob("__init__.py") if "__pycache__" not in p.parts}
+    listed = set(tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["packages"])
+    assert packages <= listed, sorted(packages - listed)
+    assert packages - {"grader.quizzes", "grader.quizzes.keys"} == set(release.HANDOUT_PACKAGES)
