@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 from enum import Enum
 
-SCHEMA_VERSION = "1.2"
+SCHEMA_VERSION = "1.3"
 
 
 class Status(str, Enum):
@@ -51,8 +51,8 @@ class CheckResult:
             "function": self.function,
             "description": self.description,
             "status": self.status.value,
-            "points": _round(self.points),
-            "max_points": _round(self.max_points),
+            "points": rounded_points(self.points),
+            "max_points": rounded_points(self.max_points),
             "message": self.message,
             "expected": jsonable(self.expected),
             "got": jsonable(self.got),
@@ -87,7 +87,7 @@ class Adjustment:
         return "/" in self.target
 
     def to_dict(self) -> dict:
-        return {"target": self.target, "points": _round(self.points), "reason": self.reason, "kind": self.kind,
+        return {"target": self.target, "points": rounded_points(self.points), "reason": self.reason, "kind": self.kind,
                 "who": self.who, "source": self.source}
 
     def describe(self) -> str:
@@ -114,29 +114,29 @@ class ChapterResult:
         """Points of the checks judged here (of one kind), with the overrides of those checks."""
         checks = sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted)
         overridden = sum(a.points for a in self.adjustments if a.on_check and kind in (None, a.check_kind))
-        return _round(checks + overridden)
+        return rounded_points(checks + overridden)
 
     @property
     def raw_score(self) -> float:
         """Points of the checks as graded, before any override."""
-        return _round(sum(c.points for c in self.checks if c.status.counted))
+        return rounded_points(sum(c.points for c in self.checks if c.status.counted))
 
     def max_score_of(self, kind: str | None = None) -> float:
-        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
+        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
 
     def recorded_score_of(self, kind: str | None = None) -> float:
         """The points of answers recorded here and graded on submission."""
-        return _round(sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted))
+        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted))
 
     @property
     def pending_score(self) -> float:
         """Points not judged here: recorded quiz answers and hidden checks."""
-        return _round(self.recorded_score_of() + self.hidden_points)
+        return rounded_points(self.recorded_score_of() + self.hidden_points)
 
     @property
     def score(self) -> float:
         """The chapter's points: its checks', with every override of them or of the chapter."""
-        return _round(self.score_of() + sum(a.points for a in self.adjustments if not a.on_check))
+        return rounded_points(self.score_of() + sum(a.points for a in self.adjustments if not a.on_check))
 
     @property
     def max_score(self) -> float:
@@ -154,7 +154,7 @@ class ChapterResult:
             "quiz_max_score": self.max_score_of("quiz"),
             "pending_score": self.pending_score,
             "hidden_checks": self.hidden_checks,
-            "hidden_points": _round(self.hidden_points),
+            "hidden_points": rounded_points(self.hidden_points),
             "problems": list(self.problems),
             "source": self.source or None,
             "notes": list(self.notes),
@@ -181,12 +181,12 @@ class Report:
     @property
     def score(self) -> float:
         """Every check's points, with every override and penalty (grade batch applies them)."""
-        return _round(sum(c.score for c in self.chapters) + sum(a.points for a in self.adjustments))
+        return rounded_points(sum(c.score for c in self.chapters) + sum(a.points for a in self.adjustments))
 
     @property
     def raw_score(self) -> float:
         """The points of the checks as graded, before any override or penalty."""
-        return _round(sum(c.raw_score for c in self.chapters))
+        return rounded_points(sum(c.raw_score for c in self.chapters))
 
     def all_adjustments(self) -> list[Adjustment]:
         return [a for ch in self.chapters for a in ch.adjustments] + list(self.adjustments)
@@ -198,12 +198,12 @@ class Report:
 
     @property
     def max_score(self) -> float:
-        return _round(sum(c.max_score for c in self.chapters))
+        return rounded_points(sum(c.max_score for c in self.chapters))
 
     @property
     def pending_score(self) -> float:
         """Points that are graded on submission, not here (hidden checks, recorded quiz answers)."""
-        return _round(sum(c.pending_score for c in self.chapters))
+        return rounded_points(sum(c.pending_score for c in self.chapters))
 
     @property
     def all_passed(self) -> bool:
@@ -261,9 +261,18 @@ class Report:
         }
 
 
-def _round(value: float) -> float:
-    rounded = round(float(value), 6)
+POINTS_DECIMALS = 4  # points are rounded once, here, to this many decimals; every output prints that value
+
+
+def rounded_points(value: float) -> float:
+    """Points as every output has them: rounded once, to POINTS_DECIMALS decimals (an int when whole)."""
+    rounded = round(float(value), POINTS_DECIMALS)
     return int(rounded) if rounded == int(rounded) else rounded
+
+
+def points_text(value: float | None) -> str:
+    """Points as a gradebook cell writes them: the rounded value, every decimal it has ("" for none)."""
+    return "" if value is None else f"{rounded_points(value):.{POINTS_DECIMALS + 8}g}"
 
 
 def jsonable(value: object) -> object:

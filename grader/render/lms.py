@@ -19,7 +19,7 @@ from xml.etree import ElementTree
 from grader import provenance
 from grader.chapters import BY_ID
 from grader.history import Result
-from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.model import ChapterResult, CheckResult, Report, Status, points_text
 from grader.render import plural
 from grader.safe_text import for_csv, for_xml, json_for_terminal
 
@@ -312,8 +312,6 @@ def _csv(rows: Iterable[list[str]]) -> str:
     return buffer.getvalue()
 
 
-def _number(value: float | None) -> str:
-    return "" if value is None else f"{value:g}"
 
 
 def gradebook_header(chapters: list[str]) -> list[str]:
@@ -332,10 +330,10 @@ def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
     row = [for_csv(result.learner)]
     for chapter in chapters:
         scores = result.chapters.get(chapter)
-        row += ["", ""] if scores is None else [_number(scores["code"]), _number(scores["quiz"])]
+        row += ["", ""] if scores is None else [points_text(scores["code"]), points_text(scores["quiz"])]
     adjustments = "; ".join(f"{'late penalty' if a['kind'] == 'late' else 'override'} {a['points']:+g} on "
                             f"{a['target']} ({a['reason']})" for a in result.adjustments)
-    return row + [_number(result.score), _number(result.max_score), result.status,
+    return row + [points_text(result.score), points_text(result.max_score), result.status,
                   for_csv("; ".join([result.message, *result.flags]).strip("; ")), for_csv(adjustments),
                   result.grader or "", for_csv(result.manifest_handout or ""),
                   "" if result.seed is None else str(result.seed)]
@@ -369,24 +367,42 @@ def _column(chapter: str) -> str:
 
 def _score(result: Result, chapter: str) -> str:
     scores = result.chapters.get(chapter)
-    return "" if scores is None else _number(scores["score"])
+    return "" if scores is None else points_text(scores["score"])
 
 
 LMS_LAYOUTS = ("canvas", "moodle")
 CANVAS_ID_COLUMNS = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"]
+# The part of a total no chapter column holds: a late penalty and overrides of the total. With it, the columns
+# of an LMS that adds up its columns give the learner's total, exactly as printed.
+BEYOND_CHAPTERS = "Late penalty and total overrides"
+
+
+def beyond_chapters(result: Result, chapters: list[str]) -> str:
+    """The cell of BEYOND_CHAPTERS: the learner's total less their chapter cells, in decimal as printed (so the
+    printed cells add up to the printed total); "" for a learner not graded."""
+    if result.score is None:
+        return ""
+    from decimal import Decimal
+
+    cells = [Decimal(points_text(result.chapters[c]["score"])) for c in chapters if c in result.chapters]
+    rest = (Decimal(points_text(result.score)) - sum(cells, Decimal(0))).normalize()
+    return format(rest + 0, "f")  # + 0: no "-0"
 
 
 def canvas_gradebook(results: list[Result], chapters: list[str]) -> str:
     """Canvas' gradebook import: the columns Student, ID, SIS User ID, SIS Login ID and Section (the learner
     id in Student and SIS Login ID; Canvas matches a row by ID, SIS User ID or SIS Login ID), one column per
-    chapter ("ch06 <title>", a new assignment on import; overrides included) and a "Points Possible" row as
-    Canvas' own export writes it. A learner not graded has empty cells (Canvas changes nothing there)."""
+    chapter ("ch06 <title>", a new assignment on import; overrides of checks and chapters included), one for
+    what belongs to no chapter (BEYOND_CHAPTERS: a late penalty, overrides of the total; 0 points possible),
+    so that Canvas' sum of a row is the learner's total, and a "Points Possible" row as Canvas' own export
+    writes it. A learner not graded has empty cells (Canvas changes nothing there)."""
     possible = points_possible(results, chapters)
-    rows = [CANVAS_ID_COLUMNS + [_column(c) for c in chapters],
-            ["    Points Possible", "", "", "", ""] + [_number(possible.get(c)) for c in chapters]]
+    rows = [CANVAS_ID_COLUMNS + [_column(c) for c in chapters] + [BEYOND_CHAPTERS],
+            ["    Points Possible", "", "", "", ""] + [points_text(possible.get(c)) for c in chapters] + ["0"]]
     for result in results:
         cell = for_csv(result.learner)
-        rows.append([cell, "", "", cell, ""] + [_score(result, c) for c in chapters])
+        rows.append([cell, "", "", cell, ""] + [_score(result, c) for c in chapters] + [beyond_chapters(result,
+                                                                                                   chapters)])
     return _csv(rows)
 
 
@@ -394,25 +410,26 @@ def moodle_gradebook(results: list[Result], chapters: list[str]) -> str:
     """Moodle's "Import grades from CSV": a column identifying the learner ("Learner id": map it to the user
     field your ids are, ID number, email address or username), one grade column per chapter with the points
     possible in its name ("ch06 <title> (out of 25)": give the grade item that maximum, or map to an
-    existing one), a total (with overrides and penalties) and a feedback column (why a learner is not
-    graded, what was flagged, the adjustments: the learner sees it). A learner not graded has empty grade
-    cells."""
+    existing one), one for what belongs to no chapter (BEYOND_CHAPTERS, out of 0: a late penalty is negative,
+    so give its grade item a negative minimum), so that the columns add up to the total; then the total (with
+    overrides and penalties) and a feedback column (why a learner is not graded, what was flagged, the
+    adjustments: the learner sees it). A learner not graded has empty grade cells."""
     possible = points_possible(results, chapters)
     total = sum(possible.values())
     rows = [["Learner id"] + [f"{_column(c)} (out of {possible.get(c, 0):g})" for c in chapters]
-            + [f"Total (out of {total:g})", "Feedback"]]
+            + [f"{BEYOND_CHAPTERS} (out of 0)", f"Total (out of {total:g})", "Feedback"]]
     for result in results:
         said = [result.message, *result.flags, *(f"{a['points']:+g} on {a['target']}: {a['reason']}"
                                                  for a in result.adjustments)]
         feedback = "; ".join(s for s in said if s)
         feedback = feedback if result.status == "graded" else f"{result.status}: {feedback}"
         rows.append([for_csv(result.learner)] + [_score(result, c) for c in chapters]
-                    + [_number(result.score), for_csv(feedback)])
+                    + [beyond_chapters(result, chapters), points_text(result.score), for_csv(feedback)])
     return _csv(rows)
 
 
 def changes_csv(changes: list[tuple]) -> str:
     """changes.csv: learner, before, after, delta, why: each learner whose score moved since the last run."""
     return _csv([["learner", "before", "after", "delta", "why"]]
-                + [[for_csv(learner), _number(before), _number(after), _number(delta), for_csv(why)]
+                + [[for_csv(learner), points_text(before), points_text(after), points_text(delta), for_csv(why)]
                    for learner, before, after, delta, why in changes])
