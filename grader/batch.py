@@ -109,23 +109,23 @@ def _settle_heap() -> None:
         gc.freeze()
 
 
-def choose_boundary(sandboxed: bool = True, probe: bool = False):
-    """How this batch runs learner code (grader.boundary.choose): bubblewrap required, or off with
-    --no-sandbox; a resident fork server per worker where the system allows. With `probe`, one child
-    interpreter is started first the way the workers will start theirs: InfrastructureError with the reason
-    when it does not start, so that no learner is graded on a broken sandbox."""
+def choose_boundary(sandbox: str = "required", probe: bool = False, secrets: tuple[str, ...] = ()):
+    """How learner code runs here (grader.boundary.choose, `sandbox` one of its modes: "required", bubblewrap,
+    for a batch; "off" with --no-sandbox); a resident fork server per worker where the system allows. With
+    `probe`, one child interpreter is started first the way the workers will start theirs: InfrastructureError
+    with the reason when it does not start, so that no learner is graded on a broken sandbox."""
     from grader import boundary
 
     try:
-        return boundary.choose("required" if sandboxed else "off", resident=True, probe=probe)
+        return boundary.choose(sandbox, resident=True, probe=probe, secrets=secrets)
     except boundary.BoundaryUnavailable as exc:
         raise InfrastructureError(str(exc)) from None
 
 
-def _boundary(sandboxed: bool):
+def _boundary(sandbox: str, secrets: tuple[str, ...] = ()):
     """This worker's boundary (its fork server started on first use), kept for every learner it grades."""
     if "boundary" not in _worker_state:
-        _worker_state["boundary"] = choose_boundary(sandboxed)
+        _worker_state["boundary"] = choose_boundary(sandbox, secrets=secrets)
     return _worker_state["boundary"]
 
 
@@ -137,17 +137,19 @@ def _drop_boundary() -> None:
 
 
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
-                  sandboxed: bool, course: Course | None = None, other_ids: tuple[str, ...] = ()):
-    """One learner's report, as `course` has it (grader.pipeline.build_report); tried a second time, with a new
-    fork server, when the first attempt failed for a reason outside the learner's code (Report.infrastructure,
-    or no process could be started at all: an OSError, raised again if the second attempt meets it too)."""
+                  sandbox: str, course: Course | None = None, other_ids: tuple[str, ...] = (),
+                  secrets: tuple[str, ...] = ()):
+    """One learner's report, as `course` has it (grader.pipeline.build_report), its learner code behind the
+    boundary `sandbox` asks (choose_boundary); tried a second time, with a new fork server, when the first attempt
+    failed for a reason outside the learner's code (Report.infrastructure, or no process could be started at
+    all: an OSError, raised again if the second attempt meets it too)."""
     from grader.boundary import Limits
     from grader.pipeline import Request, build_report
     from grader.submission import Submission
 
     for attempt in (1, 2):
         try:
-            session = _boundary(sandboxed).open_session(Submission(root, "exercises"), Limits(**limits))
+            session = _boundary(sandbox, secrets).open_session(Submission(root, "exercises"), Limits(**limits))
         except OSError:
             if attempt == 2:
                 raise
@@ -210,7 +212,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
     warnings = learner_yaml_warnings(root, learner, entry.origin) + manifest_flags
-    report = _grade_report(root, learner, chapters, seed, plots, limits, sandboxed, course,
+    report = _grade_report(root, learner, chapters, seed, plots, limits, "required" if sandboxed else "off", course,
                            other_ids=(str(manifest.get("learner")),) if manifest else ())
     warnings += report.flags
     warnings += adjusting.apply(report, list(overrides), late, adjusting.parse_time(submitted))
@@ -315,7 +317,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                             + (f"; it holds only what is skipped: {what}" if what else ": it is empty"))
     rows, override_problems = read_overrides(overrides or out / "overrides.csv", [e.learner for e in entries],
                                              chapters)
-    isolation = choose_boundary(sandboxed, probe=True).isolation
+    isolation = choose_boundary("required" if sandboxed else "off", probe=True).isolation
     if announce is not None:
         announce(isolation)
     out.mkdir(parents=True, exist_ok=True)

@@ -270,8 +270,10 @@ def _instructor_course(config: str | None, command: str):
     if course.in_handout():
         raise click.UsageError(f"{command} runs on the instructor's side, with the references; this is a learner's "
                                "handout")
+    from grader.pipeline import instructor_course
+
     try:
-        return course.current(config)
+        return instructor_course(config)
     except course.CourseError as exc:
         raise click.BadParameter(str(exc), param_hint="--course") from None
 
@@ -591,9 +593,11 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                       "learner id (their quiz numbers).")
 @click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
               help="Seconds for one learner's code, all chapters together.")
-@click.option("--sandbox", type=click.Choice(["auto", "required"]), default="auto", show_default=True,
-              help="auto: bubblewrap where it starts on Gradescope's image, else grade without it and say so; "
-                   "required: grade nothing without it.")
+@click.option("--sandbox", type=click.Choice(["auto", "required", "none"]), default="auto", show_default=True,
+              help="auto: bubblewrap where it starts on Gradescope's image, else learner code as an unprivileged user "
+                   "that cannot read the references (the autograder runs as root), else nothing is graded; required: "
+                   "grade nothing without bubblewrap; none: grade without a barrier (learner code can read the "
+                   "references and the course seed).")
 @click.option("--force", is_flag=True, help="Replace OUT if it exists.")
 def gradescope_command(out: str, course_file: str | None, chapter_list: str, learner_field: str,
                        time_budget: float, sandbox: str, force: bool) -> None:

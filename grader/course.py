@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 
@@ -59,6 +59,12 @@ class Course:
     quiz_feedback_by: dict | None = None  # chapter -> "recorded" or "immediate" where it differs from quiz_feedback
     current_handout: str | None = None  # instructor side: the id (version) of the handout learners should have
     late: Late | None = None  # the deadline and the late penalty, where the course has them
+    lines: dict | None = field(default=None, compare=False, hash=False)  # setting -> the line of its file it is on
+
+    def where(self, setting: str) -> str:
+        """Where `setting` is written: "course.yaml, line 7" (the file alone where the line is not known)."""
+        line = (self.lines or {}).get(setting)
+        return f"{self.source}, line {line}" if line else self.source
 
     @property
     def in_handout(self) -> bool:
@@ -190,7 +196,7 @@ def _from_yaml(path: Path) -> Course:
         raise CourseError(f"{where('handout')}: handout is the id of the current handout, as `grade release` prints "
                           "it (e.g. 0.1.0+handout.3f2a9c1b0d4e)")
     return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
-                  exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by,
+                  exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by, lines=lines,
                   current_handout=handout.strip() if handout else None,
                   late=_late(data, where))
 

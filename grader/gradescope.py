@@ -21,19 +21,23 @@ manifest (`grade submit`) says to look at (another handout, edited after packing
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import json
 import os
+import stat
 import sys
 import tempfile
 import time
 import zipfile
 from dataclasses import asdict, dataclass, field
+from datetime import datetime
 from pathlib import Path
 
 SETTINGS_FILE = "autograder.json"
 COURSE_FILE = "course.yaml"
 LEARNER_FIELDS = ("email", "sid", "id", "name")
-SANDBOX_MODES = ("auto", "required")
+SANDBOX_MODES = ("auto", "required", "none")
 PROJECT = Path(__file__).resolve().parent.parent
 
 
@@ -49,7 +53,7 @@ class Settings:
     chapters: list[str]
     learner_field: str = "email"
     time_budget: float = 60.0
-    sandbox: str = "auto"  # "auto": bubblewrap where it starts, else without it (said in the output); "required"
+    sandbox: str = "auto"  # "auto": bubblewrap, else a dropped uid, else not graded; "required": bubblewrap; "none"
     grader: str = ""  # the wheel's file name
     hidden: list[str] = field(default_factory=list)  # for the instructor's eyes; the run reads course.yaml
 
@@ -69,6 +73,7 @@ need=()
 command -v python3 >/dev/null 2>&1 || need+=(python3)
 python3 -c "import ensurepip, venv" >/dev/null 2>&1 || need+=(python3-venv)
 command -v bwrap >/dev/null 2>&1 || need+=(bubblewrap)
+command -v setpriv >/dev/null 2>&1 || need+=(util-linux)
 if [ "${#need[@]}" -gt 0 ]; then
     if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
         export DEBIAN_FRONTEND=noninteractive
@@ -79,6 +84,11 @@ if [ "${#need[@]}" -gt 0 ]; then
     fi
 fi
 python3 -c "import sys; sys.exit(0 if sys.version_info >= (3, 10) else 'setup.sh: the grader needs Python 3.10 or later, this image has ' + sys.version.split()[0])"
+# where bubblewrap cannot start, learner code runs as this unprivileged user, which cannot read the answers
+if [ "$(id -u)" = 0 ] && ! id grader-learner >/dev/null 2>&1; then
+    useradd --system --no-create-home --shell /usr/sbin/nologin grader-learner 2>/dev/null \
+        || echo "setup.sh: could not create the user grader-learner; learner code would run as nobody" >&2
+fi
 python3 -m venv "$SOURCE/venv"
 "$SOURCE/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$SOURCE/{wheel}"
 "$SOURCE/venv/bin/python" -m grader.gradescope check "$(dirname "$SOURCE")"
@@ -148,8 +158,11 @@ def build(out: Path, course, *, chapters: list[str], learner_field: str = "email
         settings = Settings(course=course.id, chapters=list(chapters), learner_field=learner_field,
                             time_budget=float(time_budget), sandbox=sandbox, grader=wheel.name,
                             hidden=sorted(course.hidden))
-        described = ("bubblewrap where it starts on Gradescope's image, else without it (the output says so)"
-                     if sandbox == "auto" else "required: where bubblewrap does not start, nothing is graded")
+        described = {"auto": "bubblewrap where it starts on Gradescope's image, else learner code as an unprivileged "
+                             "user that cannot read the references, keys or course file, else nothing is graded",
+                     "required": "required: where bubblewrap does not start, nothing is graded",
+                     "none": "none: learner code runs without a barrier and can read the references and the course "
+                             "seed"}[sandbox]
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(f".{out.name}.{os.getpid()}.tmp")
         with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as archive:
@@ -180,47 +193,128 @@ def describe(out: Path, settings: Settings) -> str:
 
 # ------------------------------------------------------------------------------------ run
 
+@dataclass
+class Metadata:
+    """What Gradescope's submission_metadata.json says of this submission, as far as it is usable: the learner
+    id (the field chosen at build time), the submission's id, its time and due dates (Gradescope's, which the
+    learner cannot write: they decide the late penalty)."""
+
+    learner: str | None  # None: unusable, and `source` says why
+    source: str  # where the id came from, or why there is none
+    submission_id: str | None = None
+    created: datetime | None = None  # when it was submitted
+    due: datetime | None = None  # the assignment's due date in Gradescope
+    own_due: datetime | None = None  # the submitter's own due date where Gradescope lists one (an extension)
+
+    @classmethod
+    def read(cls, root: Path, learner_field: str) -> Metadata:
+        from grader.overrides import parse_time
+        from grader.staging import id_problem
+
+        path = root / "submission_metadata.json"
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            return cls(None, f"{path.name} cannot be read ({type(exc).__name__})")
+        if not isinstance(data, dict):
+            return cls(None, f"{path.name} is not Gradescope's submission metadata")
+
+        def when(value: object) -> datetime | None:
+            return parse_time(value) if isinstance(value, str) else None
+
+        assignment = data.get("assignment") if isinstance(data.get("assignment"), dict) else {}
+        users = data.get("users")
+        first = users[0] if isinstance(users, list) and users and isinstance(users[0], dict) else {}
+        own = first.get("assignment") if isinstance(first.get("assignment"), dict) else {}
+        found = cls(None, "", str(data["id"]) if isinstance(data.get("id"), (int, str)) else None,
+                    when(data.get("created_at")), when(assignment.get("due_date")), when(own.get("due_date")))
+        value = first.get(learner_field)
+        who = str(value).strip() if value is not None else ""
+        if not first:
+            found.source = f"{path.name} names no submitter"
+        elif not who:
+            found.source = f"{path.name}: the submitter has no {learner_field}"
+        elif id_problem(who):
+            found.source = f"{path.name}: the submitter's {learner_field} {id_problem(who)}"
+        else:
+            group = (f"; a group of {len(users)}: the quiz is graded with the first submitter's numbers"
+                     if len(users) > 1 else "")
+            found.learner, found.source = who, f"the submitter's {learner_field} in {path.name}{group}"
+        return found
+
+    def deadline(self, late) -> object:
+        """The course's late penalty (grader.course.Late) with this submitter's extension: the course's deadline
+        moved by as much as Gradescope moved the submitter's own due date past the assignment's."""
+        if late is None or self.due is None or self.own_due is None or self.own_due <= self.due:
+            return late
+        return dataclasses.replace(late, deadline=late.deadline + (self.own_due - self.due))
+
+
 def learner_from_metadata(root: Path, learner_field: str) -> tuple[str | None, str]:
     """(the learner id from submission_metadata.json, or None; a sentence saying where it came from or why not)."""
-    from grader.staging import id_problem
-
-    path = root / "submission_metadata.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        return None, f"{path.name} cannot be read ({type(exc).__name__})"
-    users = data.get("users") if isinstance(data, dict) else None
-    if not isinstance(users, list) or not users or not isinstance(users[0], dict):
-        return None, f"{path.name} names no submitter"
-    value = users[0].get(learner_field)
-    who = str(value).strip() if value is not None else ""
-    if not who:
-        return None, f"{path.name}: the submitter has no {learner_field}"
-    problem = id_problem(who)
-    if problem:
-        return None, f"{path.name}: the submitter's {learner_field} {problem}"
-    group = f"; a group of {len(users)}: the quiz is graded with the first submitter's numbers" if len(users) > 1 else ""
-    return who, f"the submitter's {learner_field} in {path.name}{group}"
+    metadata = Metadata.read(root, learner_field)
+    return metadata.learner, metadata.source
 
 
-def _sandbox_state(mode: str) -> tuple[bool, str, str]:
-    """(sandboxed, isolation line, reason it is not); with mode "required" and no sandbox the reason is fatal."""
+def submission_seed(course_seed: int, learner: str, submission_id: str | None) -> int:
+    """The seed one Gradescope submission is graded at: drawn from the course seed, the learner and the
+    submission's id, so each attempt has inputs of its own (expected values a learner saw after one attempt
+    say nothing of the next), and a regrade of the same submission draws the same ones."""
+    if submission_id is None:
+        return course_seed
+    digest = hashlib.sha256(f"{course_seed}/{learner}/{submission_id}".encode("utf-8", "surrogatepass")).digest()
+    return int.from_bytes(digest[:4], "big") & 0x7FFFFFFF
+
+
+# What the learner's code must never read, in the Gradescope layout: the course file (its seed), the settings,
+# the instructor's wheel, the references and the keys where the grader is installed, the submission's metadata
+# (it holds the previous submission's results, hidden checks' outputs included).
+def secrets(root: Path) -> list[Path]:
+    import importlib.util
+
+    found = [root / "source" / COURSE_FILE, root / "source" / SETTINGS_FILE, root / "submission_metadata.json",
+             *sorted((root / "source").glob("*.whl"))]
+    for package in ("solutions", "grader.quizzes.keys"):
+        try:
+            spec = importlib.util.find_spec(package)
+        except ImportError:
+            continue
+        if spec is not None and spec.submodule_search_locations:
+            found += [Path(p) for p in spec.submodule_search_locations]
+    return found
+
+
+def root_only(paths: list[Path]) -> None:
+    """Make `paths` (files, or folders with all they hold) readable by root only (this process is root)."""
+    for path in paths:
+        if not path.exists():
+            continue
+        for place in [path] if not path.is_dir() else [path, *path.rglob("*")]:
+            if not place.is_symlink():
+                place.chmod(stat.S_IMODE(place.stat().st_mode) & ~0o077)
+
+
+_DOOR_MODES = {"auto": "barrier", "required": "required", "none": "off"}
+
+
+def _sandbox_state(mode: str, hidden_paths: list[Path] = ()) -> tuple[bool, str, str]:
+    """(whether to grade, the isolation line, why not): "auto" grades behind bubblewrap or, as root where
+    bubblewrap cannot start, as an unprivileged user that cannot read `hidden_paths`, and refuses to grade
+    with neither; "required" only behind bubblewrap; "none" without a barrier, as the instructor chose."""
     from grader import boundary
 
     try:
-        chosen = boundary.choose(mode, probe=True, turned_off="by GRADER_SANDBOX=off")
+        chosen = boundary.choose(_DOOR_MODES.get(mode, "barrier"), probe=True,
+                                 turned_off="by the autograder's settings (grade gradescope --sandbox none)",
+                                 secrets=tuple(str(p) for p in hidden_paths))
     except boundary.BoundaryUnavailable as exc:
-        reason = str(exc)
-    else:
-        if chosen.sandboxed:
-            return True, chosen.isolation, ""
-        reason = chosen.why_not
-    root = hasattr(os, "geteuid") and os.geteuid() == 0
-    line = (f"isolation: no sandbox: bubblewrap cannot run on this image ({' '.join(reason.split())[:300]}); "
-            f"learner code runs as {'root' if root else 'the autograder user'} in this submission's own "
-            "container, with resource limits and a process-tree kill only, and could read what the autograder "
-            "holds (the references and the course config)")
-    return False, line, reason
+        reason = " ".join(str(exc).split())[:600]
+        fix = ("build the autograder with --sandbox auto, to grade as an unprivileged user where bubblewrap does not "
+               "start" if mode == "required" else "use an image where bubblewrap starts (user namespaces) and "
+               "run the autograder as root, or, knowing that learner code can then read the references, build the "
+               "autograder with --sandbox none")
+        return False, f"isolation: no barrier stands here ({reason}); nothing is graded: {fix}", reason
+    return True, chosen.isolation, ""
 
 
 def _stage(root: Path, learner: str, staging: Path) -> Path:
@@ -261,7 +355,7 @@ def _not_graded(reason: str, started: float, heading: list[str], isolation: str)
 def run(root: Path) -> int:
     """Grade root/submission into root/results/results.json (always written). 0 when graded (whatever the
     score) or when the submission holds nothing to grade; 1 when it could not be graded for a reason outside
-    the learner's code (the results say NOT GRADED)."""
+    the learner's code (the results say NOT GRADED, and why, for the instructor)."""
     from grader.safe_text import for_terminal
 
     started = time.monotonic()
@@ -271,42 +365,54 @@ def run(root: Path) -> int:
     try:
         settings = Settings.read(root / "source" / SETTINGS_FILE)
         from grader import batch
-        from grader import course as courses
+        from grader import overrides as adjusting
+        from grader.pipeline import instructor_course
         from grader.render import lms
         from grader.staging import StagingError
 
-        course = courses.current(str(root / "source" / COURSE_FILE))
-        learner, source = learner_from_metadata(root, settings.learner_field)
-        sandboxed, isolation, reason = _sandbox_state(settings.sandbox)
+        course = instructor_course(str(root / "source" / COURSE_FILE))
+        metadata = Metadata.read(root, settings.learner_field)
+        hidden_paths = secrets(root)
+        if hasattr(os, "geteuid") and os.geteuid() == 0:
+            root_only(hidden_paths)  # before any learner code runs: readable by root only
+        grading, isolation, reason = _sandbox_state(settings.sandbox, hidden_paths)
         print(isolation, flush=True)
+        if not grading:
+            _write(results, _not_graded(f"no barrier between learner code and the answers here: {reason}", started,
+                                        heading, isolation))
+            print(f"NOT GRADED: {for_terminal(isolation)}", flush=True)
+            return 1
+        if metadata.learner is None:  # never a silent fallback to an id the upload itself names
+            _write(results, _not_graded(f"no usable learner id: {metadata.source} (the autograder takes the "
+                                        f"submitter's {settings.learner_field}; rebuild it with --learner-id naming "
+                                        "a field every learner has)", started, heading, isolation))
+            print(f"NOT GRADED: no usable learner id: {for_terminal(metadata.source)}", flush=True)
+            return 1
+        learner = metadata.learner
+        seed = submission_seed(course.grading_seed, learner, metadata.submission_id)
         with tempfile.TemporaryDirectory(prefix="gradescope-staging-") as staging:
             os.chmod(staging, 0o755)
             try:
-                staged = _stage(root, learner or "submission", Path(staging))
+                staged = _stage(root, learner, Path(staging))
             except StagingError as exc:
                 message = (f"Your submission could not be graded: {exc}. Submit your chapter files (exercises/chNN_*.py,"
                            " or the files at the top of the upload) and your quiz answers (answers/chNN.yaml).")
                 _write(results, lms.gradescope_not_graded(message, execution_time=time.monotonic() - started))
                 print(for_terminal(message), flush=True)
                 return 0
-            if learner is None:  # no usable id from Gradescope: the submission's own learner.yaml, else anonymous
-                from grader.quiz import learner_id
-
-                learner, said = learner_id(staged / "exercises" / "answers", None)
-                source = f"{source}; taken from {said}"
-            heading = [f"Graded as {learner} ({source}), at the course seed."]
-            if settings.sandbox == "required" and not sandboxed:
-                _write(results, _not_graded(f"the sandbox does not start here: {reason}", started, heading, isolation))
-                print(f"NOT GRADED: the sandbox is required and does not start: {for_terminal(reason)}", flush=True)
-                return 1
+            attempt = ("at a seed of this submission's own, drawn from the course seed" if seed != course.grading_seed
+                       else "at the course seed")
+            heading = [f"Graded as {learner} ({metadata.source}), {attempt}."]
             from grader import submit
 
             manifest, packed = submit.check(staged / "exercises", learner, course.id, course.current_handout)
             warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
             try:
-                report = batch._grade_report(staged, learner, list(settings.chapters), course.grading_seed, False,
-                                             {"learner_seconds": settings.time_budget}, sandboxed, course,
-                                             other_ids=(str(manifest.get("learner")),) if manifest else ())
+                report = batch._grade_report(staged, learner, list(settings.chapters), seed, False,
+                                             {"learner_seconds": settings.time_budget},
+                                             _DOOR_MODES.get(settings.sandbox, "barrier"), course,
+                                             other_ids=(str(manifest.get("learner")),) if manifest else (),
+                                             secrets=tuple(str(p) for p in hidden_paths))
             finally:
                 batch._drop_boundary()
             warnings += report.flags
@@ -314,8 +420,12 @@ def run(root: Path) -> int:
             _write(results, _not_graded(report.infrastructure, started, heading, isolation))
             print(f"NOT GRADED: {for_terminal(report.infrastructure)}", flush=True)
             return 1
+        late = metadata.deadline(course.late)
+        warnings += adjusting.apply(report, [], late, metadata.created)
+        warnings += _late_notes(course.late, late, metadata)
         _write(results, lms.gradescope(report, hidden=course.hidden, execution_time=time.monotonic() - started,
-                                       heading=heading, notes=warnings, isolation=isolation))
+                                       heading=heading, notes=warnings, isolation=isolation,
+                                       submission=metadata.submission_id))
         print(for_terminal(f"{heading[0]} Score {report.score:g}/{report.max_score:g}."), flush=True)
         for line in lms.summary_lines(report) + warnings:
             print(for_terminal(line), flush=True)
@@ -331,6 +441,18 @@ def run(root: Path) -> int:
         return 1
 
 
+def _late_notes(course_late, late, metadata: Metadata) -> list[str]:
+    """What the output says of the late penalty: the extension applied, or why no penalty could be."""
+    if course_late is None:
+        return []
+    if metadata.created is None:
+        return ["No late penalty applied: Gradescope's metadata gives no submission time (created_at)."]
+    if late is not course_late:
+        return [f"Deadline {late.deadline.isoformat()} for this submitter: the course's, moved by the extension "
+                "Gradescope lists for them."]
+    return []
+
+
 def check(root: Path) -> int:
     """At image build time: say whether learner code can run in the sandbox here (never fails the build)."""
     try:
@@ -338,11 +460,14 @@ def check(root: Path) -> int:
     except (OSError, ValueError, TypeError) as exc:
         print(f"grader.gradescope check: {SETTINGS_FILE} cannot be read: {exc}", file=sys.stderr)
         return 1
-    sandboxed, isolation, _ = _sandbox_state(settings.sandbox)
+    hidden_paths = secrets(root)
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        root_only(hidden_paths)
+    grading, isolation, _ = _sandbox_state(settings.sandbox, hidden_paths)
     print(isolation)
-    if not sandboxed and settings.sandbox == "required":
-        print("WARNING: this autograder requires the sandbox and it does not start on this image: no submission "
-              "will be graded (every run says NOT GRADED). Build the zip with --sandbox auto to grade without it.")
+    if not grading:
+        print("WARNING: no barrier between learner code and the answers stands on this image: no submission will be "
+              "graded (every run says NOT GRADED, and why).")
     return 0
 
 

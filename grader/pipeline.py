@@ -35,6 +35,25 @@ class Request:
     other_ids: tuple[str, ...] = ()  # ids whose quiz numbers a learner may have used by mistake (e.g. a manifest's)
 
 
+def instructor_course(config: str | None = None) -> courses.Course:
+    """The course every command that grades on the instructor's side reads (batch, Gradescope, release): the
+    course file (grader.course.current), its hidden check ids checked against the checks there are.
+    CourseError, with the file and line, for an id that names no check (and the one it may mean)."""
+    import difflib
+
+    from grader import checks as check_registry
+    from grader.chapters import BY_ID
+
+    course = courses.current(config)
+    known = [f"{chapter}/{c.id}" for chapter in BY_ID for c in check_registry.load(chapter).checks]
+    unknown = [f"{name}{f': did you mean {close[0]}?' if (close := difflib.get_close_matches(name, known, n=1)) else ''}"
+               for name in sorted(course.hidden) if name not in known]
+    if unknown:
+        raise courses.CourseError(f"{course.where('hidden')}: hidden names checks that do not exist: "
+                                  f"{'; '.join(unknown)} (`grade list --checks` shows the ids)")
+    return course
+
+
 def hidden_ids(course: courses.Course, chapters: tuple[str, ...]) -> frozenset[str]:
     """The "chNN/check_id" of checks this grader must not run: in a handout, those it does not have."""
     if not course.in_handout:

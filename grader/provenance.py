@@ -93,8 +93,8 @@ def stamp(report, the_course=None, learner_id: str | None = None) -> None:
 
 def footer(report, learner_sees: bool = False) -> str:
     """The one line every text output ends with: what graded this, at which seed, for whom. Where the
-    learner sees it (`learner_sees`: Gradescope's output), a course seed is named, not shown: it is the
-    instructor's secret."""
+    learner sees it (`learner_sees`: Gradescope's output), a seed other than the public one is not shown: it is
+    the instructor's secret, or drawn from it."""
     from grader.course import PUBLIC_SEED
 
     parts = [f"grader {report.grader or 'unknown'}", f"handout {report.handout or 'none'}"]
@@ -102,7 +102,7 @@ def footer(report, learner_sees: bool = False) -> str:
         parts.append(f"course {report.course}")
     seed = "none" if report.seed is None else report.seed
     if learner_sees and report.seed not in (None, PUBLIC_SEED):
-        seed = "the course seed"
+        seed = "not shown (the course's, or drawn from it)"
     parts.append(f"seed {seed}")
     parts.append(f"learner {report.learner_id or 'not set'}")
     return "Graded by " + ", ".join(parts) + "."

@@ -77,7 +77,7 @@ def test_each_contract_fails_when_its_import_is_planted(tree, contract):
 
 
 # What decides how learner code starts: making a launcher or a sandbox, and the environment overrides.
-_LAUNCH_CALLS = {"ForkServer", "start_child", "Sandbox"}
+_LAUNCH_CALLS = {"ForkServer", "start_child", "Sandbox", "DroppedUser"}
 _LAUNCH_VARIABLES = {"GRADER_SANDBOX", "GRADER_FORK_SERVER", "GRADER_LAUNCHER"}
 
 

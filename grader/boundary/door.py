@@ -6,8 +6,9 @@ resident process kept between sessions), `choose` picks
 - the launcher: a resident fork server (grader.boundary.forkserver; where forking is safe and the caller keeps
   the Boundary between sessions), a fresh interpreter per session with process groups and passed descriptors
   (grader.boundary.spawn, POSIX), or the portable one (Windows: request over stdin, a job object);
-- the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts, else none, and the
-  isolation line that says which, and why.
+- the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts; where it does not and the
+  grader is root, a dropped uid (grader.boundary.dropped: learner code as an unprivileged user that cannot read
+  the references, keys or course file), proved by a probe; else none, and the isolation line says which, and why.
 Environment overrides, for tests and benchmarks: GRADER_SANDBOX=off (no sandbox), GRADER_FORK_SERVER=off (a
 fresh interpreter per session even where a fork server would serve), GRADER_LAUNCHER=fork-server|spawn|portable
 (force one launcher).
@@ -23,7 +24,9 @@ from grader.boundary.session import ChildHandle, Limits, Session
 from grader.boundary.spawn import start_child
 from grader.system import fork_is_safe, process_groups
 
-SANDBOX_MODES = ("auto", "required", "off")
+# required: bubblewrap or nothing; barrier: bubblewrap, else a dropped uid, else nothing; auto: the best there is,
+# none included (the isolation line says so); off: none
+SANDBOX_MODES = ("auto", "barrier", "required", "off")
 
 
 class Launch(enum.Enum):
@@ -118,12 +121,14 @@ def _no_bubblewrap(portable: bool) -> str:
 
 
 def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
-           turned_off: str = "with --no-sandbox") -> Boundary:
+           turned_off: str = "with --no-sandbox", secrets: tuple[str, ...] = ()) -> Boundary:
     """How learner code runs here. `sandbox`: "required" (BoundaryUnavailable where bubblewrap cannot run
-    learner code), "auto" (bubblewrap where it starts, else none, and the isolation line says why) or "off";
-    `resident`: the caller keeps the Boundary for many sessions (a fork server where forking is safe);
-    `probe`: start one interpreter the way sessions will before saying yes (BoundaryUnavailable if none starts
-    at all); `turned_off`: how "off" was asked, for the isolation line."""
+    learner code), "barrier" (bubblewrap, else, as root, learner code as an unprivileged user that cannot read
+    `secrets`; BoundaryUnavailable where neither holds), "auto" (bubblewrap where it starts, else none, and
+    the isolation line says why) or "off"; `resident`: the caller keeps the Boundary for many sessions (a fork
+    server where forking is safe); `probe`: start one interpreter the way sessions will before saying yes
+    (BoundaryUnavailable if none starts at all; for "barrier" it must also fail to read every path of
+    `secrets`); `turned_off`: how "off" was asked, for the isolation line."""
     if sandbox not in SANDBOX_MODES:
         raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
     forced = os.environ.get("GRADER_LAUNCHER", "")
@@ -144,17 +149,37 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
         from grader.boundary.sandbox import Sandbox
 
         chosen = Boundary(launch, Sandbox(bwrap, shutil.which("setpriv")))
-    if probe:
+    if probe or sandbox == "barrier":  # a barrier is proved, by every process that relies on it
         from grader.boundary.sandbox import probe as try_one
 
-        reason = try_one(chosen.sandbox)
-        if reason is not None and chosen.sandbox is not None and sandbox == "auto":
+        reason = try_one(chosen.sandbox, secrets=secrets)
+        if reason is not None and chosen.sandbox is not None and sandbox in ("auto", "barrier"):
             chosen = Boundary(launch, None, probe_failure=" ".join(reason.split())[:300])
         elif reason is not None:
             raise BoundaryUnavailable(reason)
-    if sandbox == "required" and chosen.sandbox is None:
+    if sandbox == "barrier" and chosen.sandbox is None:
+        chosen = _dropped_user(launch, chosen, secrets)
+    if sandbox in ("required", "barrier") and chosen.sandbox is None:
         raise BoundaryUnavailable(chosen.why_not)
     return chosen
+
+
+def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -> Boundary:
+    """Learner code as an unprivileged user, where this process is root and the probe shows that user starts an
+    interpreter and reads none of `secrets`; else `without`, its reason extended."""
+    from grader.boundary import dropped
+    from grader.boundary.sandbox import probe as try_one
+
+    setpriv = dropped.possible()
+    if setpriv is None:
+        return Boundary(launch, None, probe_failure=f"{without.why_not}; and the grader does not run as root (with "
+                                                    "setpriv) to run learner code as an unprivileged user")
+    user = dropped.DroppedUser(setpriv)
+    reason = try_one(user, secrets=secrets)
+    if reason is not None:
+        return Boundary(launch, None, probe_failure=f"{without.why_not}; and as the unprivileged user {user.name}: "
+                                                    f"{' '.join(reason.split())[:300]}")
+    return Boundary(launch, user)
 
 
 def open_session(submission, limits: Limits = Limits(), sandbox: str = "auto") -> Session:

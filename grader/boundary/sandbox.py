@@ -303,23 +303,31 @@ def user_namespaces() -> bool:
             and read("/proc/sys/kernel/apparmor_restrict_unprivileged_userns", "0") == "0")
 
 
-def probe(sandbox: Sandbox | None, seconds: float = 30.0) -> str | None:
-    """None when a child interpreter starts in `sandbox` and imports numpy and the child side; else why
-    not, in one paragraph (an infrastructure failure: no learner should be graded then)."""
+def probe(wrap, seconds: float = 30.0, secrets: tuple[str, ...] = ()) -> str | None:
+    """None when a child interpreter started as sessions start theirs (wrapped by `wrap`: a Sandbox, a
+    grader.boundary.dropped.DroppedUser, or None) imports numpy and the child's side and can read none of
+    `secrets` (the references, keys and course file); else why not, in one paragraph (then no learner is
+    graded that way)."""
     import subprocess
 
     from grader.boundary.spawn import INTERPRETER
 
-    command = [sys.executable, *INTERPRETER, "-c",
-               f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.boundary.child; print('ready')"]
-    if sandbox is not None:
-        command = sandbox(command)
+    code = (f"import sys; sys.path[:] = {child_path()!r}; import numpy, grader.boundary.child, os\n"
+            f"for path in {list(secrets)!r}:\n"
+            "    try:\n        os.listdir(path) if os.path.isdir(path) else open(path, 'rb').close()\n"
+            "        print('readable:', path)\n    except OSError:\n        pass\nprint('ready')")
+    command = [sys.executable, *INTERPRETER, "-c", code]
+    if wrap is not None:
+        command = wrap(command)
     try:
         done = subprocess.run(command, capture_output=True, text=True, encoding="utf-8", errors="replace", timeout=seconds,
                               stdin=subprocess.DEVNULL)
     except (OSError, subprocess.TimeoutExpired) as exc:
         return f"the sandboxed interpreter did not start: {exc}"
-    if done.returncode == 0 and done.stdout.strip() == "ready":
-        return None
+    lines = done.stdout.split("\n")
+    readable = [line.split(": ", 1)[1] for line in lines if line.startswith("readable: ")]
+    if done.returncode == 0 and "ready" in lines:
+        return None if not readable else (f"learner code could read {', '.join(readable[:3])}: those must be readable "
+                                          "by root only")
     said = " ".join((done.stderr or done.stdout).split())[-600:]
     return f"the sandboxed interpreter did not start (exit status {done.returncode}): {said or 'no message'}"

@@ -281,6 +281,8 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
         return PortableChild(process, capture, scratch, root, _job_for(process, memory_bytes))
     sandboxed = bool(getattr(wrap, "available", False))  # then the child has a /tmp of its own
     scratch, root = _scratch(sandboxed)
+    if not sandboxed and hasattr(wrap, "give"):  # a child under another uid writes into its host folder
+        wrap.give(scratch)
     read_fd, write_fd = os.pipe()
     capture_fd = capture_file()
     command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]

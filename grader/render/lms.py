@@ -94,14 +94,17 @@ def summary_lines(report: Report) -> list[str]:
 
 
 def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_time: float | None = None,
-                    heading: Iterable[str] = (), notes: Iterable[str] = (), isolation: str = "") -> dict:
+                    heading: Iterable[str] = (), notes: Iterable[str] = (), isolation: str = "",
+                    submission: str | None = None) -> dict:
     """Gradescope's results.json as data (its autograder specification): score, execution_time, output and
     output_format, stdout_visibility, and one test per check with name, number, score, max_score, status
     ("passed"/"failed"; an error or skipped check is "failed", told apart by its output, its tags and
     extra_data.status), output, tags (chapter, kind, function, status) and visibility: checks the course
     hides (`hidden`, "ch06/H_rows_orthogonal") are "after_published", all others "visible". Chapter-level
     messages (a file that does not import) are tests of 0 points. `heading` and `notes` go before and after
-    the score lines of the top-level output."""
+    the score lines of the top-level output. No seed is in it (a course seed is the instructor's secret): its
+    `extra_data.submission` is the Gradescope submission whose id, with the course seed and the learner, the seed
+    was drawn from (grader.gradescope.submission_seed), so a regrade draws it again."""
     tests = []
     for chapter_index, chapter in enumerate(report.chapters):
         number = int(chapter.chapter[2:]) if chapter.chapter[2:].isdigit() else chapter_index
@@ -131,7 +134,8 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     data = {"score": report.score, "output": "\n".join(output), "output_format": "simple_format",
             "test_output_format": "text", "stdout_visibility": "hidden",
             "extra_data": {"max_score": report.max_score, "learner": report.learner,
-                           "provenance": report.provenance(), "raw_score": report.raw_score,
+                           "provenance": {k: v for k, v in report.provenance().items() if k != "seed"},
+                           "submission": submission, "raw_score": report.raw_score,
                            "adjustments": [a.to_dict() for a in report.all_adjustments()]}, "tests": tests}
     if execution_time is not None:
         data["execution_time"] = round(max(0.0, execution_time), 2)
