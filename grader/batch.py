@@ -203,7 +203,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
         return learner, "unreadable", f"{entry.source.name}: {exc}"
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
-    submitted = entry.submitted or submit.packed_time(manifest) or ""
+    submitted, timing = submission_time(entry, manifest, course)
     late = course.late if course else None
     settings = json.dumps([[o.key() for o in overrides], repr(late), submitted, handout, course_id], default=str)
     digest = content_hash(root, chapters, seed, settings)
@@ -211,7 +211,7 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     if _previous_hash(folder) == digest:
         return learner, "unchanged", "already graded, files unchanged"
     folder.mkdir(parents=True, exist_ok=True)
-    warnings = learner_yaml_warnings(root, learner, entry.origin) + manifest_flags
+    warnings = learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing
     report = _grade_report(root, learner, chapters, seed, plots, limits, "required" if sandboxed else "off", course,
                            other_ids=(str(manifest.get("learner")),) if manifest else ())
     warnings += report.flags
@@ -220,7 +220,8 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     data = report.to_dict()
     data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
                      "warnings": warnings, "files_hash": submit.files_hash(root / "exercises"),
-                     "submitted": submitted or None, "manifest": _manifest_summary(manifest)}
+                     "submitted": submitted or None, "time_from": _time_source(entry, submitted),
+                     "manifest": _manifest_summary(manifest)}
     if report.infrastructure:
         for name in ("results.json", "report.html"):
             (folder / name).unlink(missing_ok=True)
@@ -240,6 +241,38 @@ def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: boo
     problems = sum(bool(c.problems) for c in report.chapters)
     with_problems = f", {plural(problems, 'chapter')} with problems" if problems else ""
     return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
+
+
+def submission_time(entry: Entry, manifest: dict | None, course: Course | None) -> tuple[str, list[str]]:
+    """(the submission time that decides a late penalty, ISO 8601 or "", and what to flag about it). Trusted:
+    the roster's `submitted` column (the LMS's time). The time in the archive's manifest is written on the
+    learner's own machine: it is used only where the course accepts it (`manifest_time: accept`), and never
+    silently. An unparsable time is no time, and said."""
+    from grader import overrides as adjusting
+    from grader import submit
+
+    flags = []
+    if entry.submitted:
+        if adjusting.parse_time(entry.submitted) is not None:
+            return entry.submitted, flags
+        flags.append(f"the roster's submission time {entry.submitted!r} ({entry.origin}) is not a time (ISO 8601, "
+                     "e.g. 2026-05-01T23:59:00+02:00)")
+    packed = submit.packed_time(manifest)
+    if not course or not course.late:
+        return "", flags
+    if packed and course.accepts_manifest_time and adjusting.parse_time(packed) is not None:
+        return packed, flags + [f"submission time {packed} from the learner's own archive manifest (the course accepts "
+                                "it: manifest_time: accept); the roster gives none"]
+    said = (f"its archive's manifest says {packed!r}, written on the learner's own machine and not accepted "
+            "(manifest_time: accept in the course file would)" if packed else "no time at all")
+    return "", flags + [f"no trusted submission time (no `submitted` in the roster): {said}; no late penalty applied"]
+
+
+def _time_source(entry: Entry, submitted: str) -> str | None:
+    """Where the submission time that was used came from: "roster", "manifest", or None (none used)."""
+    if not submitted:
+        return None
+    return "roster" if submitted == entry.submitted else "manifest"
 
 
 def _manifest_summary(manifest: dict | None) -> dict | None:
@@ -388,9 +421,35 @@ def read_overrides(path: Path, learners: list[str], chapters: list[str]) -> tupl
                                                                           check_registry.load(chapter).checks}:
             problems.append(f"{row.source}: {row.target} is not a check of {chapter} (`grade list --checks` shows "
                             "the ids; a quiz question is quiz_<its id>); row not applied")
+        elif row.points is not None and abs(row.points) > _most_points(row, chapters):
+            problems.append(f"{row.source}: {row.points:g} points is more than {row.target} can move "
+                            f"(at most {_most_points(row, chapters):g}); row not applied")
         else:
             usable.append(row)
     return usable, problems
+
+
+def _most_points(row, chapters: list[str]) -> float:
+    """The most points an override of `row.target` can add or take: its check's, its chapter's code (the quiz's
+    questions are not known here: an override of a chapter may also move its quiz, so its quiz's too, at most the
+    whole course), or the whole batch's."""
+    from grader import checks as check_registry
+    from grader.quiz import bank
+
+    def quiz(chapter: str) -> float:
+        try:
+            return sum(q.points for q in bank.questions(chapter))
+        except (OSError, ValueError):
+            return 0.0
+
+    if row.level == "check":
+        chapter, check_id = row.target.split("/", 1)
+        if check_id.startswith("quiz_"):
+            return next((q.points for q in bank.questions(chapter) if f"quiz_{q.id}" == check_id), 0.0)
+        return next(c.points for c in check_registry.load(chapter).checks if c.id == check_id)
+    if row.level == "chapter":
+        return check_registry.load(row.target).max_score + quiz(row.target)
+    return sum(check_registry.load(c).max_score + quiz(c) for c in chapters)
 
 
 def _learner_state(out: Path, learner: str, status: str, message: str):
@@ -515,7 +574,7 @@ class ClassOutputs:
         extra = {"seconds": batch.get("seconds") or 0.0, "output": batch.get("learner_output", ""),
                  "manifest": batch.get("manifest"), "submitted": batch.get("submitted")}
         self.graded.append(learner)
-        if not extra["submitted"]:
+        if batch.get("time_from") != "roster":  # no time, or only the learner's own (their manifest's)
             self.untimed.append(learner)
         self.tally.add(learner, report, extra)
         self.junit.add(learner, report, extra)
@@ -543,9 +602,9 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
     notes = _keep_hand_edits(out, history, run)
     untimed = collected.untimed
     if deadline and untimed:
-        notes.append(f"no submission time for {len(untimed)} of {len(graded)} graded (no `submitted` column in the "
-                     f"roster for them, no grade submit manifest): no late penalty applied to {', '.join(untimed[:20])}"
-                     + (" ..." if len(untimed) > 20 else ""))
+        notes.append(f"no trusted submission time for {len(untimed)} of {len(graded)} graded (no `submitted` in the "
+                     "roster for them; a time only from their own archive's manifest counts only with "
+                     f"manifest_time: accept): {', '.join(untimed[:20])}" + (" ..." if len(untimed) > 20 else ""))
     digest = hashlib.sha256()
 
     def gradebook(handle) -> None:
@@ -566,10 +625,14 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
     if similarity:
         from grader import similarity as similarities
 
-        similar = similarities.rank(out / STAGING, graded)
+        try:
+            similar, left_out = similarities.rank(out / STAGING, graded)
+        except Exception as exc:  # noqa: BLE001  a ranking for a person to look at never costs the class outputs
+            similar, left_out = [], [f"--similarity could not rank this class ({type(exc).__name__}: {exc})"]
+        notes += left_out
     view = summary.Summary(collected.tally, collected.not_graded, isolation,
                            [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
-                           similar)
+                           similar, untimed=list(untimed) if deadline else [])
     write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
     write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
     return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}

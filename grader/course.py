@@ -59,6 +59,9 @@ class Course:
     quiz_feedback_by: dict | None = None  # chapter -> "recorded" or "immediate" where it differs from quiz_feedback
     current_handout: str | None = None  # instructor side: the id (version) of the handout learners should have
     late: Late | None = None  # the deadline and the late penalty, where the course has them
+    # whether a submission time in the learner's own archive manifest may decide a late penalty where the roster
+    # gives none (`manifest_time: accept`; by default it may not: the learner's machine wrote it)
+    accepts_manifest_time: bool = False
     lines: dict | None = field(default=None, compare=False, hash=False)  # setting -> the line of its file it is on
 
     def where(self, setting: str) -> str:
@@ -136,7 +139,8 @@ def _from_handout(path: Path) -> Course:
         raise CourseError(f"{path}: the handout's course data cannot be read ({exc}); reinstall the handout") from None
 
 
-_FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives", "handout", "deadline", "late_penalty"}
+_FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives", "handout", "deadline", "late_penalty",
+           "manifest_time"}
 
 
 def _key_lines(text: str) -> dict[str, int]:
@@ -191,12 +195,18 @@ def _from_yaml(path: Path) -> Course:
     if seed == PUBLIC_SEED:
         raise CourseError(f"{where('seed')}: the course seed equals the public seed {PUBLIC_SEED}; hard-coded public "
                           "values would pass")
+    manifest_time = data.get("manifest_time", "ignore")
+    if manifest_time not in ("accept", "ignore"):
+        raise CourseError(f"{where('manifest_time')}: manifest_time is accept or ignore (whether the time in a learner's "
+                          f"own archive manifest may decide a late penalty where the roster gives none), not "
+                          f"{manifest_time!r}")
     handout = data.get("handout")
     if handout is not None and (not isinstance(handout, str) or not handout.strip()):
         raise CourseError(f"{where('handout')}: handout is the id of the current handout, as `grade release` prints "
                           "it (e.g. 0.1.0+handout.3f2a9c1b0d4e)")
     return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
                   exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by, lines=lines,
+                  accepts_manifest_time=manifest_time == "accept",
                   current_handout=handout.strip() if handout else None,
                   late=_late(data, where))
 

@@ -20,6 +20,7 @@ stays until its row is removed, and grade batch's history (gradebook.db) keeps e
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
@@ -69,6 +70,13 @@ def read(path: Path) -> tuple[list[Override], list[str]]:
             factor_value = float(factor) if factor else None
         except ValueError:
             problems.append(f"{where}: points and factor are numbers (got {points!r}, {factor!r}); row not applied")
+            continue
+        if any(v is not None and not math.isfinite(v) for v in (points_value, factor_value)):
+            problems.append(f"{where}: points and factor are finite numbers (got {points!r}, {factor!r}); row not applied")
+            continue
+        if factor_value is not None and (factor_value < 0 or (target == "late" and factor_value > 1)):
+            problems.append(f"{where}: a factor is 0 or more ({'at most 1 for the late penalty; ' if target == 'late' else ''}"
+                            f"got {factor!r}); row not applied")
             continue
         if (points_value is None) == (factor_value is None):
             problems.append(f"{where}: give points or a factor, one of them; row not applied")

@@ -65,7 +65,7 @@ def _functions(source: str) -> dict[str, str]:
     """Each top-level function's source, by name (a file that does not parse: nothing)."""
     try:
         tree = ast.parse(source)
-    except (SyntaxError, ValueError):
+    except (SyntaxError, ValueError, RecursionError, MemoryError):  # a file nested too deep is just not split
         return {}
     lines = source.splitlines()
     return {node.name: "\n".join(lines[node.lineno - 1:node.end_lineno]) for node in tree.body
@@ -125,8 +125,25 @@ def _shared_lines(fingerprint, slices, limit: int = 3) -> list[str]:
     return blocks
 
 
-def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int = TOP) -> list[Pair]:
-    """The `top` pairs of `learners` whose staged code (staging/<folder>/exercises/chNN_*.py) is most alike."""
+def _sources(package: Path) -> dict[str, str]:
+    """A learner's chapters as code, by module: each chNN_*.py, and each notebook without a .py of its name by
+    its code cells in order (what is graded of it). A notebook that cannot be read gives nothing."""
+    from grader.notebook import NotebookError, code_cells
+
+    found = {path.stem: path.read_text(encoding="utf-8", errors="replace") for path in sorted(package.glob("ch0*.py"))}
+    for path in sorted(package.glob("ch0*.ipynb")):
+        if path.stem not in found:
+            try:
+                found[path.stem] = "\n\n".join(source for _, source in code_cells(path.read_bytes()))
+            except (NotebookError, OSError):
+                continue
+    return found
+
+
+def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int = TOP) -> tuple[list[Pair], list[str]]:
+    """The `top` pairs of `learners` whose staged code (staging/<folder>/exercises/chNN_*.py, or the code cells
+    of a chapter kept as a notebook) is most alike, and a sentence for each file that could not be compared (a
+    hostile one: too deeply nested, too large to tokenize), which is left out, the others compared."""
     from grader.staging import folder_name
 
     _, compare_files = _engine()
@@ -139,14 +156,19 @@ def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int
             stubs = None
     fingerprint = _fingerprinter(_stub_hashes(stubs))
     prints: dict[str, dict[str, object]] = {}  # learner -> "chNN_module.function" (and "chNN_module" whole) -> fp
+    left_out: list[str] = []
     for learner in learners:
         package = staging / folder_name(learner) / "exercises"
         mine: dict[str, object] = {}
-        for path in sorted(package.glob("ch0*.py")):
-            source = path.read_text(encoding="utf-8", errors="replace")
-            mine[path.stem] = fingerprint(source)
-            for name, text in _functions(source).items():
-                mine[f"{path.stem}.{name}"] = fingerprint(text)
+        for module, source in _sources(package).items():
+            try:
+                parts = {module: fingerprint(source), **{f"{module}.{name}": fingerprint(text)
+                                                          for name, text in _functions(source).items()}}
+            except (RecursionError, MemoryError, ValueError, IndexError) as exc:
+                left_out.append(f"--similarity left out {learner}'s {module} (it could not be compared: "
+                                f"{type(exc).__name__})")
+                continue
+            mine.update(parts)
         prints[learner] = mine
     holders: Counter = Counter()
     for mine in prints.values():
@@ -182,4 +204,4 @@ def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int
         for part in pair.functions[:3]:
             _, _, (slices, _) = compare_files(prints[pair.first][part], prints[pair.second][part])
             pair.shared += _shared_lines(prints[pair.first][part], slices, limit=1)
-    return pairs[:top]
+    return pairs[:top], left_out

@@ -53,6 +53,7 @@ class Summary:
     flagged: dict[str, list[str]] = field(default_factory=dict)
     changes: list[tuple] = field(default_factory=list)  # (learner, before, after, delta, why)
     notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
+    untimed: list[str] = field(default_factory=list)  # graded with a deadline but no trusted submission time
     similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
 
     @functools.cached_property
@@ -212,6 +213,7 @@ def _json_data(view: Summary) -> dict:
         "changes": [{"learner": c[0], "before": c[1], "after": c[2], "delta": c[3], "why": c[4]} for c in view.changes],
         "similar": [pair.to_dict() for pair in view.similar],
         "notes": list(view.notes),
+        "untimed": list(view.untimed),
         "isolation": view.isolation,
     }
     return for_json(data)
