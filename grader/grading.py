@@ -199,6 +199,8 @@ def import_problem(error: dict, module_file: str) -> str:
     if exception == "NotebookError":
         return error.get("message", "")
     line = f", line {error['line']}" if error.get("line") else ""
+    if error.get("file") and Path(error["file"]) != Path(module_file):  # in an earlier chapter's file it imports
+        module_file = f"{Path(error['file'])} (imported by {module_file})"
     if error.get("where"):  # a notebook: "exercises/ch06_measurement.ipynb, cell 4, line 2"
         module_file, line = error["where"], ""
     if exception == "SyntaxError" or exception == "IndentationError":

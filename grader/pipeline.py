@@ -135,6 +135,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
         for chapter in report.chapters:
             chapter.checks.extend(judged[chapter.chapter].checks)
             chapter.problems.extend(judged[chapter.chapter].problems)
+            chapter.notes.extend(judged[chapter.chapter].notes)
     from grader import provenance
 
     provenance.stamp(report, course, learner_id)

@@ -146,3 +146,25 @@ def clean_report(report, clean: Callable[[str], str]):
     """A copy of a grader.model.Report with `clean` applied to every string in it (messages, problems,
     what learner code printed, quiz answers as written, the learner's id ...)."""
     return clean_value(report, clean)
+
+
+def decode_saved_text(data: bytes) -> tuple[str, str]:
+    """A learner's saved text file as text, and what encoding it was in where that was not plain UTF-8 ("" for
+    UTF-8): UTF-8 with a byte-order mark, and UTF-16 (Windows Notepad's "Unicode", with its byte-order mark, or
+    without one where every other byte is a NUL) are read as such. Bytes that are none of these become U+FFFD."""
+    import codecs
+
+    if data.startswith(codecs.BOM_UTF8):
+        return data[len(codecs.BOM_UTF8):].decode("utf-8", "replace"), "UTF-8 with a byte-order mark"
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return data.decode("utf-16", "replace"), "UTF-16 (Windows Notepad's \"Unicode\")"
+    if len(data) >= 4 and data.count(0) * 3 >= len(data):  # UTF-16 without its mark: a NUL beside each ASCII byte
+        little = data[1::2].count(0) >= data[0::2].count(0)
+        return data.decode("utf-16-le" if little else "utf-16-be", "replace"), "UTF-16 (without a byte-order mark)"
+    return data.decode("utf-8", "replace"), ""
+
+
+def encoding_note(shown: str, encoding: str) -> str:
+    """The sentence a learner reads about a file saved in `encoding` instead of UTF-8."""
+    return (f"{shown} is saved as {encoding}: it was read as such; save it as UTF-8 (in Notepad: Save as, Encoding: "
+            "UTF-8) so that every tool reads it")

@@ -82,6 +82,14 @@ class Submission(NamedTuple):
                     prepared.sources[relative] = source
             prepared.graded[module] = notebook.KERNEL
             prepared.problems.pop(module, None)
+        from grader.safe_text import decode_saved_text, encoding_note
+
+        for relative, data in list(texts.items()):
+            if relative.endswith(".py") and relative not in prepared.sources:
+                text, encoding = decode_saved_text(data)
+                if encoding:  # Python reads UTF-8 (a byte-order mark it skips; UTF-16 not at all)
+                    texts[relative] = text.encode("utf-8")
+                    prepared.notes.setdefault(Path(relative).stem, []).append(encoding_note(relative, encoding))
         for relative, data in texts.items():
             total += len(data)
             if total > MAX_FILES_BYTES:

@@ -36,8 +36,9 @@ from grader.boundary.wire import (
 )
 
 
-def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None]:
-    """The traceback trimmed to frames in the submission's files, and the innermost such line."""
+def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None, str | None]:
+    """The traceback trimmed to frames in the submission's files, and the innermost such line and its file
+    (relative to the submission: an error in an earlier chapter's file, imported by this one, is there)."""
     import traceback
 
     frames = [f for f in traceback.extract_tb(exc.__traceback__) if f.filename.startswith(root)]
@@ -48,7 +49,9 @@ def _learner_frames(exc: BaseException, root: str) -> tuple[str, int | None]:
         if frame.line:
             lines.append(f"    {frame.line}")
     text = "\n".join(lines + [f"{type(exc).__name__}: {_safe_str(exc)}"])
-    return text, (frames[-1].lineno if frames else None)
+    if not frames:
+        return text, None, None
+    return text, frames[-1].lineno, os.path.relpath(frames[-1].filename, root).replace(os.sep, "/")
 
 
 def _safe_str(exc: BaseException) -> str:
@@ -62,7 +65,7 @@ _MEMORY_LIMIT: list[int] = []  # the cap on memory written set by _apply_limits,
 
 
 def describe_exception(exc: BaseException, root: str) -> dict:
-    text, line = _learner_frames(exc, root)
+    text, line, file = _learner_frames(exc, root)
     message = _safe_str(exc)
     if isinstance(exc, MemoryError) and _MEMORY_LIMIT:
         message = f"ran out of memory: the limit is {_MEMORY_LIMIT[0] / (1 << 30):g} GiB" + (f" ({message})" if message else "")
@@ -73,14 +76,15 @@ def describe_exception(exc: BaseException, root: str) -> dict:
         "message": message,
         "traceback": text,
         "line": line,
+        "file": file,
     }
 
 
 def _syntax_error(exc: SyntaxError, root: str) -> dict:
-    shown = os.path.relpath(exc.filename, root) if exc.filename else "?"
-    text = f'  File "{shown}", line {exc.lineno}\n    {(exc.text or "").rstrip()}\nSyntaxError: {exc.msg}'
+    shown = os.path.relpath(exc.filename, root).replace(os.sep, "/") if exc.filename else None
+    text = f'  File "{shown or "?"}", line {exc.lineno}\n    {(exc.text or "").rstrip()}\nSyntaxError: {exc.msg}'
     return {"exception": type(exc).__name__, "not_implemented": False, "message": exc.msg or "",
-            "traceback": text, "line": exc.lineno}
+            "traceback": text, "line": exc.lineno, "file": shown}
 
 
 class _Catalogue:

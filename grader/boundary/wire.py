@@ -376,6 +376,7 @@ def clean_error(value: object) -> dict:
     bases = value.get("bases")
     return {"exception": text("exception", 200), "message": text("message", 2000), "traceback": text("traceback"),
             "line": line if isinstance(line, int) and not isinstance(line, bool) else None,
+            "file": text("file", 500) or None,  # the submission's file the innermost line is in
             "not_implemented": value.get("not_implemented") is True,
             "bases": [b for b in bases if isinstance(b, str)][:8] if isinstance(bases, list) else []}
 

@@ -19,6 +19,7 @@ from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
 from grader.quiz.answers import LOADER, MAX_BYTES, TOO_LARGE, read
 from grader.quiz.symbolic import AnswerError
+from grader.safe_text import decode_saved_text
 
 DEFAULT_LEARNER = "anonymous"
 _LEARNER_ID = re.compile(r"^[\w.@+-]{1,100}$")
@@ -37,7 +38,7 @@ def _configured_learner(config: Path) -> tuple[str | None, str]:
     if config.stat().st_size > MAX_BYTES:
         return None, f"{config.name} is too large"
     try:
-        node = yaml.compose(config.read_bytes().decode("utf-8", errors="replace"), Loader=LOADER)
+        node = yaml.compose(decode_saved_text(config.read_bytes())[0], Loader=LOADER)
     except (yaml.YAMLError, RecursionError) as exc:
         mark = getattr(exc, "problem_mark", None)
         return None, f"{config.name} is not valid YAML{f' (line {mark.line + 1})' if mark else ''}"
@@ -84,7 +85,7 @@ def _time_is_up(deadline: float | None) -> bool:
 
 def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: str,
                quiz_dir: Path | None = None, deadline: float | None = None,
-               only: frozenset[str] | None = None) -> tuple[list[CheckResult], list[str]]:
+               only: frozenset[str] | None = None, notes: list[str] | None = None) -> tuple[list[CheckResult], list[str]]:
     """The quiz results of one chapter, and chapter-level problems (file, line, question).
 
     A question whose key is here is judged. One whose key is not (no keys file, not in it, or
@@ -101,6 +102,8 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     shown = f"{shown_folder}/{chapter}.yaml"
     answers = read(answers_folder / f"{chapter}.yaml", shown)
     problems = list(answers.problems)
+    if notes is not None:  # what costs nothing, e.g. the file's encoding (not UTF-8, read all the same)
+        notes.extend(answers.notes)
     known = {q.id for q in questions}
     for qid, answer in answers.answers.items():
         if qid not in known:
@@ -178,7 +181,8 @@ def add_quiz_results(report: Report, root: Path, package: str, learner: str | No
     report.learner = f"{who} (from {source})"
     for chapter in report.chapters:
         try:
-            results, problems = grade_quiz(chapter.chapter, folder, who, f"{package}/answers", deadline=deadline)
+            results, problems = grade_quiz(chapter.chapter, folder, who, f"{package}/answers", deadline=deadline,
+                                           notes=chapter.notes)
         except bank.BankError as exc:
             chapter.problems.append(f"quiz not graded: {exc}")
             continue

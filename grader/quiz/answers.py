@@ -16,6 +16,8 @@ from pathlib import Path
 
 import yaml
 
+from grader.safe_text import decode_saved_text, encoding_note
+
 # libyaml's composer recurses in C and crashes the process on deeply nested input, while the pure-Python
 # one stops with a RecursionError. So libyaml (15 times faster) composes only a text that cannot nest
 # deeper than C_DEPTH_BOUND: every level of nesting needs one of NESTING's characters or a line. Any
@@ -28,6 +30,7 @@ MAX_BYTES = 64_000
 MAX_DEPTH = 3  # an answer, a list, a list of lists (a matrix)
 MAX_ITEMS = 100
 _ENTRY = re.compile(r"^([A-Za-z_][\w-]*)\s*:")
+_START = re.compile(r"^([A-Za-z_][\w-]*)")  # an entry's first line: a question id, with its ':' or without
 MAX_INT_BITS = 1000  # about 301 decimal digits: the integers a float can hold, with room to spare
 TOO_LARGE = "the number is too large"
 
@@ -44,6 +47,7 @@ class AnswerFile:
     answers: dict[str, Answer]
     problems: list[str]  # about the file as a whole, naming the file and line
     unreadable: dict[str, str] = field(default_factory=dict)  # question id -> why (file, line, question)
+    notes: list[str] = field(default_factory=list)  # what the learner should know that costs nothing (its encoding)
 
 
 def _shape_problem(node: yaml.Node) -> str | None:
@@ -156,7 +160,9 @@ def read(path: Path, shown: str) -> AnswerFile:
     if size > MAX_BYTES:
         out.problems.append(f"{shown} is {size} bytes; answer files are read up to {MAX_BYTES} bytes")
         return out
-    text = path.read_bytes().decode("utf-8", errors="replace")
+    text, encoding = decode_saved_text(path.read_bytes())
+    if encoding:
+        out.notes.append(encoding_note(shown, encoding))
     try:
         node = compose(text)
         if node is not None:
@@ -164,23 +170,33 @@ def read(path: Path, shown: str) -> AnswerFile:
         return out
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
-        where = f"line {mark.line + 1}" if mark else "somewhere"
-        out.problems.append(f"{shown}, {where}: not valid YAML ({exc.problem}); the other answers are still graded")
+        whole = f"{shown}, line {mark.line + 1}: not valid YAML ({exc.problem})" if mark else f"{shown}: not valid YAML"
     except (yaml.YAMLError, RecursionError):
-        out.problems.append(f"{shown}: not valid YAML; the other answers are still graded")
+        whole = f"{shown}: not valid YAML"
     out.answers.clear()
     out.unreadable.clear()
+    # Read entry by entry: an entry starts with a question id at the start of a line, with its ':' or without
+    # (a missing colon costs that answer alone, said at its own line, not the answer above it).
     lines = text.splitlines()
-    starts = [i for i, line in enumerate(lines) if _ENTRY.match(line)] + [len(lines)]
+    starts = [i for i, line in enumerate(lines) if _START.match(line)] + [len(lines)]
     for begin, end in pairwise(starts):
         block = "\n".join(lines[begin:end])
+        key = _START.match(lines[begin]).group(1)
+        if not _ENTRY.match(lines[begin]):
+            rest = lines[begin][len(key):].strip()
+            out.unreadable[key] = (f"{shown}, line {begin + 1}, question {key}: no ':' after the question id; write "
+                                   f"`{key}: {rest}`" if rest else f"{shown}, line {begin + 1}: {key!r} without ':' "
+                                   "and an answer")
+            out.answers.pop(key, None)
+            continue
         try:
             node = compose(block)
         except (yaml.YAMLError, RecursionError):
-            key = _ENTRY.match(lines[begin]).group(1)
             out.unreadable[key] = f"{shown}, line {begin + 1}, question {key}: {_why_not_yaml(lines[begin], key)}"
             out.answers.pop(key, None)
             continue
         if node is not None:
             _entries_of_node(node, begin, block, shown, out)
+    if not out.unreadable:  # no entry of its own is wrong: say what the whole file's reading said
+        out.problems.append(f"{whole}; the answers were read one by one")
     return out
