@@ -95,7 +95,14 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
     judged fails with file, line and why; one not judged by `deadline` (time.monotonic()) is SKIP
     with OUT_OF_TIME; one that sympy could not decide in time fails with judge.UNDECIDED. `only` (question
     ids) grades those questions alone."""
-    from grader.quiz.judge import answer_terms, fmt_value, judge, read_answer, right_answer, shown_key
+    from grader.quiz.judge import (
+        answer_terms,
+        fmt_value,
+        judge,
+        read_answer,
+        right_answer,
+        shown_key,
+    )
 
     questions = bank.questions(chapter, quiz_dir)
     keys = bank.keys(chapter, quiz_dir) or {}
