@@ -87,6 +87,10 @@ class Server:
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=options["learner"],
                                                quiz=not options["no_quiz"] and not functions,
                                                plots=html or options["html_path"] is not None, functions=functions))
+        for chapter in report.chapters:
+            note = _unsaved(submission, chapter.chapter)
+            if note:
+                chapter.notes.append(note)
         if options["html_path"] is not None:
             from grader.render import figure_cache
             from grader.render import html as page
@@ -140,6 +144,50 @@ class Server:
             return submission
         history = tuple((str(label), str(code)) for label, code in cells)
         return submission._replace(kernel=tuple((BY_ID[c].module, history) for c in from_kernel))
+
+
+def _definitions(code: str) -> dict[str, str]:
+    """Each top-level function `code` defines, the last definition of a name winning, as its syntax tree's dump
+    (so that spacing and comments do not count)."""
+    import ast
+
+    try:
+        tree = ast.parse(code)
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return {}
+    return {node.name: ast.dump(node) for node in tree.body if isinstance(node, (ast.FunctionDef,
+                                                                               ast.AsyncFunctionDef))}
+
+
+def _unsaved(submission, chapter: str) -> str:
+    """Where `chapter` was graded from the cells the kernel ran and its saved file exists: a note naming the
+    functions whose code there differs from the kernel's (`grade chNN` and `grade submit` grade the saved file),
+    else ""."""
+    from grader.chapters import BY_ID
+    from grader.notebook import NotebookError, code_cells
+
+    module = BY_ID[chapter].module
+    cells = dict(submission.kernel).get(module)
+    saved = submission.chapter_file(module)
+    if cells is None or not saved.is_file():
+        return ""
+    kernel: dict[str, str] = {}
+    for _, code in cells:
+        kernel.update(_definitions(code))
+    try:
+        data = saved.read_bytes()
+        text = ("\n\n".join(source for _, source in code_cells(data)) if saved.suffix == ".ipynb"
+                else data.decode("utf-8", "replace"))
+    except (OSError, NotebookError):
+        return ""
+    on_disk = _definitions(text)
+    differ = sorted(name for name in _functions(chapter) if kernel.get(name) != on_disk.get(name)
+                    and name in kernel)
+    if not differ:
+        return ""
+    return (f"graded the code this notebook's kernel ran; the saved {saved.name} has other code for "
+            f"{', '.join(differ)}: `grade {chapter}` and `grade submit` grade the saved file, so save the notebook "
+            "before you submit")
 
 
 def cli_submission(options: dict):
