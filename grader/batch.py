@@ -632,7 +632,7 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
         notes += left_out
     view = summary.Summary(collected.tally, collected.not_graded, isolation,
                            [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
-                           similar, untimed=list(untimed) if deadline else [])
+                           similar=similar, untimed=list(untimed) if deadline else [])
     write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
     write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
     return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}

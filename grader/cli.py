@@ -438,6 +438,7 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
     from grader.quiz import answers_dir, learner_id
     from grader.render import text
     from grader.safe_text import for_terminal
+    from grader.staging import id_problem
 
     submission = find_submission(submission_dir, False)
     answers = answers_dir(submission.root, submission.package)
@@ -460,10 +461,11 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
                                    "quiz was graded with the numbers of 'anonymous'. Put `learner: your-id` in it "
                                    "(as your course lists you), run `grade quiz chNN --show` to see your own numbers, "
                                    "and submit again (or pass --learner your-id)")
-        chosen = click.prompt("Your learner id, as your course lists you (your quiz numbers are drawn from it)").strip()
-    if not submit.LEARNER_ID.match(chosen):
-        raise click.BadParameter(f"{chosen!r}: a learner id is letters, digits and . _ @ + - (at most 100)",
-                                 param_hint="--learner")
+        chosen = click.prompt("Your learner id, as your course lists you (your quiz numbers are drawn from it)",
+                              value_proc=_learner_id_typed)
+    problem = id_problem(chosen)
+    if problem:  # the one rule for ids, as grade batch and learner.yaml have it
+        raise click.BadParameter(f"the learner id {chosen!r} {problem}", param_hint="--learner")
     if chosen != in_file:
         submit.write_learner_yaml(answers, chosen)
         click.echo(f"Wrote `learner: {chosen}` into {submission.package}/answers/learner.yaml.")
@@ -482,6 +484,17 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
                                                                local["pending_score"] - local["hidden_points"]))
     click.echo(f"Wrote {out} ({len(manifest['files'])} files, manifest {submit.MANIFEST}; handout "
                f"{manifest['handout'] or 'none'}). Hand in this file, as it is.")
+
+
+def _learner_id_typed(typed: str) -> str:
+    """A learner id typed at grade submit's prompt, or the reason it is not one (click asks again)."""
+    from grader.staging import id_problem
+
+    chosen = typed.strip()
+    problem = id_problem(chosen)
+    if problem:
+        raise click.UsageError(f"the learner id {chosen!r} {problem}; type it as your course lists you")
+    return chosen
 
 
 @main.command("batch")

@@ -175,6 +175,7 @@ class Report:
     handout: str | None = None  # the handout's id (its version): the one grading here, or the course's current one
     course: str | None = None  # the course id
     learner_id: str | None = None  # the plain learner id whose quiz numbers were graded
+    learner_unset: bool = False  # no id was given: the quiz was graded with the default id's numbers
     adjustments: list[Adjustment] = field(default_factory=list)  # overrides of the total and late penalties
     flags: list[str] = field(default_factory=list)  # for the instructor's eyes (grade batch keeps them in report.json)
 

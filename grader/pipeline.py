@@ -129,7 +129,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     if request.quiz:
         quiz = quizzes.pop() if quizzes else quiz_report(session, request, course, list(request.chapters))
         learner_id = quiz.learner_id
-        report.learner = quiz.learner
+        report.learner, report.learner_unset = quiz.learner, quiz.learner_unset
         report.flags += quiz.flags
         judged = {c.chapter: c for c in quiz.chapters}
         for chapter in report.chapters:

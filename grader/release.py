@@ -216,12 +216,14 @@ quiz answer files (`exercises/answers/`) and the grader ({wheel}).
 
 ```sh
 python3 -m venv .venv && . .venv/bin/activate      # Windows: .venv\\Scripts\\activate
-pip install {wheel}
+pip install "{wheel}{{extra}}"
 ```
 
 ## Work and grade
 
-Fill in a function in `exercises/chNN_*.py` (each stub says what it computes), then, in this folder:
+{work}
+
+In a terminal, in this folder:
 
 | command | what it does |
 |---|---|
@@ -251,7 +253,7 @@ This handout holds no reference solution and no quiz key: it grades from recorde
 grade submit
 ```
 
-packs your `exercises/` into `<your id>.zip`, the archive your course grades: every `chNN_*.py` and
+packs your `exercises/` into `<your id>.zip`, the archive your course grades: every chapter file (`chNN_*.py`, or `.ipynb`) and
 the files in `exercises/answers/`, and a manifest (this handout's version, a hash of each file, your
 score at home, the time). It will not pack without your learner id (it asks for one on a terminal),
 and it grades the packed archive again, so the score it prints is that of what you hand in. Hand in
@@ -259,7 +261,22 @@ that file as it is: a file changed after packing is noticed.
 """
 
 
-def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict) -> None:
+SCRIPT_WORK = "Fill in a function in `exercises/chNN_*.py` (each stub says what it computes), then grade it."
+NOTEBOOK_WORK = """Each chapter is a Jupyter notebook, `exercises/chNN_*.ipynb` (Jupyter, JupyterLab, VS Code or Colab): its
+text says what each function computes, a cell per function holds the stub to fill in. Its first cell installs
+this grader where it is missing (`pip install "{wheel}[notebook]"` by hand does the same) and loads `%grade`;
+run the chapter's cells, then its last cell:
+
+```python
+%grade ch06             # also %grade all, %grade ch06 H_jacobian, and the options below (--no-quiz, -v, ...)
+```
+
+The report shows in the notebook. `%grade` grades the code the kernel ran where the notebook defines the
+chapter's functions; `grade ch06` in a terminal and `grade submit` grade the saved notebook, so save it before
+you submit (`%grade` says so when the two differ)."""
+
+
+def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict, notebooks: bool = False) -> None:
     checks = sum(h["checks"] for h in hidden.values())
     points = sum(h["points"] for h in hidden.values())
     hidden_text = (f", plus {checks} hidden check{'s' * (checks != 1)} worth {points:g} points" if checks else "")
@@ -269,7 +286,9 @@ def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict) 
             f"{recorded}, but those of {', '.join(practice)}: practice, graded here where the question is the same "
             "for everyone and never counted" if len(practice) < len(CHAPTERS) else
             "practice: graded here where the question is the same for everyone, and never counted")
-    text = LEARNER_README.format(wheel=wheel.name, hidden=hidden_text, quiz=quiz)
+    work = NOTEBOOK_WORK if notebooks else SCRIPT_WORK
+    text = LEARNER_README.format(wheel=wheel.name, hidden=hidden_text, quiz=quiz,
+                                 work=work.format(wheel=wheel.name)).replace("{extra}", "[notebook]" if notebooks else "")
     (out / "README.md").write_text(text, encoding="utf-8")
 
 
@@ -306,7 +325,7 @@ def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: 
     _copy_exercises(out)
     if notebooks:
         write_notebooks(out / "exercises", pip_source or f"../{wheel.name}")
-    _write_readme(out, wheel, course, hidden)
+    _write_readme(out, wheel, course, hidden, notebooks)
     leaks = scan(out)
     if leaks:
         raise ReleaseError("the handout would hold answers; nothing should be handed out:\n  " + "\n  ".join(leaks[:20]))

@@ -33,7 +33,6 @@ from pathlib import Path
 from grader.staging import MANIFEST
 
 FORMAT = 1
-LEARNER_ID = re.compile(r"^[\w.@+-]{1,100}$")  # as learner.yaml takes it (grader.quiz)
 
 
 class SubmitError(RuntimeError):

@@ -9,7 +9,6 @@ code runs here: answers are data, read from YAML and parsed behind a whitelist (
 
 from __future__ import annotations
 
-import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,9 +19,9 @@ from grader.quiz import bank
 from grader.quiz.answers import LOADER, MAX_BYTES, TOO_LARGE, read
 from grader.quiz.symbolic import AnswerError
 from grader.safe_text import decode_saved_text
+from grader.staging import id_problem
 
 DEFAULT_LEARNER = "anonymous"
-_LEARNER_ID = re.compile(r"^[\w.@+-]{1,100}$")
 
 
 def answers_dir(root: Path, package: str) -> Path:
@@ -51,8 +50,9 @@ def _configured_learner(config: Path) -> tuple[str | None, str]:
             who = value.value.strip()
             if not who:
                 return None, ""
-            if not _LEARNER_ID.match(who):
-                return None, f"{config.name}: a learner id is letters, digits and . _ @ + - (at most 100)"
+            problem = id_problem(who)
+            if problem:
+                return None, f"{config.name}: the learner id {who!r} {problem}"
             return who, ""
     return None, ""
 
@@ -186,6 +186,7 @@ def add_quiz_results(report: Report, root: Path, package: str, learner: str | No
     folder = answers_dir(root, package)
     who, source = learner_id(folder, learner, package)
     report.learner = f"{who} (from {source})"
+    report.learner_id, report.learner_unset = who, source.startswith("default")
     for chapter in report.chapters:
         try:
             results, problems = grade_quiz(chapter.chapter, folder, who, f"{package}/answers", deadline=deadline,

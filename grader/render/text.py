@@ -124,6 +124,10 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
     out: list[str] = start_here(report)
     if report.learner and any(c.kind == "quiz" for ch in report.chapters for c in ch.checks):
         out.append(f"Quiz answers graded for learner {report.learner}.")
+        if report.learner_unset:
+            out.append(f"Your quiz numbers and option letters are those of {report.learner_id!r} until you put "
+                       "`learner: your-id` (as your course lists you) in exercises/answers/learner.yaml: do that before "
+                       "you work on the quiz, and see your own with `grade quiz chNN --show`.")
     for chapter in report.chapters:
         title = f"{chapter.chapter}  {chapter.title}"
         out.append(click.style(title, bold=True) if colour else title)
