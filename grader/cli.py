@@ -31,6 +31,10 @@ class _DefaultToRun(click.Group):
     def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
         if args and args[0] not in self.commands and args[0] not in ("--help", "-h", "--version"):
             if not args[0].startswith("-") and not _is_chapter(args[0]):
+                chapter = _chapter_of_file(args[0])
+                if chapter is not None:
+                    raise click.UsageError(f"{args[0]!r} is a chapter's file; grade it by its chapter: `grade {chapter}` "
+                                           "(`grade list` shows the chapters)", ctx)
                 import difflib
 
                 close = difflib.get_close_matches(args[0].lower(), [c for c in self.commands if c != "run"], n=1,
@@ -40,6 +44,15 @@ class _DefaultToRun(click.Group):
                                            "(`grade --help` lists the commands, `grade list` the chapters)", ctx)
             args = ["run", *args]
         return super().parse_args(ctx, args)
+
+
+def _chapter_of_file(name: str) -> str | None:
+    """The chapter whose file `name` names (exercises/ch06_measurement.py, ch06_measurement.ipynb, ch06_measurement),
+    or None."""
+    stem = name.replace("\\", "/").rsplit("/", 1)[-1]
+    for suffix in (".py", ".ipynb"):
+        stem = stem.removesuffix(suffix)
+    return next((c.id for c in CHAPTERS if c.module == stem), None)
 
 
 def _is_chapter(name: str) -> bool:
@@ -158,7 +171,19 @@ def chapter_and_submission_options(command):
     return command
 
 
-@main.command("run")
+class _RunContext(click.Context):
+    """`grade ch06` runs the `run` command without its name: usage lines say `grade`, as the learner typed it."""
+
+    @property
+    def command_path(self) -> str:
+        return self.parent.command_path if self.parent is not None else super().command_path
+
+
+class _RunCommand(click.Command):
+    context_class = _RunContext
+
+
+@main.command("run", cls=_RunCommand)
 @chapter_and_submission_options
 @click.option("--seed", type=int, default=None,
               help="Seed for the random test inputs (default: the public seed; a handout grades only at it).")
@@ -214,6 +239,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.render import figure_cache, html
 
         write_atomically(html_path, html.render(report, figure_cache.default()))
+        click.echo(f"Wrote the HTML report: {os.path.abspath(html_path)}", err=True)
     _emit(report, output_format, verbose, session.isolation)
 
 
@@ -336,7 +362,7 @@ def list_command(show_checks: bool) -> None:
     from grader import checks, course
     from grader.pipeline import hidden_ids, switched_off
 
-    the_course = course.current() if course.in_handout() else course.Course()
+    the_course = course.here()
     for info in CHAPTERS:
         chapter = checks.load(info.id)
         hidden, off = hidden_ids(the_course, (info.id,)), switched_off(the_course, (info.id,))
@@ -377,7 +403,7 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
     from grader.pipeline import practice
     from grader.quiz import answers_dir, learner_id
 
-    the_course = course.current() if course.in_handout() else course.Course()
+    the_course = course.here()
     for chapter in report.chapters:
         if the_course.practice(chapter.chapter):
             practice(chapter)
@@ -409,6 +435,8 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
     the_course = _instructor_course(course_file, "grade release")
     try:
         built = release.build(Path(out), the_course, force=force, notebooks=notebooks, pip_source=pip_source)
+    except release.OutNotEmpty as exc:
+        raise click.BadParameter(str(exc), param_hint="OUT") from None
     except release.ReleaseError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(release.describe(built))
@@ -577,10 +605,17 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     for learner, message in sorted(result["messages"].items()):
         if result["statuses"][learner] in ("error", "unreadable"):
             click.echo(f"  {for_terminal(learner, one_line=True)}: {for_terminal(message, one_line=True)}", err=True)
+    still_flagged = 0
     for learner, warnings in sorted(result["flagged"].items()):
+        if result["statuses"].get(learner) != "graded":  # unchanged since a run that listed its flags
+            still_flagged += 1
+            continue
         for warning in warnings:
             click.echo(f"  flagged {for_terminal(learner, one_line=True)}: {for_terminal(warning, one_line=True)}",
                        err=True)
+    if still_flagged:
+        click.echo(f"  {plural(still_flagged, 'learner')} not graded again this run still flagged (as listed before; "
+                   f"all in {Path(out_dir) / 'summary.html'})", err=True)
     for entry in result["skipped"]:
         click.echo(f"  skipped {for_terminal(entry.name, one_line=True)}: {for_terminal(entry.reason, one_line=True)}",
                    err=True)

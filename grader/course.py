@@ -115,6 +115,16 @@ def current(config: str | None = None) -> Course:
     return _from_yaml(path)
 
 
+def here() -> Course:
+    """The course the commands that grade one submission report for (`grade chNN`, `grade quiz`, `grade list`,
+    `grade submit`): a handout's own; on the instructor's side the course file beside the references (its id,
+    its quiz feedback and exact derivatives), or the defaults where there is none or it cannot be read."""
+    try:
+        return current()
+    except CourseError:
+        return Course(source="defaults")
+
+
 def _project_config() -> Path | None:
     import importlib.util
 

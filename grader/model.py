@@ -64,6 +64,15 @@ class CheckResult:
         }
 
 
+def not_written(checks: list[CheckResult]) -> dict[str, list[CheckResult]]:
+    """Among `checks`, the functions every check of which failed only because the function is not written yet
+    (it raises NotImplementedError), with their checks: shown as one line each."""
+    by_function: dict[str, list[CheckResult]] = {}
+    for check in checks:
+        by_function.setdefault(check.function, []).append(check)
+    return {f: cs for f, cs in by_function.items() if all(c.details.get("not_implemented") for c in cs)}
+
+
 @dataclass
 class Adjustment:
     """A change of points made after grading: an instructor's override (overrides.csv) or a late penalty.

@@ -98,7 +98,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     has it (default: a handout's own course; on the instructor's side every check runs)."""
     from grader.grading import grade
 
-    course = course or (courses.current() if courses.in_handout() else courses.Course())
+    course = course or courses.here()
     others, notes = other_functions(request)
     hidden = hidden_ids(course, request.chapters)
     if request.functions:

@@ -37,6 +37,10 @@ class ReleaseError(RuntimeError):
     """The release cannot be built, or would hold an answer; the message says which and where."""
 
 
+class OutNotEmpty(ReleaseError):
+    """The folder asked for is not empty (a usage error: choose another, or --force)."""
+
+
 @dataclass
 class Release:
     folder: Path
@@ -299,7 +303,7 @@ def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: 
     `pip_source` (default: the wheel beside exercises/)."""
     if out.exists() and any(out.iterdir()):
         if not force:
-            raise ReleaseError(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
+            raise OutNotEmpty(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
         shutil.rmtree(out)
     out.mkdir(parents=True, exist_ok=True)
     hidden = hidden_summary(course)

@@ -129,7 +129,7 @@ def pack(folder: Path, learner: str, out: Path, chapters: tuple[str, ...] = ("al
         except StagingError as exc:
             raise SubmitError(f"the archive cannot be read back: {exc}") from None
         local = _grade_fresh(regraded, learner, chapters, timeout)
-        the_course = courses.current() if courses.in_handout() else _project_course()
+        the_course = courses.here()
         manifest = {"format": FORMAT, "course": the_course.id if the_course else None,
                     "handout": provenance.handout_id(the_course) if the_course and the_course.in_handout else None,
                     "handout_released": (the_course.handout or {}).get("released") if the_course else None,
@@ -141,15 +141,6 @@ def pack(folder: Path, learner: str, out: Path, chapters: tuple[str, ...] = ("al
         _write_zip(final, package, files, manifest)
         final.replace(out)
     return manifest
-
-
-def _project_course():
-    from grader import course as courses
-
-    try:
-        return courses.current()
-    except courses.CourseError:
-        return courses.Course()
 
 
 def _write_zip(path: Path, package: Path, files: dict[str, str], manifest: dict | None) -> None:

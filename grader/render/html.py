@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from grader.model import CheckResult, Report
+from grader.model import CheckResult, Report, not_written
+from grader.render import plural
 from grader.render.figures import Figure
 
 if TYPE_CHECKING:
@@ -95,18 +96,20 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 {% if ch.source and (ch.source.endswith(".ipynb") or ch.source.startswith("the code")) %}<p class="note">graded: {{ ch.source }}</p>{% endif %}
 {% for note in ch.notes %}<p class="note">note: {{ note }}</p>{% endfor %}
 {% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
-{% if ch.hidden_checks %}<p class="note">{{ ch.hidden_checks }} hidden check(s) ({{ num(ch.hidden_points) }} points) run when you submit.</p>{% endif %}
+{% if ch.hidden_checks %}<p class="note">{{ plural(ch.hidden_checks, "hidden check") }} ({{ plural(ch.hidden_points, "point") }}) run{{ "s" if ch.hidden_checks == 1 }} when you submit.</p>{% endif %}
 {% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
 <figcaption>{{ fig.caption }}{% if fig.gave %}<span class="gave">{{ fig.gave }}</span>{% endif %}</figcaption></figure>{% endfor %}
 {% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
 {% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
-{% for c in checks %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
+{% set folded = not_written(checks) if kind == "code" else {} %}
+{% for c in checks %}{% if c.function in folded %}{% if c is sameas folded[c.function][0] %}<div class="check fail"><span class="status"><span aria-hidden="true">{{ marks["fail"] }} </span>fail</span>{{ c.function }}: not implemented yet ({{ folded[c.function] | length }} check{{ "s" if folded[c.function] | length != 1 }})
+<span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
 <span class="points">{% if c.practice %}practice, not counted{% else %}{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span>{% endif %}</span>
 <span class="note"> &middot; {{ ch.chapter }}/{{ c.id }}</span>
 {% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
 {% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
 {% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
-</div>{% endfor %}{% endif %}{% endfor %}
+</div>{% endif %}{% endfor %}{% endif %}{% endfor %}
 </section>{% endfor %}
 </{{ root }}>"""
 
@@ -213,7 +216,8 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
         figures[chapter.chapter] = its_figures
         if kept is not None:
             kept.store(chapter.chapter, chapter.plots, [vars(figure) for figure in its_figures])
-    return template.render(report=report, figures=figures, num=_num, values=_values,
+    return template.render(report=report, figures=figures, num=_num, values=_values, not_written=not_written,
+                           plural=plural,
                            verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
                            kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report),
                            adjustments=report.all_adjustments())

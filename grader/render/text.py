@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from grader import provenance, safe_text
-from grader.model import CheckResult, Report, Status
+from grader.model import CheckResult, Report, Status, not_written
 from grader.render import plural
 
 _MARKS = {Status.PASS: ("✓", "PASS"), Status.FAIL: ("✗", "FAIL"), Status.ERROR: ("!", "ERR "),
@@ -43,14 +43,6 @@ def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose:
     return lines
 
 
-def _untouched(checks: list[CheckResult]) -> dict[str, list[CheckResult]]:
-    """Functions every check of which failed only because the function is not written yet."""
-    by_function: dict[str, list[CheckResult]] = {}
-    for check in checks:
-        by_function.setdefault(check.function, []).append(check)
-    return {f: cs for f, cs in by_function.items() if all(c.details.get("not_implemented") for c in cs)}
-
-
 def _folded_line(function: str, checks: list[CheckResult], colour: bool, unicode_ok: bool) -> str:
     mark = _mark(Status.FAIL, unicode_ok)
     mark = click.style(mark, fg=_COLOURS[Status.FAIL], bold=True) if colour else mark
@@ -64,7 +56,7 @@ def start_here(report: Report) -> list[str]:
     if not code or any(c.status == Status.PASS for c in code):
         return []
     chapter = next(ch for ch in report.chapters if any(c.kind == "code" for c in ch.checks))
-    untouched = _untouched([c for c in chapter.checks if c.kind == "code"])
+    untouched = not_written([c for c in chapter.checks if c.kind == "code"])
     if not untouched:
         return []
     function, checks = next(iter(untouched.items()))
@@ -154,7 +146,7 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
                 out.append(f"  {mark} [0/{_points(sum(c.max_points for c in checks))}] none of the "
                            f"{len(checks)} checks ran: {checks[0].message.split(': ', 1)[-1]}")
                 continue
-            folded = _untouched(checks) if kind == "code" and not verbose else {}
+            folded = not_written(checks) if kind == "code" and not verbose else {}
             for check in checks:
                 if check.function not in folded:
                     out.extend(render_check(check, colour=colour, unicode_ok=unicode_ok, verbose=verbose,
