@@ -284,10 +284,12 @@ def secrets(root: Path) -> list[Path]:
     return found
 
 
-def root_only(paths: list[Path]) -> None:
-    """Make `paths` (files, or folders with all they hold) readable by root only (this process is root)."""
+def root_only(paths: list[Path], root: Path) -> None:
+    """Make `paths` (files, or folders with all they hold) readable by root only (this process is root), those
+    inside the autograder's folder `root` (a grader installed elsewhere is not the autograder's to change: the
+    barrier's probe then finds its answers readable, and nothing is graded)."""
     for path in paths:
-        if not path.exists():
+        if not path.exists() or not path.resolve().is_relative_to(root.resolve()):
             continue
         for place in [path] if not path.is_dir() else [path, *path.rglob("*")]:
             if not place.is_symlink():
@@ -374,7 +376,7 @@ def run(root: Path) -> int:
         metadata = Metadata.read(root, settings.learner_field)
         hidden_paths = secrets(root)
         if hasattr(os, "geteuid") and os.geteuid() == 0:
-            root_only(hidden_paths)  # before any learner code runs: readable by root only
+            root_only(hidden_paths, root)  # before any learner code runs: readable by root only
         grading, isolation, reason = _sandbox_state(settings.sandbox, hidden_paths)
         print(isolation, flush=True)
         if not grading:
@@ -462,7 +464,7 @@ def check(root: Path) -> int:
         return 1
     hidden_paths = secrets(root)
     if hasattr(os, "geteuid") and os.geteuid() == 0:
-        root_only(hidden_paths)
+        root_only(hidden_paths, root)
     grading, isolation, _ = _sandbox_state(settings.sandbox, hidden_paths)
     print(isolation)
     if not grading:
