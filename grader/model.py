@@ -44,6 +44,11 @@ class CheckResult:
     # chosen]} (the letters are each learner's own) or {"form": the answer's form, its numbers by name}
     answer: dict = field(default_factory=dict)
 
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in ("points", "max_points"):  # rounded once, here: every sum and every output is of these
+            value = rounded_points(value)
+        object.__setattr__(self, name, value)
+
     def to_dict(self, chapter: str = "") -> dict:
         return {
             "id": self.id,
@@ -86,6 +91,11 @@ class Adjustment:
     who: str = ""
     source: str = ""  # where it was read, e.g. "overrides.csv, line 3"
     check_kind: str = ""  # for a check: "code" or "quiz" (its chapter's column it changes)
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name == "points":  # rounded once, here (see CheckResult)
+            value = rounded_points(value)
+        object.__setattr__(self, name, value)
 
     @property
     def chapter(self) -> str | None:
