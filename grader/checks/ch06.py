@@ -13,6 +13,7 @@ from grader.checks.derivatives import (
     add_exact_check,
     angle,
     elevation,
+    integer_point,
     planar_point,
 )
 from grader.compare import (
@@ -126,10 +127,12 @@ def H_rows_orthogonal(ctx):
 
 @CHECKS.check("H_jacobian", points=1)
 def H_integer_and_array_inputs(ctx):
-    """H accepts integers and numpy scalars: H_jacobian(-4, 3) and H_jacobian(np.int64(-4), 3)"""
-    expected = REF.H_jacobian(-4, 3)
-    got = yield [call("H_jacobian", -4, 3), call("H_jacobian", Array(-4, "int64"), 3)]
-    return all_of([expect(g, expected, label="H_jacobian(-4, 3)", entries=H) for g in got])
+    """H accepts integers and numpy scalars: H_jacobian(a, b) and H_jacobian(np.int64(a), b) at integers drawn for
+    this run"""
+    a, b = integer_point(ctx.rng)
+    expected = REF.H_jacobian(a, b)
+    got = yield [call("H_jacobian", a, b), call("H_jacobian", Array(a, "int64"), b)]
+    return all_of([expect(g, expected, label=f"H_jacobian({a}, {b})", entries=H) for g in got])
 
 
 @CHECKS.check("H_jacobian", points=1)

@@ -24,6 +24,7 @@ from grader.checks.derivatives import (
     add_derivative_checks,
     add_exact_check,
     angle,
+    integer_point,
     time_step,
     vector_form,
     wound,
@@ -132,13 +133,14 @@ add_exact_check(CHECKS, "F_jacobian", F,
 
 @CHECKS.check("F_jacobian", points=1)
 def F_integer_and_array_states(ctx):
-    """F_jacobian takes the state as a list, a numpy array or an integer array: F_jacobian([1, -2, 2], -1.5, 0.3, 0.2)"""
-    state = [1, -2, 2]
+    """F_jacobian takes the state as a list, a numpy array or an integer array (an integer state drawn for this
+    run)"""
+    state = [*integer_point(ctx.rng), int(ctx.rng.integers(-3, 4))]
     expected = REF.F_jacobian(state, -1.5, 0.3, 0.2)
     got = yield [call("F_jacobian", state, -1.5, 0.3, 0.2), call("F_jacobian", Array(state, "int64"), -1.5, 0.3, 0.2),
-                 call("F_jacobian", Array([1.0, -2.0, 2.0]), -1.5, 0.3, 0.2)]
+                 call("F_jacobian", Array([float(v) for v in state]), -1.5, 0.3, 0.2)]
     forms = ("a list of ints", "an int64 array", "a float array")
-    return all_of([expect(g, expected, label=f"F_jacobian([1, -2, 2] as {form}, -1.5, 0.3, 0.2)",
+    return all_of([expect(g, expected, label=f"F_jacobian({state} as {form}, -1.5, 0.3, 0.2)",
                           rtol=RTOL, atol=ATOL, entries=F) for g, form in zip(got, forms)])
 
 

@@ -28,7 +28,13 @@ import numpy as np
 
 from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
-from grader.checks.derivatives import FD_ATOL, FD_RTOL, planar_point, vector_form
+from grader.checks.derivatives import (
+    FD_ATOL,
+    FD_RTOL,
+    integer_point,
+    planar_point,
+    vector_form,
+)
 from grader.compare import (
     Entries,
     Verdict,
@@ -105,9 +111,12 @@ def gradient_fd_random_points(ctx):
 
 @CHECKS.check("gradient_fd", points=1)
 def gradient_fd_integer_input(ctx):
-    """gradient_fd converts integer x to float first: integer points as an int64 array, a list and a tuple"""
-    cases = [("wave_vec", [1, 2], Array([1, 2], "int64")), ("wave_vec", [-2, 1], [-2, 1]),
-             ("rosenbrock_vec", [1, -1], (1, -1)), ("saddle3_vec", [1, -2, 1], Array([1, -2, 1], "int64"))]
+    """gradient_fd converts integer x to float first: integer points (drawn for this run) as an int64 array, a
+    list and a tuple"""
+    p, q, r = (list(integer_point(ctx.rng)) for _ in range(3))
+    three = [*integer_point(ctx.rng), int(ctx.rng.integers(-2, 3))]
+    cases = [("wave_vec", p, Array(p, "int64")), ("wave_vec", q, q), ("rosenbrock_vec", r, tuple(r)),
+             ("saddle3_vec", three, Array(three, "int64"))]
     expected = [REF.gradient_of(name, point) for name, point, _ in cases]
     slips = [_forward_slip(name, point, 1e-5) for name, point, _ in cases]
     calls = [call("gradient_fd", Fn(name), passed) for name, _, passed in cases]

@@ -298,6 +298,15 @@ def planar_point(rng: np.random.Generator, r_min: float = 0.8, r_max: float = 4.
     return r * np.array([np.cos(theta), np.sin(theta)])  # r times the unit vector at angle theta
 
 
+def integer_point(rng: np.random.Generator) -> tuple[int, int]:
+    """Integers (a, b), 1 to 6 in size with either sign and |a| != |b|: off the axes and diagonals (a sign or a
+    transpose slip shows), and drawn for the run, so that no value read off one run's feedback answers another."""
+    while True:
+        a, b = (int(rng.integers(1, 7)) * int(rng.choice([-1, 1])) for _ in range(2))
+        if abs(a) != abs(b):
+            return a, b
+
+
 def polar_point(rng: np.random.Generator, r_max: float = 5.0) -> np.ndarray:
     """(r, theta) with r in [0.5, r_max] and theta away from the axes and diagonals."""
     return np.array([rng.uniform(0.5, r_max), angle(rng)])
