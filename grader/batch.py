@@ -522,6 +522,7 @@ class ClassOutputs:
 
     def __init__(self, out: Path, learners: list[str], statuses: dict, messages: dict,
                  chapters: list[str] = ()) -> None:
+        from grader import statistics
         from grader.quiz import class_questions
         from grader.render import lms, summary
 
@@ -534,7 +535,9 @@ class ClassOutputs:
         self.not_graded: dict[str, str] = {}
         self.graded: list[str] = []
         self.untimed: list[str] = []  # graded without a submission time
-        self.tally = summary.Tally(class_questions(list(chapters)))  # the summary reads no bank or key
+        catalogue = class_questions(list(chapters))
+        self.tally = summary.Tally(catalogue)  # the summary reads no bank or key
+        self.items = statistics.collector(list(chapters), catalogue)  # each item's points per learner
         # no name in OUT: gone even when the batch is killed; closed by close()
         self.scratch = tempfile.TemporaryFile("w+", encoding="utf-8", newline="", dir=out)  # noqa: SIM115
         self.junit = lms.JUnit(self.scratch)
@@ -577,6 +580,7 @@ class ClassOutputs:
         if batch.get("time_from") != "roster":  # no time, or only the learner's own (their manifest's)
             self.untimed.append(learner)
         self.tally.add(learner, report, extra)
+        self.items.add(learner, report)
         self.junit.add(learner, report, extra)
 
 
@@ -585,11 +589,12 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
             similarity: bool = False, deadline: bool = False) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
-    and summary.json from the per-learner reports. A gradebook.csv changed by hand since the last run is
-    kept as gradebook.edited-<time>.csv (it is an export: changes belong in overrides.csv) and said so.
-    `collected` (ClassOutputs) has taken in the learners graded so far; the others' report.json are read
-    here. Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
+    and summary.json (with the item statistics, grader.statistics) from the per-learner reports. A gradebook.csv
+    changed by hand since the last run is kept as gradebook.edited-<time>.csv (it is an export: changes belong
+    in overrides.csv) and said so. `collected` (ClassOutputs) has taken in the learners graded so far; the
+    others' report.json are read here. Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
     from grader import history as histories
+    from grader import statistics
     from grader.render import lms, summary
 
     collected.finish()
@@ -632,7 +637,8 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
         notes += left_out
     view = summary.Summary(collected.tally, collected.not_graded, isolation,
                            [(s.name, s.reason) for s in skipped], flagged, moved, list(override_problems) + notes,
-                           similar=similar, untimed=list(untimed) if deadline else [])
+                           similar=similar, untimed=list(untimed) if deadline else [],
+                           statistics=statistics.compute(collected.items))
     write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
     write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
     return {"flagged": flagged, "changes": moved, "similar": similar, "notes": notes}

@@ -8,7 +8,10 @@ the option, not the letter); per symbolic question each answer form; the most co
 messages; quiz questions shown as templates, each per-learner number as its range; and who was
 flagged, not graded or skipped, whose score moved since the last run, the overrides that could not
 apply, and the pairs of learners whose code is most alike (grader.similarity, for a person to look
-at). Self-contained HTML; learner text escaped.
+at). With 5 or more learners, item statistics of every check and question (grader.statistics computes them; here
+they are only shown): facility, discrimination, the options' shares, Cronbach's alpha per chapter, facility by
+parameter, what is flagged, and a figure per chapter (grader.render.item_plots). Self-contained HTML; learner
+text escaped.
 """
 
 from __future__ import annotations
@@ -28,7 +31,9 @@ from grader.safe_text import for_html, for_json
 STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1000px;margin:24px auto;color:#1f2937}"
          "table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #e5e7eb;text-align:left;"
          "vertical-align:top}.bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}"
-         "pre{white-space:pre-wrap;background:#f3f4f6;padding:4px 6px;margin:2px 0;font-size:.85em}")
+         "pre{white-space:pre-wrap;background:#f3f4f6;padding:4px 6px;margin:2px 0;font-size:.85em}"
+         "figure{border:1px solid #d1d5db;border-radius:6px;padding:10px;margin:12px 0}figure img{max-width:100%;"
+         "height:auto;display:block}figcaption{font-size:.9em;color:#374151}.flag{color:#9a3412}")
 VERSION = "1"
 
 
@@ -55,6 +60,7 @@ class Summary:
     notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
     untimed: list[str] = field(default_factory=list)  # graded with a deadline but no trusted submission time
     similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
+    statistics: dict | None = None  # grader.statistics.compute's numbers (None: fewer than 5 learners)
 
     @functools.cached_property
     def counts(self) -> dict:
@@ -215,11 +221,90 @@ def _json_data(view: Summary) -> dict:
         "notes": list(view.notes),
         "untimed": list(view.untimed),
         "isolation": view.isolation,
+        "statistics": view.statistics,
     }
     return for_json(data)
 
 
 # ------------------------------------------------------------------------------------ HTML
+
+def _number(value: float | None, digits: int = 2) -> str:
+    return "n/a" if value is None else f"{value:.{digits}f}"
+
+
+def _values(low: float, high: float) -> str:
+    return f"{low:g}" if low == high else f"{low:g} to {high:g}"
+
+
+def _statistics_parts(found: dict | None) -> Iterator[str]:
+    """The item statistics section: how they are computed and flagged, the flagged items, then per chapter its
+    alpha, its figure (a class of RELIABLE_LEARNERS or more) and every item; the options of the choice questions;
+    the facility by parameter of the parametrised ones."""
+    if found is None:
+        return
+    rules = found["rules"]
+    yield ("<h2 id='item-statistics'>Item statistics</h2>"
+           f"<p>From {_count(found['learners'], 'graded learner')}, every check and quiz question: its "
+           "<em>facility</em> (the mean share of its points), its <em>discrimination</em> (the correlation of its "
+           "points with the rest of the learner's score) and the upper-lower index (facility among the 27% with the "
+           "highest rest scores minus among the 27% with the lowest). Flagged (the README's rules): facility above "
+           f"{rules['facility_high']:g} or below {rules['facility_low']:g}, discrimination below "
+           f"{rules['discrimination_low']:g}, a wrong option chosen more by strong learners (its discrimination above "
+           f"{rules['distractor_high']:g}, chosen by {rules['distractor_learners']} or more), and facility that "
+           f"differs between the learners' own numbers beyond chance ({escape(found['parameter_test'])}).</p>")
+    if found["rough"]:
+        yield (f"<p id='statistics-rough'><strong>Rough:</strong> fewer than {rules['reliable_learners']} learners; "
+               "these numbers move a lot by chance, so nothing is flagged and no figure is drawn.</p>")
+    items = found["items"]
+    flagged = [item for item in items if item["flags"]]
+    if flagged:
+        yield _table("flagged-items", "Flagged items", ["item", "facility", "discrimination", "why"],
+                     [[f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", _number(i["facility"]),
+                       _number(i["discrimination"]),
+                       "<br>".join(f"<span class='flag'>{escape(flag)}</span>" for flag in i["flags"])]
+                      for i in flagged], {1, 2})
+    elif not found["rough"]:
+        yield "<p id='flagged-items'>No item is flagged.</p>"
+    drawn = {}
+    if not found["rough"]:
+        from grader.render import item_plots
+
+        drawn = item_plots.figures(found)
+    for chapter in found["chapters"]:
+        name = chapter["chapter"]
+        alpha = "n/a" if chapter["alpha"] is None else f"{chapter['alpha']:.2f}"
+        yield (f"<h3 id='items-{escape(name)}'>{escape(name)}: Cronbach's alpha {alpha} ({chapter['items']} items, "
+               f"{_count(chapter['learners'], 'learner')} judged on all)</h3>")
+        figure = drawn.get(name)
+        if figure is not None:
+            image = (f"<img src='{figure.uri}' alt='{escape(figure.alt)}' width='{figure.width}' "
+                     f"height='{figure.height}'>" if figure.uri else "")
+            yield f"<figure>{image}<figcaption>{escape(figure.caption)}</figcaption></figure>"
+        rows = [[f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", str(i["learners"]),
+                 _number(i["facility"]), _number(i["discrimination"]), _number(i["upper_lower"]),
+                 "flagged" if i["flags"] else ""] for i in items if i["chapter"] == name]
+        yield f"<details><summary>Every item of {escape(name)}</summary>"
+        yield _table(f"item-table-{escape(name)}", f"Items of {name}",
+                     ["item", "learners", "facility", "discrimination", "upper-lower", ""], rows, {1, 2, 3, 4})
+        yield "</details>"
+    options = [(i, o) for i in items for o in i["options"]]
+    if options:
+        yield _table("option-statistics", "Options: who chose each (letters are each learner's own; by option)",
+                     ["question", "option", "right", "chosen by", "discrimination"],
+                     [[escape(i["id"]), f"{escape(o['option'])}) {escape(o['text'])}", "yes" if o["right"] else "no",
+                       f"{o['chosen']} ({_number(o['share'])})", _number(o["discrimination"])] for i, o in options],
+                     {3, 4})
+    parameters = [(i, p) for i in items for p in i["parameters"]]
+    if parameters:
+        yield _table("parameter-statistics", "Facility by the learner's own numbers (parametrised questions)",
+                     ["question", "parameter", "facility per bin (learners)", "test", "p (Holm)"],
+                     [[escape(i["id"]), escape(p["name"]),
+                       "<br>".join(f"{escape(_values(b['low'], b['high']))}: {_number(b['facility'])} "
+                                   f"({b['learners']})" for b in p["bins"]),
+                       escape(p["test"] or "not tested (one bin)"),
+                       ("n/a" if p["p_holm"] is None else f"{p['p_holm']:.2g}") +
+                       (" <span class='flag'>differs</span>" if p["differs"] and not found["rough"] else "")]
+                      for i, p in parameters], {4})
 
 def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]],
            numeric: set[int] = frozenset()) -> str:
@@ -275,6 +360,7 @@ def html_parts(view: Summary) -> Iterator[str]:
         yield _table("messages", "Most common failure messages", ["count", "chapter", "message"],
                      [[str(m["count"]), escape(m["chapter"]), escape(m["message"])] for m in counts["messages"]],
                      {0})
+        yield from _statistics_parts(view.statistics)
     if view.similar:
         rows = []
         for pair in view.similar:

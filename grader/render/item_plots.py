@@ -1,0 +1,73 @@
+"""The class summary's figure per chapter: each item's facility against its discrimination, items labelled, the
+flagging rules as guide lines; drawn by matplotlib as the HTML report's figures are (grader.render.figures: an SVG
+data URI with a text alternative that says the same in numbers). It reads only the numbers grader.statistics
+computed."""
+
+from __future__ import annotations
+
+from grader.render.figures import GUIDE, LEARNER, REFERENCE, Figure, preload, svg_uri
+
+
+def figures(statistics: dict) -> dict[str, Figure]:
+    """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so)."""
+    out = {}
+    for chapter in statistics["chapters"]:
+        items = [item for item in statistics["items"] if item["chapter"] == chapter["chapter"]]
+        try:
+            out[chapter["chapter"]] = _figure(chapter["chapter"], items, statistics["rules"], statistics["learners"])
+        except Exception as exc:  # noqa: BLE001  a figure never costs the summary
+            out[chapter["chapter"]] = Figure("", "", f"This figure could not be drawn ({type(exc).__name__}: {exc}).")
+    return out
+
+
+def _short(item: dict) -> str:
+    return item["id"].split("/", 1)[1]
+
+
+def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figure:
+    preload()
+    from matplotlib.figure import Figure as Canvas
+
+    fig = Canvas(figsize=(7.5, 4.6))
+    ax = fig.add_subplot()
+    placed = [i for i in items if i["facility"] is not None and i["discrimination"] is not None]
+    for flagged, colour, marker, label in ((False, REFERENCE, "o", "item"), (True, LEARNER, "^", "flagged item")):
+        group = [i for i in placed if bool(i["flags"]) is flagged]
+        if group:
+            ax.scatter([i["facility"] for i in group], [i["discrimination"] for i in group], s=28, color=colour,
+                       marker=marker, label=label, zorder=3)
+    for item in placed:
+        ax.annotate(_short(item), (item["facility"], item["discrimination"]), xytext=(3, 2),
+                    textcoords="offset points", fontsize=6.5, color="#111827" if item["flags"] else "#374151")
+    for x in (rules["facility_low"], rules["facility_high"]):
+        ax.axvline(x, color=GUIDE, linestyle=":", linewidth=1)
+    ax.axhline(rules["discrimination_low"], color=GUIDE, linestyle=":", linewidth=1)
+    low = min([-0.1] + [i["discrimination"] for i in placed])
+    ax.set(xlim=(-0.02, 1.05), ylim=(low - 0.05, 1.0), xlabel="facility (mean share of the item's points)",
+           ylabel="discrimination (with the rest of the score)",
+           title=f"{chapter}: facility against discrimination ({learners} learners)")
+    ax.legend(fontsize=8, loc="upper left")
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.12, top=0.92)
+    caption = (f"{chapter}: each item's facility against its discrimination; dotted lines at the flagging rules "
+               f"(facility {rules['facility_low']:g} and {rules['facility_high']:g}, discrimination "
+               f"{rules['discrimination_low']:g}); flagged items as triangles")
+    return Figure(svg_uri(fig), f"{caption}. {_in_numbers(items, placed)}", caption, 750, 460,
+                  _in_numbers(items, placed))
+
+
+def _in_numbers(items: list[dict], placed: list[dict]) -> str:
+    """The figure in words: every flagged item with its two numbers, the range of the others."""
+    flagged = [i for i in placed if i["flags"]]
+    others = [i for i in placed if not i["flags"]]
+    said = [f"{len(items)} items"]
+    if flagged:
+        said.append("flagged: " + "; ".join(f"{_short(i)} (facility {i['facility']:.2f}, discrimination "
+                                            f"{i['discrimination']:.2f})" for i in flagged))
+    if others:
+        said.append(f"the other {len(others)}: facility {min(i['facility'] for i in others):.2f} to "
+                    f"{max(i['facility'] for i in others):.2f}, discrimination "
+                    f"{min(i['discrimination'] for i in others):.2f} to {max(i['discrimination'] for i in others):.2f}")
+    missing = len(items) - len(placed)
+    if missing:
+        said.append(f"{missing} not placed (every learner got the same points: no discrimination)")
+    return "In numbers: " + "; ".join(said) + "."

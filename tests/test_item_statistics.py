@@ -1,0 +1,265 @@
+"""Item statistics (grader.statistics) in summary.html and summary.json: on a generated class of learners of known
+ability, the bad question and the question that is harder for some learners' numbers are flagged, and no other."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import math
+import random
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from grader import batch, statistics
+from grader import checks as check_registry
+from grader.history import History
+from grader.chapters import BY_ID
+from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.quiz import bank
+from grader.render import lms
+
+CHAPTERS = ["ch05", "ch06", "ch07"]
+BAD = "ch06/quiz_bearing_near_dish"  # its key answer is chosen more by the weak: strong learners pick option a
+BY_NUMBERS = "ch06/quiz_bearing_variance"  # much harder for learners whose r is below 2
+
+
+def _sigmoid(value: float) -> float:
+    return 1 / (1 + math.exp(-value))
+
+
+class SimulatedClass:
+    """Learners of known ability (standard normal) answering every code check and quiz question of CHAPTERS as a
+    two-parameter logistic model has it: each item its own discrimination (1 to 2) and difficulty (-1 to 0.5), so
+    that every item is moderately easy and tells strong learners from weak ones; wrong answers to a choice question
+    pick a wrong option, the first ones more often. Two items are made bad on purpose: BAD (strong learners choose
+    the wrong option a) and BY_NUMBERS (harder where the learner's own r is below 2)."""
+
+    def __init__(self, learners: int, seed: int = 7) -> None:
+        self.random = random.Random(seed)
+        self.abilities = {f"learner-{i:03d}": self.random.gauss(0, 1) for i in range(learners)}
+        self.keys = {chapter: bank.keys(chapter) for chapter in CHAPTERS}
+        self.items = {}
+        for chapter in CHAPTERS:
+            for check in check_registry.load(chapter).checks:
+                self.items[f"{chapter}/{check.id}"] = self._parameters()
+            for question in bank.questions(chapter):
+                self.items[f"{chapter}/quiz_{question.id}"] = self._parameters()
+
+    def _parameters(self) -> tuple[float, float]:
+        return self.random.uniform(1.0, 2.0), self.random.uniform(-1.0, 0.5)
+
+    def _right(self, key: str, ability: float, learner: str, question=None) -> bool:
+        slope, difficulty = self.items[key]
+        if key == BAD:
+            return self.random.random() < _sigmoid(-1.5 * ability)
+        chance = _sigmoid(slope * (ability - difficulty))
+        if key == BY_NUMBERS and question.values_for(learner, "ch06")["r"] < 2:
+            chance = _sigmoid(slope * (ability - difficulty) - 3.5)
+        return self.random.random() < chance
+
+    def reports(self) -> dict[str, Report]:
+        return {learner: self.report(learner, ability) for learner, ability in self.abilities.items()}
+
+    def report(self, learner: str, ability: float) -> Report:
+        chapters = []
+        for chapter in CHAPTERS:
+            results = []
+            for check in check_registry.load(chapter).checks:
+                right = self._right(f"{chapter}/{check.id}", ability, learner)
+                results.append(CheckResult(check.id, check.function, check.description,
+                                           Status.PASS if right else Status.FAIL, check.points if right else 0.0,
+                                           check.points, "" if right else "wrong"))
+            for question in bank.questions(chapter):
+                key = f"{chapter}/quiz_{question.id}"
+                right = self._right(key, ability, learner, question)
+                result = CheckResult(f"quiz_{question.id}", question.id, question.prompt[:80],
+                                     Status.PASS if right else Status.FAIL, question.points if right else 0.0,
+                                     question.points, kind="quiz")
+                if question.kind in ("choice", "multi"):
+                    result.answer = {"options": self._options(question, self.keys[chapter][question.id], right,
+                                                              ability, key == BAD)}
+                results.append(result)
+            chapters.append(ChapterResult(chapter, BY_ID[chapter].title, results))
+        return Report(learner, chapters, seed=1, learner=learner, learner_id=learner, grader="simulated")
+
+    def _options(self, question, key, right: bool, ability: float, bad: bool) -> list[str]:
+        keyed = [key.answer] if question.kind == "choice" else list(key.answer)
+        wrong = [o for o in question.options if o not in keyed]
+        if right:
+            return sorted(keyed)
+        if bad and "a" in wrong and self.random.random() < _sigmoid(2 * ability):
+            pick = "a"
+        else:
+            pick = self.random.choices(wrong, weights=[len(wrong) - i for i in range(len(wrong))])[0]
+        return [pick] if question.kind == "choice" else sorted(set(keyed[1:]) | {pick})
+
+
+def _statistics(reports: dict[str, Report]) -> dict:
+    scores = statistics.collector(CHAPTERS)
+    for learner, report in reports.items():
+        scores.add(learner, report)
+    return statistics.compute(scores)
+
+
+@pytest.fixture(scope="module")
+def class_of_200() -> dict:
+    return _statistics(SimulatedClass(200).reports())
+
+
+def test_a_class_of_200_flags_the_bad_question_and_the_one_harder_for_some_numbers_and_no_other(class_of_200):
+    found = class_of_200
+    assert found["learners"] == 200 and not found["rough"]
+    assert sorted(found["flagged"]) == sorted([BAD, BY_NUMBERS]), {i["id"]: i["flags"] for i in found["items"]
+                                                                   if i["flags"]}
+    items = {item["id"]: item for item in found["items"]}
+    bad = items[BAD]
+    assert bad["discrimination"] < 0 and bad["upper_lower"] < 0
+    assert any("does not tell strong learners from weak" in flag for flag in bad["flags"])
+    option_a = next(o for o in bad["options"] if o["option"] == "a")
+    assert not option_a["right"] and option_a["discrimination"] > statistics.DISTRACTOR_HIGH
+    assert any("wrong option a)" in flag for flag in bad["flags"])
+    by_numbers = items[BY_NUMBERS]
+    r = next(p for p in by_numbers["parameters"] if p["name"] == "r")
+    assert r["differs"] and r["p_holm"] < statistics.PARAMETER_ALPHA / 10 and len(r["bins"]) == 4
+    assert r["bins"][0]["facility"] < r["bins"][-1]["facility"] - 0.3  # the low r bin is the hard one
+    assert sum(b["learners"] for b in r["bins"]) == 200
+    assert by_numbers["discrimination"] > statistics.DISCRIMINATION_LOW  # not flagged for anything else
+
+
+def test_every_item_has_facility_discrimination_and_upper_lower_as_defined(class_of_200):
+    reports = SimulatedClass(200).reports()  # the same class again (same seed)
+    items = {item["id"]: item for item in class_of_200["items"]}
+    key = "ch06/H_worked_example"
+    points = np.array([_points(report, key) for report in reports.values()])
+    totals = np.array([sum(c.points for ch in report.chapters for c in ch.checks) for report in reports.values()])
+    rest = totals - points
+    assert items[key]["facility"] == pytest.approx(points.mean() / 2, abs=1e-4)
+    assert items[key]["discrimination"] == pytest.approx(np.corrcoef(points, rest)[0, 1], abs=1e-4)
+    order = np.argsort(rest, kind="stable")
+    assert items[key]["upper_lower"] == pytest.approx((points[order[-54:]].mean() - points[order[:54]].mean()) / 2,
+                                                      abs=1e-4)
+    assert all(0 <= i["facility"] <= 1 and -1 <= i["discrimination"] <= 1 for i in class_of_200["items"])
+    quiz = [i for i in class_of_200["items"] if i["kind"] == "quiz"]
+    assert quiz and len(class_of_200["items"]) == sum(len(check_registry.load(c).checks) + len(bank.questions(c))
+                                                      for c in CHAPTERS)
+
+
+def _points(report: Report, key: str) -> float:
+    chapter, check_id = key.split("/")
+    return next(c.points for ch in report.chapters if ch.chapter == chapter for c in ch.checks if c.id == check_id)
+
+
+def test_cronbach_alpha_per_chapter_is_high_for_items_of_one_ability(class_of_200):
+    alphas = {c["chapter"]: c["alpha"] for c in class_of_200["chapters"]}
+    assert set(alphas) == set(CHAPTERS) and all(0.8 < a < 1 for a in alphas.values()), alphas
+
+
+def test_cronbach_alpha_of_a_known_table():
+    # three items, four learners: the textbook computation by hand
+    table = np.array([[1, 1, 1], [1, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=float)
+    k, items, total = 3, table.var(axis=0, ddof=1).sum(), table.sum(axis=1).var(ddof=1)
+    assert statistics.cronbach_alpha(table)[0] == pytest.approx(k / (k - 1) * (1 - items / total))
+    assert statistics.cronbach_alpha(np.ones((4, 3)))[0] is None  # totals that do not vary
+
+
+def test_below_30_learners_the_statistics_are_rough_and_flag_nothing_and_below_5_there_are_none():
+    simulated = SimulatedClass(12, seed=3)
+    rough = _statistics(simulated.reports())
+    assert rough["rough"] and rough["learners"] == 12 and rough["flagged"] == []
+    assert all(item["facility"] is not None for item in rough["items"])
+    few = dict(list(SimulatedClass(4).reports().items()))
+    assert _statistics(few) is None
+
+
+def test_a_distractor_is_flagged_only_when_enough_learners_chose_it():
+    found = statistics._flags({"facility": 0.5, "discrimination": 0.4, "parameters": [], "options": [
+        {"option": "b", "right": False, "chosen": statistics.DISTRACTOR_LEARNERS - 1, "discrimination": 0.6},
+        {"option": "c", "right": True, "chosen": 90, "discrimination": 0.5}]})
+    assert found == []
+
+
+def test_holm_correction_is_step_down_and_monotone():
+    tested = [{"p": p} for p in (0.01, 0.04, 0.03, 0.005)]
+    statistics._holm(tested)
+    assert [t["p_holm"] for t in tested] == pytest.approx([0.03, 0.06, 0.06, 0.02])
+    assert [t["differs"] for t in tested] == [True, False, False, True]
+
+
+@pytest.mark.slow
+def test_the_chi_square_and_fisher_tests_agree_with_scipy_on_random_tables():
+    stats = pytest.importorskip("scipy.stats")  # the field's standard, installed with the test extra
+    draw = random.Random(11)
+    for _ in range(300):
+        rows = draw.choice([2, 3, 4])
+        table = [[draw.randint(0, 40), draw.randint(0, 40)] for _ in range(rows)]
+        if any(sum(row) == 0 for row in table) or any(sum(column) == 0 for column in zip(*table)):
+            continue
+        statistic, _ = statistics.chi_square(table)
+        expected = stats.chi2_contingency(np.array(table), correction=False)
+        assert statistic == pytest.approx(expected[0], rel=1e-9)
+        assert statistics.chi_square_tail(statistic, rows - 1) == pytest.approx(expected[1], rel=1e-9, abs=1e-300)
+        if rows == 2:
+            assert statistics.fisher_exact(table) == pytest.approx(stats.fisher_exact(table)[1], rel=1e-9)
+    for freedom in range(1, 8):  # the tail far out, where 1 - cdf would have lost every digit
+        assert statistics.chi_square_tail(80.0, freedom) == pytest.approx(stats.chi2.sf(80.0, freedom), rel=1e-9)
+
+
+def _summary_of_a_batch(out: Path, reports: dict[str, Report]) -> tuple[dict, str]:
+    """The class outputs grade batch writes for these reports (each as its report.json), through its own
+    ClassOutputs and rebuild: (summary.json, summary.html)."""
+    for learner, report in reports.items():
+        (out / learner).mkdir(parents=True)
+        (out / learner / "report.json").write_text(json.dumps({**report.to_dict(), "batch": {"warnings": []}}),
+                                                   encoding="utf-8")
+    history = History(out / "gradebook.db")
+    collected = batch.ClassOutputs(out, list(reports), {}, {}, CHAPTERS)
+    try:
+        batch.rebuild(out, history, history.start("simulated", None, None, 1, CHAPTERS), CHAPTERS, collected)
+    finally:
+        collected.close()
+        history.close()
+    return (json.loads((out / "summary.json").read_text(encoding="utf-8")),
+            (out / "summary.html").read_text(encoding="utf-8"))
+
+
+def _validate_summary(data: dict) -> None:
+    jsonschema = pytest.importorskip("jsonschema")
+    jsonschema.Draft202012Validator(lms.schema("summary")).validate(data)
+
+
+@pytest.mark.slow
+def test_the_summary_of_a_batch_of_200_shows_the_statistics_and_a_figure_per_chapter(tmp_path):
+    data, page = _summary_of_a_batch(tmp_path / "out", SimulatedClass(200).reports())
+    _validate_summary(data)
+    found = data["statistics"]
+    assert found["learners"] == 200 and sorted(found["flagged"]) == sorted([BAD, BY_NUMBERS])
+    flagged = page.split("id='flagged-items'", 1)[1].split("</table>", 1)[0]
+    assert BAD in flagged and BY_NUMBERS in flagged and flagged.count("<tr>") == 3  # a header and the two
+    assert "wrong option a) is chosen more by strong learners" in html.unescape(flagged)
+    images = re.findall(r"<img src='data:image/svg\+xml;base64,([^']+)' alt='([^']+)'", page)
+    assert len(images) == len(CHAPTERS)
+    alts = {alt.split(":", 1)[0]: html.unescape(alt) for _, alt in images}
+    assert set(alts) == set(CHAPTERS)
+    assert "flagged: quiz_bearing_near_dish (facility" in alts["ch06"] and "flagged:" not in alts["ch05"]
+    svg = base64.b64decode(images[1][0]).decode("utf-8")
+    assert "quiz_bearing_variance" in svg and "H_worked_example" in svg  # the items are labelled
+    assert "Cronbach's alpha" in page and "id='parameter-statistics'" in page and "id='option-statistics'" in page
+    assert "Rough:" not in page
+
+
+def test_a_batch_below_30_learners_shows_rough_statistics_without_flags_or_figures(tmp_path):
+    data, page = _summary_of_a_batch(tmp_path / "out", SimulatedClass(12, seed=5).reports())
+    _validate_summary(data)
+    assert data["statistics"]["rough"] and data["statistics"]["flagged"] == []
+    assert "Rough:" in page and "<img" not in page and "id='flagged-items'" not in page
+    assert all(not p["differs"] for i in data["statistics"]["items"] for p in i["parameters"])
+
+
+def test_a_batch_of_4_has_no_statistics(tmp_path):
+    data, page = _summary_of_a_batch(tmp_path / "out", SimulatedClass(4).reports())
+    _validate_summary(data)
+    assert data["statistics"] is None and "Item statistics" not in page
