@@ -46,7 +46,7 @@ from grader.compare import (
     fmt_array,
     value_problem,
 )
-from grader.diagnose import Mistake
+from grader.diagnose import Evidence, Mistake
 
 STEP = 1e-5
 FD_RTOL = 1e-6
@@ -149,7 +149,7 @@ def add_derivative_checks(checks: ChapterChecks, d: Derivative, points: float = 
             if problem:
                 return Verdict(False, problem, want)
             v = compare_arrays(returned.as_array(), want, label=label, rtol=FD_RTOL, atol=FD_ATOL,
-                               entries=d.entries, expected_name="expected", mistakes=mistakes)
+                               entries=d.entries, expected_name="expected", mistakes=mistakes, source=returned)
             if not v.passed:
                 v.message = f"{v.message}\n  (wrong in {_columns_text(v.details['wrong'], d.entries)})"
             verdicts.append(v)
@@ -229,7 +229,7 @@ def exact_verdict(returned: Returned, exact: np.ndarray, label: "str | Label", e
     got = returned.as_array()
     scale = float(np.max(np.abs(exact)))
     verdict = compare_arrays(got, exact, label=label, rtol=EXACT_RTOL, atol=EXACT_RTOL * scale, entries=entries,
-                             exact=True, expected_name="exact", digits=15)
+                             exact=True, expected_name="exact", digits=15, source=returned)
     if verdict.passed:
         return verdict
     worst = float(np.max(np.abs(got - exact) / (np.abs(exact) + scale))) if np.all(np.isfinite(got)) else np.inf
@@ -248,9 +248,7 @@ def exact_verdict(returned: Returned, exact: np.ndarray, label: "str | Label", e
                                                f"one.{single}")
     else:
         return verdict
-    verdict.mistake = mistake
-    verdict.message = f"{label}: {mistake.help}\n{verdict.message}"
-    return verdict
+    return verdict.also(lambda: Evidence({mistake.id: mistake}))
 
 
 def add_exact_check(checks: ChapterChecks, function: str, entries: Entries,
@@ -299,10 +297,11 @@ def planar_point(rng: np.random.Generator, r_min: float = 0.8, r_max: float = 4.
 
 
 def integer_point(rng: np.random.Generator) -> tuple[int, int]:
-    """Integers (a, b), 1 to 6 in size with either sign and |a| != |b|: off the axes and diagonals (a sign or a
-    transpose slip shows), and drawn for the run, so that no value read off one run's feedback answers another."""
+    """Integers (a, b), 1 to 99 in size with either sign and |a| != |b|: off the axes and diagonals (a sign or a
+    transpose slip shows), and drawn for the run from some 39,000 pairs, so that a value read off one run's feedback
+    hardly ever answers another."""
     while True:
-        a, b = (int(rng.integers(1, 7)) * int(rng.choice([-1, 1])) for _ in range(2))
+        a, b = (int(rng.integers(1, 100)) * int(rng.choice([-1, 1])) for _ in range(2))
         if abs(a) != abs(b):
             return a, b
 
