@@ -718,6 +718,145 @@ def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use
             handle.write(classroom.github_output_line(results))
 
 
+@main.command("regrade")
+@click.argument("out", type=click.Path(exists=True, file_okay=False))
+@click.option("--apply", "apply_it", is_flag=True,
+              help="Record the new grades as a run of OUT/gradebook.db with --reason, and rewrite the moved learners' "
+                   "reports and the class outputs (without it nothing but OUT/regrade.csv is written).")
+@click.option("--reason", default=None, help="Why the grades change (required with --apply; changes.csv shows it).")
+@click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="The course configuration (default: solutions/course.yaml beside the references).")
+@click.option("--overrides", "overrides_file", type=click.Path(dir_okay=False), default=None,
+              help="Overrides applied as grade batch applies them (default: OUT/overrides.csv where it exists).")
+@click.option("--jobs", type=click.IntRange(min=1), default=None, help="Parallel workers (default: all cores).")
+@click.option("--time-budget", type=click.FloatRange(min=1), default=60, show_default=True,
+              help="Seconds for one learner's code, all chapters together.")
+@click.option("--no-sandbox", is_flag=True, help="Run learner code without bubblewrap even where it is installed.")
+def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: str | None,
+                    overrides_file: str | None, jobs: int | None, time_budget: float, no_sandbox: bool) -> None:
+    """Grade the submissions stored in OUT (grade batch's output folder) again with today's grader and course
+    file, at the last run's seed and chapters, and show whose grade would change and why, check by check, in
+    OUT/regrade.csv (learner, old_score, new_score, checks_changed, why). Nothing else changes until --apply
+    records it in the history as a run with its --reason."""
+    import json
+    from pathlib import Path
+
+    from grader import batch, regrade
+    from grader.safe_text import for_terminal
+
+    if apply_it and not (reason or "").strip():
+        raise click.UsageError("--apply records the regrade with its reason: give --reason TEXT (changes.csv and "
+                               "every moved learner's history show it)")
+    the_course = _instructor_course(course_file, "grade regrade")
+    folder = Path(out)
+    try:
+        found = regrade.regrade(folder, the_course, jobs=jobs, sandboxed=not no_sandbox,
+                                overrides=Path(overrides_file) if overrides_file else None,
+                                limits={"learner_seconds": time_budget})
+    except regrade.RegradeError as exc:
+        raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="OUT") from None
+    except batch.RosterError as exc:
+        raise click.BadParameter(for_terminal(str(exc)), param_hint="--overrides") from None
+    except batch.InfrastructureError as exc:
+        click.echo(f"grade regrade: no learner was graded again: learner code cannot run here. "
+                   f"{for_terminal(str(exc), one_line=True)}", err=True)
+        sys.exit(EXIT_USAGE)
+    written = regrade.write_csv(folder, found)
+    info = found.run_info
+    click.echo(f"Graded {plural(len(found.compared), 'learner')} of run {found.run} again (seed {info['seed']}, "
+               f"{', '.join(json.loads(info['chapters']))}) with grader {found.grader} "
+               f"(the run's: {info['grader']}).")
+    moved = found.moved
+    if moved:
+        click.echo(f"{len(moved)} learner's grade would change:" if len(moved) == 1 else
+                   f"{len(moved)} learners' grades would change:")
+        for change in moved:
+            new = "not graded" if change.new_score is None else f"{change.new_score:g}"
+            old = "none" if change.old_score is None else f"{change.old_score:g}"
+            click.echo(f"  {for_terminal(change.learner, one_line=True)}: {old} -> {new}: "
+                       f"{for_terminal(change.why, one_line=True)}")
+    else:
+        click.echo("No learner's grade or check verdict would change.")
+    for learner, why in sorted(found.left_out.items()):
+        click.echo(f"  not graded again: {for_terminal(learner, one_line=True)}: {why}", err=True)
+    for problem in found.override_problems:
+        click.echo(f"  {for_terminal(problem, one_line=True)}", err=True)
+    click.echo(f"Written: {written}")
+    if apply_it:
+        run = regrade.apply(folder, found, the_course, reason.strip(),
+                            Path(overrides_file) if overrides_file else None)
+        click.echo(f"Recorded as run {run} of {folder / 'gradebook.db'} ({for_terminal(reason.strip(), one_line=True)});"
+                   f" gradebook.csv, changes.csv, junit.xml and the summary are rebuilt from it.")
+    elif moved:
+        click.echo("Nothing else changed: `grade regrade OUT --apply --reason TEXT` records it.")
+
+
+@main.command("selftest")
+@click.option("--seeds", "count", type=click.IntRange(min=1), default=None,
+              help="How many seeds: the public one, the course's, then 1, 2, 3 ... [default: 25]")
+@click.option("--seed", "only", type=int, default=None,
+              help="Check this one seed (with the public one to compare with), as a failure's command does.")
+@click.option("--chapters", "chapter_list", default="all", show_default=True, help="e.g. ch05,ch06")
+@click.option("--course", "course_file", type=click.Path(exists=True, dir_okay=False), default=None,
+              help="The course configuration (default: solutions/course.yaml beside the references).")
+@click.option("--quizzes", "quiz_dir", type=click.Path(exists=True, file_okay=False), default=None,
+              help="Question banks and their keys to check, laid out as quizzes/ is (default: the grader's own).")
+@click.option("--no-code", is_flag=True, help="Check the quiz only (no reference code runs).")
+@click.option("--generated", is_flag=True, help="Also weigh the slips generated from the references (grader.mutants; "
+              "about four times the time): those told apart at some seeds only are listed as notes.")
+@click.option("--no-sandbox", is_flag=True, help="Run the reference code without bubblewrap even where it is installed.")
+def selftest_command(count: int | None, only: int | None, chapter_list: str, course_file: str | None,
+                     quiz_dir: str | None, no_code: bool, generated: bool, no_sandbox: bool) -> None:
+    """Check the course at many seeds, not only the public one, before learners meet it (and in CI): the
+    reference solutions get every check's points at every seed; every mistake a check can name is told apart
+    from the right value at the check's inputs at every seed (not only at most); every parametrised quiz
+    question's key is finite, well-conditioned and told apart from its known wrong answers for every learner
+    draw (learner id selftest-<seed>); the reference answers get full marks. Exits 1 naming each failing check
+    or question at its first failing seed, with a command that reproduces it; 0 when everything holds."""
+    import time
+    from pathlib import Path
+
+    from grader import selftest
+    from grader.safe_text import for_terminal
+
+    picked = [c.id for c in chapters_from(tuple(chapter_list.split(",")))]
+    the_course = _instructor_course(course_file, "grade selftest")
+    if only is not None and count is not None:
+        raise click.UsageError("--seed checks one seed, --seeds many: give one of them")
+    seeds = selftest.seeds_for(count or selftest.DEFAULT_SEEDS, the_course) if only is None else \
+        list(dict.fromkeys([only, selftest.seeds_for(1)[0]]))
+    extra = "".join(f" {option} {value}" for option, value in (("--course", course_file), ("--quizzes", quiz_dir))
+                    if value)
+
+    def command(item: str, seed: int) -> str:
+        chapter = item.split("/", 1)[0]
+        text = f"grade selftest --seed {seed} --chapters {chapter}{extra}"
+        if "/quiz_" in item:
+            text += f"; its numbers: grade quiz {chapter} --show --learner {selftest.LEARNER_PREFIX}{seed}"
+        return text
+
+    started = time.monotonic()
+    shown = ", ".join(map(str, seeds[:4])) + (" ..." if len(seeds) > 4 else "")
+    click.echo(f"grade selftest: {', '.join(picked) if len(picked) < 10 else 'every chapter'} at "
+               f"{plural(len(seeds), 'seed')} ({shown})", err=True)
+    outcome = selftest.run(picked, seeds, the_course, quiz_dir=Path(quiz_dir) if quiz_dir else None,
+                           sandbox="off" if no_sandbox else "auto", code=not no_code, command=command,
+                           report=None if only is None else {only}, generated=generated)
+    for failure in outcome.failures:
+        more = f" (and {plural(failure.other_seeds, 'other seed')})" if failure.other_seeds else ""
+        click.echo(f"FAIL {failure.item} at seed {failure.seed}{more}:")
+        for problem in failure.problems:
+            click.echo(f"  {for_terminal(problem, one_line=True)}")
+        click.echo(f"  reproduce: {for_terminal(failure.reproduce, one_line=True)}")
+    for note in outcome.notes:
+        click.echo(f"note: {for_terminal(note, one_line=True)}")
+    counted = ", ".join(f"{n} {what}" for what, n in outcome.counted.items())
+    verdict = (f"{plural(len(outcome.failures), 'check or question', 'checks or questions')} fail"
+               if outcome.failures else "everything holds")
+    click.echo(f"{verdict} at {plural(len(seeds), 'seed')} ({counted}; {time.monotonic() - started:.1f} s).")
+    sys.exit(EXIT_NOT_ALL_PASSED if outcome.failures else EXIT_ALL_PASSED)
+
+
 EXAMPLES = {
     "run": ["grade ch06                      grade chapter 6 (code and quiz)",
             "grade ch06 H_jacobian           only that function's checks",
@@ -736,6 +875,11 @@ EXAMPLES = {
                "grade submit --learner ada.lovelace --out ~/handin.zip"],
     "gradescope": ["grade gradescope autograder.zip",
                    "grade gradescope autograder.zip --learner-id sid --chapters ch06,ch07"],
+    "regrade": ["grade regrade graded/                     whose grade today's grader would change, and why",
+                "grade regrade graded/ --apply --reason \"bearing_variance: 3 significant digits, as its hint says\""],
+    "selftest": ["grade selftest                            25 seeds, every chapter (CI runs it)",
+                 "grade selftest --seeds 200 --chapters ch06",
+                 "grade selftest --seed 17 --chapters ch06 --quizzes my-quizzes/   one failure again"],
 }
 
 

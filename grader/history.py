@@ -1,8 +1,8 @@
 """The course's history: a SQLite gradebook (OUT/gradebook.db) of every `grade batch` run.
 
 Tables:
-- runs: one per `grade batch`: when it started and finished, the grader's version, the course's
-  current handout, the course, the seed and the chapters.
+- runs: one per `grade batch` (and per `grade regrade --apply`, with its reason): when it started and
+  finished, the grader's version, the course's current handout, the course, the seed and the chapters.
 - results: per run and learner: status, message, the submission's hash (its files only) and the
   content hash (files, grader, seed), the handout and time in its manifest, the score as graded, the
   score with overrides and penalties, the adjustments, the flags, and the scores per chapter that
@@ -27,7 +27,7 @@ FILE_NAME = "gradebook.db"
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY, started TEXT NOT NULL, finished TEXT, grader TEXT NOT NULL, handout TEXT,
-    course TEXT, seed INTEGER, chapters TEXT NOT NULL, gradebook_sha TEXT);
+    course TEXT, seed INTEGER, chapters TEXT NOT NULL, gradebook_sha TEXT, reason TEXT);
 CREATE TABLE IF NOT EXISTS results (
     run INTEGER NOT NULL REFERENCES runs(id), learner TEXT NOT NULL, status TEXT NOT NULL, message TEXT NOT NULL,
     files_hash TEXT, content_hash TEXT, manifest_handout TEXT, submitted TEXT, grader TEXT, seed INTEGER,
@@ -91,15 +91,19 @@ class History:
         self.db.execute("PRAGMA synchronous=NORMAL")
         with self.db:
             self.db.executescript(SCHEMA)
+            if "reason" not in {row["name"] for row in self.db.execute("PRAGMA table_info(runs)")}:
+                self.db.execute("ALTER TABLE runs ADD COLUMN reason TEXT")  # a history from before regrades
 
     def close(self) -> None:
         self.db.close()
 
-    def start(self, grader: str, handout: str | None, course: str | None, seed: int, chapters: list[str]) -> int:
+    def start(self, grader: str, handout: str | None, course: str | None, seed: int, chapters: list[str],
+              reason: str | None = None) -> int:
+        """A new run (its id); `reason`: why it was made, where it is no batch (`grade regrade --apply`)."""
         with self.db:
-            cursor = self.db.execute("INSERT INTO runs (started, grader, handout, course, seed, chapters) "
-                                     "VALUES (?, ?, ?, ?, ?, ?)", (now(), grader, handout, course, seed,
-                                                                   json.dumps(chapters)))
+            cursor = self.db.execute("INSERT INTO runs (started, grader, handout, course, seed, chapters, reason) "
+                                     "VALUES (?, ?, ?, ?, ?, ?, ?)", (now(), grader, handout, course, seed,
+                                                                      json.dumps(chapters), reason))
         return int(cursor.lastrowid)
 
     def record(self, run: int, result: Result) -> None:
@@ -117,6 +121,10 @@ class History:
                 data[key] = json.loads(data[key])
             out[row["learner"]] = Result(**data)
         return out
+
+    def last_finished(self) -> int | None:
+        """The last finished run, or None."""
+        return self.db.execute("SELECT max(id) FROM runs WHERE finished IS NOT NULL").fetchone()[0]
 
     def previous(self, run: int) -> int | None:
         """The last finished run before `run`."""
@@ -152,9 +160,9 @@ class History:
 
 
 def why_moved(before: Result, after: Result, before_run: dict, run: dict) -> str:
-    """Why a learner's score moved between two runs: a resubmission, the grader or handout, the seed or
-    chapters, the overrides, the late penalty; each that differs, in words."""
-    reasons = []
+    """Why a learner's score moved between two runs: a regrade (its reason), a resubmission, the grader or
+    handout, the seed or chapters, the overrides, the late penalty; each that differs, in words."""
+    reasons = [f"regrade ({run['reason']})"] if run.get("reason") else []
     if before.files_hash != after.files_hash:
         reasons.append("resubmission (other files)")
     if (before.grader or before_run["grader"]) != (after.grader or run["grader"]):

@@ -12,6 +12,7 @@ A check raises `Skip("why")` when something it depends on failed.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from typing import Callable, Generator
 
@@ -39,9 +40,10 @@ class Context:
     chapter: str
     check_id: str
 
-    @property
+    @functools.cached_property
     def rng(self) -> Draws:
-        """A fresh generator for this check, the same for the same seed, chapter and check."""
+        """This check's generator, the same for the same seed, chapter and check: one stream, which every draw
+        continues (a fresh one at each use gave `[point(ctx.rng) for _ in range(8)]` eight equal points)."""
         return Draws(f"{self.seed}/{self.chapter}/{self.check_id}")
 
 

@@ -2,7 +2,9 @@
 
 A question says what is asked; its key, in a separate file, says what is right, how close is close
 enough, and what each wrong answer means. Parametrised questions draw their numbers per learner
-(seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine);
+(seeded by a SHA-256 of learner id, chapter and question: the same on every run and machine), drawn
+again where a question's `avoid` says the numbers make a known slip indistinguishable from the key
+(`grade selftest` finds such numbers);
 the key of a numeric one is computed by the reference implementation
 (grader.expected.reference_function, trusted code imported in the grading process), never stored;
 that of a symbolic one (a derivation per learner: the map itself holds the numbers) is an
@@ -36,6 +38,8 @@ def _quiz_dir() -> Path:
 
 QUIZ_DIR = _quiz_dir()  # the default of every quiz_dir argument, read at call time
 KINDS = ("choice", "multi", "numeric", "vector", "matrix", "symbolic")
+SMALLEST = 0.5  # a per-learner number is at least this in size
+MAX_DRAWS = 1000  # draws of a learner's numbers before a range (or its `avoid`) is called one that leaves none
 
 
 class BankError(ValueError):
@@ -70,19 +74,44 @@ class Question:
     domain: dict[str, tuple[float, float]] = field(default_factory=dict)  # symbolic: symbol -> range
     derived: dict[str, str] = field(default_factory=dict)  # symbolic: a symbol answers may use -> its definition
     entries: dict = field(default_factory=dict)  # vector/matrix: symbol, rows, cols, derivative (grader.compare.Entries)
+    # numbers drawn again: expression in the params -> the size it must exceed (0: it must not be 0), e.g.
+    # {"r - 1": 0} where r = 1 makes 1/r^2 equal its reciprocal, so that a learner's slip could not be told apart
+    avoid: dict[str, float] = field(default_factory=dict)
 
     def values_for(self, learner: str, chapter: str) -> dict[str, float]:
         """This learner's numbers for a parametrised question (empty for a fixed one): each
-        parameter uniform in its range, one decimal, at least 0.5 in size."""
+        parameter uniform in its range, one decimal, at least 0.5 in size; all of them drawn again
+        while one of the `avoid` expressions is within its size of 0 (the same draws as without
+        `avoid` for every learner it does not concern). BankError for a range (or `avoid`) that
+        leaves no numbers."""
         draw = random.Random(variant_seed(learner, chapter, self.id))
-        values = {}
-        for name, (low, high) in self.params.items():
-            while True:
-                value = round(draw.uniform(low, high), 1)
-                if abs(value) >= 0.5:
-                    values[name] = value
-                    break
-        return values
+        for _ in range(MAX_DRAWS):
+            values = {}
+            for name, (low, high) in self.params.items():
+                for _ in range(MAX_DRAWS):
+                    value = round(draw.uniform(low, high), 1)
+                    if abs(value) >= SMALLEST:
+                        values[name] = value
+                        break
+                else:
+                    raise BankError(f"question {self.id}: its parameter {name} in [{low:g}, {high:g}] has no value "
+                                    f"of size {SMALLEST:g} or more with one decimal")
+            if not self.avoided(values):
+                return values
+        raise BankError(f"question {self.id}: its `avoid` leaves (almost) no numbers in its parameters' ranges")
+
+    def avoided(self, values: dict[str, float]) -> str:
+        """The `avoid` expression these numbers make (almost) 0, or "" (an expression without a value here,
+        e.g. a division by 0, is avoided too)."""
+        from grader.quiz.symbolic import AnswerError, Undefined, evaluate
+
+        for text, size in self.avoid.items():
+            try:
+                if abs(evaluate(_avoid_tree(text, tuple(self.params)), values)) <= max(float(size), 1e-9):
+                    return text
+            except (Undefined, AnswerError):
+                return text
+        return ""
 
     def text_for(self, values: dict[str, float]) -> str:
         """The prompt with this learner's numbers filled in."""
@@ -144,6 +173,13 @@ class Key:
         return result
 
 
+@functools.lru_cache(maxsize=256)
+def _avoid_tree(text: str, names: tuple[str, ...]):
+    from grader.quiz.symbolic import check_text
+
+    return check_text(text, names)
+
+
 def _load(path: Path) -> object:
     try:
         return yaml.load(path.read_text(encoding="utf-8"), Loader=SAFE_LOADER)
@@ -174,8 +210,27 @@ def _questions(chapter: str, quiz_dir: Path) -> list[Question]:
             shape=tuple(raw.get("shape", ())), answer_format=str(raw.get("format", "")),
             domain={str(k): (float(v[0]), float(v[1])) for k, v in (raw.get("domain") or {}).items()},
             derived={str(k): str(v) for k, v in (raw.get("derived") or {}).items()},
-            entries=dict(raw.get("entries") or {}),
+            entries=dict(raw.get("entries") or {}), avoid=_avoid(path, raw),
         ))
+    return out
+
+
+def _avoid(path: Path, raw: dict) -> dict[str, float]:
+    """A question's `avoid` ({expression in its params: size}), each expression checked; BankError naming the
+    file and question for one that does not read."""
+    from grader.quiz.symbolic import AnswerError
+
+    avoid = raw.get("avoid") or {}
+    names = tuple(str(n) for n in (raw.get("params") or {}))
+    if not isinstance(avoid, dict):
+        raise BankError(f"{path}: question {raw.get('id')!r}: avoid is a mapping {{expression in the params: size}}")
+    out = {}
+    for text, size in avoid.items():
+        try:
+            _avoid_tree(str(text), names)
+            out[str(text)] = float(size)
+        except (AnswerError, TypeError, ValueError) as exc:
+            raise BankError(f"{path}: question {raw.get('id')!r}: avoid {text!r}: {exc}") from None
     return out
 
 

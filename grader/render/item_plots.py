@@ -1,5 +1,5 @@
-"""The class summary's figure per chapter: each item's facility against its discrimination, items labelled, the
-flagging rules as guide lines; drawn by matplotlib as the HTML report's figures are (grader.render.figures: an SVG
+"""The class summary's figure per chapter: each item's facility against its discrimination, items labelled (by their
+number in the chapter's table; a flagged one by its name too), the flagging rules as guide lines; drawn by matplotlib as the HTML report's figures are (grader.render.figures: an SVG
 data URI with a text alternative that says the same in numbers). It reads only the numbers grader.statistics
 computed."""
 
@@ -36,21 +36,25 @@ def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figu
         if group:
             ax.scatter([i["facility"] for i in group], [i["discrimination"] for i in group], s=28, color=colour,
                        marker=marker, label=label, zorder=3)
-    for item in placed:
-        ax.annotate(_short(item), (item["facility"], item["discrimination"]), xytext=(3, 2),
-                    textcoords="offset points", fontsize=6.5, color="#111827" if item["flags"] else "#374151")
+    for number, item in enumerate(items, 1):  # by number (the chapter's table has them), flagged ones by name too
+        if item in placed:
+            label = f"{number} {_short(item)}" if item["flags"] else str(number)
+            ax.annotate(label, (item["facility"], item["discrimination"]), xytext=(3, 2), textcoords="offset points",
+                        fontsize=7 if item["flags"] else 6, color="#111827" if item["flags"] else "#374151")
     for x in (rules["facility_low"], rules["facility_high"]):
         ax.axvline(x, color=GUIDE, linestyle=":", linewidth=1)
     ax.axhline(rules["discrimination_low"], color=GUIDE, linestyle=":", linewidth=1)
     low = min([-0.1] + [i["discrimination"] for i in placed])
-    ax.set(xlim=(-0.02, 1.05), ylim=(low - 0.05, 1.0), xlabel="facility (mean share of the item's points)",
+    high = max([0.5] + [i["discrimination"] for i in placed])
+    ax.set(xlim=(-0.02, 1.05), ylim=(low - 0.05, min(1.0, high + 0.1)), xlabel="facility (mean share of the item's points)",
            ylabel="discrimination (with the rest of the score)",
            title=f"{chapter}: facility against discrimination ({learners} learners)")
     ax.legend(fontsize=8, loc="upper left")
     fig.subplots_adjust(left=0.1, right=0.97, bottom=0.12, top=0.92)
     caption = (f"{chapter}: each item's facility against its discrimination; dotted lines at the flagging rules "
                f"(facility {rules['facility_low']:g} and {rules['facility_high']:g}, discrimination "
-               f"{rules['discrimination_low']:g}); flagged items as triangles")
+               f"{rules['discrimination_low']:g}); flagged items as triangles, with their names; the numbers are "
+               "those of the chapter's table of items")
     return Figure(svg_uri(fig), f"{caption}. {_in_numbers(items, placed)}", caption, 750, 460,
                   _in_numbers(items, placed))
 

@@ -280,12 +280,13 @@ def _statistics_parts(found: dict | None) -> Iterator[str]:
             image = (f"<img src='{figure.uri}' alt='{escape(figure.alt)}' width='{figure.width}' "
                      f"height='{figure.height}'>" if figure.uri else "")
             yield f"<figure>{image}<figcaption>{escape(figure.caption)}</figcaption></figure>"
-        rows = [[f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", str(i["learners"]),
+        rows = [[str(number), f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", str(i["learners"]),
                  _number(i["facility"]), _number(i["discrimination"]), _number(i["upper_lower"]),
-                 "flagged" if i["flags"] else ""] for i in items if i["chapter"] == name]
-        yield f"<details><summary>Every item of {escape(name)}</summary>"
+                 "flagged" if i["flags"] else ""]
+                for number, i in enumerate((i for i in items if i["chapter"] == name), 1)]
+        yield f"<details><summary>Every item of {escape(name)} (numbered as in the figure)</summary>"
         yield _table(f"item-table-{escape(name)}", f"Items of {name}",
-                     ["item", "learners", "facility", "discrimination", "upper-lower", ""], rows, {1, 2, 3, 4})
+                     ["#", "item", "learners", "facility", "discrimination", "upper-lower", ""], rows, {0, 2, 3, 4, 5})
         yield "</details>"
     options = [(i, o) for i in items for o in i["options"]]
     if options:
