@@ -35,6 +35,9 @@ if TYPE_CHECKING:
 KAPPA_MAX = 100.0  # a key more sensitive than this to its numbers loses more than two of the learner's digits
 LEARNER_PREFIX = "selftest-"  # the learner id of a seed's quiz draw
 DEFAULT_SEEDS = 25
+# the references are trusted and quick (about 0.3 s a seed): limits a busy machine never reaches, so that a timeout
+# says the references hang, never that other work held the cores
+REFERENCE_SECONDS = 600.0
 
 
 @dataclass
@@ -287,7 +290,7 @@ def check_reference_answers(chapters: list[str], watch: Watch, seed: int) -> int
         return 0
     import solutions
 
-    folder = Path(list(solutions.__path__)[0]) / "answers"
+    folder = Path(next(iter(solutions.__path__))) / "answers"
     judged = 0
     for chapter in chapters:
         try:
@@ -315,18 +318,21 @@ def check_code(chapters: list[str], seeds: list[int], watch: Watch, course: Cour
     counted."""
     from grader import boundary, grading
     from grader import checks as check_registry
+    from grader.boundary import Limits
     from grader.model import Status
     from grader.pipeline import switched_off
     from grader.submission import locate
 
     submission = locate(None, True)
     door = boundary.choose(sandbox, resident=True)
+    limits = Limits(call_seconds=REFERENCE_SECONDS / 10, chapter_seconds=REFERENCE_SECONDS,
+                    learner_seconds=REFERENCE_SECONDS, cpu_seconds=int(REFERENCE_SECONDS))
     off = switched_off(course, tuple(chapters)) if course is not None else frozenset()
     counted = {"checks judged": 0, "comparisons weighed": 0}
     try:
         for done, seed in enumerate(seeds, 1):
             plans = [grading.ChapterPlan(check_registry.load(c), seed, exclude=off) for c in chapters]
-            session = door.open_session(submission)
+            session = door.open_session(submission, limits)
             try:
                 runs = session.run([plan.request() for plan in plans])
             finally:

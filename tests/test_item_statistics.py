@@ -16,8 +16,8 @@ import pytest
 
 from grader import batch, statistics
 from grader import checks as check_registry
-from grader.history import History
 from grader.chapters import BY_ID
+from grader.history import History
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
 from grader.render import lms

@@ -59,7 +59,8 @@ def test_the_planted_range_fails_at_the_draws_next_to_a_and_only_there(planted):
 def test_a_planted_ill_conditioned_range_fails_naming_its_seed_and_the_command_reproduces_it(planted):
     done = run_grade("selftest", "--seeds", 60, "--chapters", "ch01", "--no-code", "--quizzes", planted)
     assert done.returncode == 1, done.stdout + done.stderr[-2000:]
-    found = re.search(r"^FAIL ch01/quiz_error_value at seed (\d+) \(and (\d+) other seeds\):$", done.stdout, re.M)
+    found = re.search(r"^FAIL ch01/quiz_error_value at seed (\d+) \(and (\d+) other seeds\):$", done.stdout,
+                      re.MULTILINE)
     assert found, done.stdout
     seed = int(found[1])
     first = done.stdout.split(found[0], 1)[1]
