@@ -1,9 +1,21 @@
-"""The misconception corpus: one-bug submissions (CODE) and wrong quiz answers (QUIZ), each with the
-mistake the grader should name, graded for real (quiz keys of per-learner questions computed by the
-installed references); prints the share named correctly and any diagnosis offered on a right answer
-(there must be none). Target: at least 80% named.
+"""The misconception corpora, graded for real; prints the share named correctly and any diagnosis offered on
+a right answer (there must be none).
 
-    python benchmarks/misconceptions.py [--verbose]
+- CODE and QUIZ: one-bug submissions and wrong quiz answers written from the catalogue of named
+  mistakes, each with the mistake the grader should name (quiz keys of per-learner questions computed by
+  the installed references). Target: at least 80% named.
+- The generated corpus, made independently of that catalogue: every single-slip variant of each graded
+  function's reference (grader.mutants: a term dropped, a factor 2, a power off by one, sin for cos,
+  a sign, degrees, the point of evaluation moved, integer arithmetic, mean for max, an index for its
+  value, a missing normalisation, ...), each written into the reference solutions as a learner's file
+  would hold it and graded through the normal pipeline on its function's checks. Counted are the
+  variants some check tells from right (the others are listed); a variant is named when a failing check
+  of its function names a mistake: its own sentence, an equivalent slip's (one the learner's outputs
+  equal at every input), or a check's own or generic entry (they take precedence). Target: at least 90%
+  named, and no diagnosis on any right submission (the references at several seeds, and the submission
+  written from the contract alone, tests/fixtures/contract_submission).
+
+    python benchmarks/misconceptions.py [--corpus catalogue|generated|all] [--chapter ch05 ...] [--verbose]
 """
 
 from __future__ import annotations
@@ -579,27 +591,156 @@ def quiz_diagnoses_on_right_answers(folder: Path) -> list[tuple[str, str, str, s
 
 
 def grade_one(root: Path, chapter: str):
-    from grader.boundary.session import Session
-    from grader.grading import grade
-    from grader.submission import Submission
+    """One chapter of the submission at root/exercises, graded as `grade` grades it (in a child, no sandbox)."""
+    from tests.support import grade_code
 
-    return grade(Session(Submission(root, "exercises")), [chapter]).chapters[0]
+    return grade_code(root, [chapter]).chapters[0]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--verbose", action="store_true")
-    args = parser.parse_args()
+RIGHT_SEEDS = (None, 1, 2, 5, 7, 731904562)  # the public seed, the test suite's others and the course's
+
+
+def diagnoses_on_right_submissions(folder: Path) -> list[tuple]:
+    """(submission, seed, chapter, check, mistake) for every check of a right submission that got a diagnosis:
+    the references at RIGHT_SEEDS and the submission written from the contract alone (there must be none)."""
+    import shutil
+
+    from grader.chapters import CHAPTERS
+    from tests.support import grade_code
+
+    offered = []
+    for seed in RIGHT_SEEDS:
+        report = grade_code(ROOT, [c.id for c in CHAPTERS], "solutions", seed=seed)
+        offered += [("solutions", seed, ch.chapter, c.id, c.mistake) for ch in report.chapters for c in ch.checks
+                    if c.mistake or c.help]
+    package = folder / "contract" / "exercises"
+    shutil.copytree(ROOT / "tests" / "fixtures" / "contract_submission", package)
+    (package / "__init__.py").write_text("", encoding="utf-8")
+    chapters = sorted(p.stem[:4] for p in package.glob("ch*.py"))
+    for seed in (None, 731904562):
+        report = grade_code(folder / "contract", chapters, seed=seed)
+        offered += [("contract", seed, ch.chapter, c.id, c.mistake) for ch in report.chapters for c in ch.checks
+                    if c.mistake or c.help]
+    return offered
+
+
+def generated_corpus(chapters: list[str]) -> list[tuple[str, str, object]]:
+    """(chapter, function, mutant) for every single slip grader.mutants makes of every graded function."""
+    from grader import checks, mutants
+
+    out = []
+    for chapter in chapters:
+        functions = list(dict.fromkeys(c.function for c in checks.load(chapter).checks))
+        out += [(chapter, function, mutant) for function in functions for mutant in mutants.mutants(chapter, function)]
+    return out
+
+
+def grade_mutant(folder: Path, chapter: str, function: str, mutant) -> list:
+    """The results of `function`'s checks for the reference solutions with `function` replaced by `mutant`."""
+    from grader import checks, mutants
+    from grader.chapters import BY_ID
+    from grader.grading import DEFAULT_SEED, grade
+    from tests.support import open_session
+
+    module = BY_ID[chapter].module
+    root = build_submission(folder, {module: replace_function(module, function, mutants.standalone(mutant))})
+    others = frozenset(f"{chapter}/{c.id}" for c in checks.load(chapter).checks if c.function != function)
+    report = grade(open_session(root), [chapter], seed=DEFAULT_SEED, exclude=others)
+    return report.chapters[0].checks
+
+
+def planned_calls(chapter: str) -> dict[str, list]:
+    """The learner calls every check of `chapter` makes at the public seed, by function."""
+    from grader import checks
+    from grader.grading import DEFAULT_SEED, ChapterPlan
+
+    out: dict[str, list] = {}
+    for call in ChapterPlan(checks.load(chapter), DEFAULT_SEED).calls:
+        out.setdefault(call.function, []).append(call)
+    return out
+
+
+def equivalent(chapter: str, function: str, mutant, calls: dict, copies: int = 3) -> bool:
+    """Whether the mutant gives the reference's value also at random perturbations of its checks' inputs (then no
+    input would tell it from right: it is the right function written otherwise)."""
+    import numpy as np
+
+    from grader import mutants
+
+    rng = np.random.default_rng(0)
+    probes = [mutants.perturbed(c, rng) for c in calls.get(function, []) for _ in range(copies)]
+    return not mutants.told_apart(chapter, mutant, probes)
+
+
+def run_generated(chapters: list[str], verbose: bool) -> None:
+    from collections import Counter
+
+    from grader import mutants
+
+    corpus = generated_corpus(chapters)
+    calls = {chapter: planned_calls(chapter) for chapter in chapters}
+    kinds = {m.name for _, _, m in corpus}
+    outcome: Counter = Counter()
+    by_kind: dict[str, Counter] = {}
+    quiet, raising = [], []
+    with tempfile.TemporaryDirectory() as folder:
+        for i, (chapter, function, mutant) in enumerate(corpus):
+            results = grade_mutant(Path(folder) / f"m{i}", chapter, function, mutant)
+            failed = [c for c in results if c.status.value in ("fail", "error")]
+            if not failed:
+                quiet.append((chapter, function, mutant))
+                continue
+            if all(mutants.evaluate(mutant.function, *mutants.arguments_of(c)()) is None
+                   for c in calls[chapter].get(function, [])):
+                raising.append((chapter, function, mutant))  # it returns no value to name: its traceback is shown
+                continue
+            said = [(c.mistake, c.help) for c in failed if c.mistake]
+            if (mutant.name, mutant.help) in said:
+                verdict = "itself"
+            elif any(name == mutant.name for name, _ in said):
+                verdict = "same kind"
+            elif any(name not in kinds for name, _ in said):
+                verdict = "own"
+            elif said:
+                verdict = "equivalent"
+            else:
+                verdict = "unnamed"
+            outcome[verdict] += 1
+            by_kind.setdefault(mutant.name, Counter())[verdict] += 1
+            if verbose or verdict == "unnamed":
+                print(f"{verdict:11} {chapter} {mutant.key:28} {mutant.name:18} {mutant.help[:70]!r} "
+                      f"got {sorted({n for n, _ in said})}")
+        offered = diagnoses_on_right_submissions(Path(folder))
+    told = sum(outcome.values())
+    named = told - outcome["unnamed"]
+    print(f"\ngenerated corpus: {len(corpus)} single-slip variants of the references in {len(chapters)} chapters; "
+          f"{told + len(raising)} told from right by the checks ({len(raising)} of them raise at every input, so no "
+          f"value is there to name: their traceback is shown), {len(quiet)} not")
+    print(f"named: {named} of {told} ({named / max(told, 1):.1%}; target >= 90%): as itself {outcome['itself']}, "
+          f"by another slip of its kind {outcome['same kind']}, by an equivalent slip {outcome['equivalent']}, "
+          f"by the check's own or a generic entry {outcome['own']}; unnamed {outcome['unnamed']}")
+    print(f"{'kind':20} {'told':>5} {'named':>6}")
+    for kind, counts in sorted(by_kind.items()):
+        total = sum(counts.values())
+        print(f"{kind:20} {total:5} {total - counts['unnamed']:6}")
+    same = [(c, f, m) for c, f, m in quiet if equivalent(c, f, m, calls[c])]
+    print(f"not told from right: {len(quiet)}, of which {len(same)} give the right value at random inputs too "
+          "(equivalent: the right function written otherwise)")
+    for chapter, function, mutant in quiet:
+        if verbose or (chapter, function, mutant) not in same:
+            print(f"  {'equivalent' if (chapter, function, mutant) in same else 'NOT TOLD':10} {chapter} "
+                  f"{mutant.key:28} {mutant.name:18} {mutant.help[:70]!r}")
+    print(f"diagnoses offered on right submissions (the references at {len(RIGHT_SEEDS)} seeds, the contract's "
+          f"submission at 2): {len(offered)}" + (f" {offered}" if offered else ""))
+
+
+def run_catalogue(verbose: bool) -> None:
     named = 0
     with tempfile.TemporaryDirectory() as folder:
-        right = grade_one(build_submission(Path(folder) / "right"), "ch00")
         offered = []
         for chapter in [f"ch0{i}" for i in range(10)]:
-            from grader.chapters import BY_ID
-
             report = grade_one(build_submission(Path(folder) / f"right-{chapter}"), chapter)
             offered += [(chapter, c.id, c.mistake) for c in report.checks if c.mistake]
-        del right
         for i, (name, (module, function, source, wanted)) in enumerate(CODE.items()):
             root = build_submission(Path(folder) / f"bug{i}", {module: replace_function(module, function, source)})
             chapter = module[:4]
@@ -607,19 +748,18 @@ def main() -> None:
             got = sorted({c.mistake for c in result.checks if c.function == function and c.mistake})
             ok = wanted in got
             named += ok
-            if args.verbose or not ok:
+            if verbose or not ok:
                 print(f"{'named' if ok else 'MISSED':6} {name:34} wanted {wanted!r:24} got {got}")
     share = named / len(CODE)
     print(f"\ncode: {named} of {len(CODE)} one-bug submissions named correctly ({share:.0%}; target >= 80%)")
     print(f"diagnoses offered on right answers: {len(offered)}" + (f" {offered}" if offered else ""))
-    del BY_ID
     quiz_named = 0
     with tempfile.TemporaryDirectory() as folder:
         for i, (chapter, question, text, learner, wanted) in enumerate(QUIZ):
             result = grade_quiz_answer(Path(folder) / f"answer{i}", chapter, question, text, learner)
             ok = result.mistake == wanted and result.status.value == "fail"
             quiz_named += ok
-            if args.verbose or not ok:
+            if verbose or not ok:
                 print(f"{'named' if ok else 'MISSED':6} {chapter} {question:22} {text!r:40} wanted {wanted!r:28} "
                       f"got {result.mistake!r}")
         quiz_offered = quiz_diagnoses_on_right_answers(Path(folder))
@@ -627,6 +767,18 @@ def main() -> None:
     print(f"\nquiz: {quiz_named} of {len(QUIZ)} wrong answers named correctly ({quiz_share:.0%}; target >= 80%)")
     print(f"quiz diagnoses offered on right answers ({len(QUIZ_LEARNERS)} learners' reference answers): "
           f"{len(quiz_offered)}" + (f" {quiz_offered}" if quiz_offered else ""))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--corpus", choices=("catalogue", "generated", "all"), default="all")
+    parser.add_argument("--chapter", action="append", help="the generated corpus of these chapters only")
+    parser.add_argument("--verbose", action="store_true")
+    args = parser.parse_args()
+    if args.corpus in ("catalogue", "all"):
+        run_catalogue(args.verbose)
+    if args.corpus in ("generated", "all"):
+        run_generated(args.chapter or [f"ch0{i}" for i in range(10)], args.verbose)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,18 @@ from typing import Callable
 import numpy as np
 
 from grader.boundary.wire import RAISED, Returned
-from grader.diagnose import SMALL, Mistake, diagnose, shape_mistake, within
+from grader.diagnose import (
+    SMALL,
+    Evidence,
+    Mistake,
+    combined,
+    explain,
+    generated,
+    generic,
+    shape_mistake,
+    weigh,
+    within,
+)
 from grader.numbers import fmt, fmt_array  # noqa: F401  (the checks' messages import them from here)
 
 SHOWN_ENTRIES = 3
@@ -33,6 +44,43 @@ class Verdict:
     got: object = None
     details: dict = field(default_factory=dict)
     mistake: Mistake | None = None  # the known mistake the wrong value matches (grader.diagnose)
+    help: str = ""  # what to change (the named mistake's sentence), apart from the message, which says what is wrong
+    # what this comparison says of each candidate mistake, worked out when a check's failure asks (grader.diagnose)
+    evidence: Callable[[], Evidence] | None = field(default=None, repr=False, compare=False)
+    _weighed: Evidence | None = field(default=None, init=False, repr=False, compare=False)
+
+    def weigh(self) -> Evidence | None:
+        """What this comparison says of each candidate mistake; None for a failure no mistake can explain (a
+        failure with neither a comparison of values nor a mistake of its own)."""
+        if self._weighed is None:
+            if self.evidence is not None:
+                self._weighed = self.evidence()
+            elif self.mistake is not None:
+                self._weighed = Evidence({self.mistake.id: self.mistake})
+            elif self.passed:
+                self._weighed = Evidence()
+            else:
+                return None
+        return self._weighed
+
+    def also(self, extra: Callable[[], Evidence]) -> Verdict:
+        """This verdict with more evidence (e.g. the generated slips of the raw value a derived comparison was
+        made of, or a mistake of the check's own), its failure named again from all of it."""
+        own, mistake = self.evidence, self.mistake
+
+        def both() -> Evidence:
+            first = own() if own is not None else Evidence({mistake.id: mistake} if mistake is not None else {})
+            second = extra()
+            ruled = first.ruled_out | second.ruled_out  # told apart anywhere: not this slip
+            return Evidence({k: m for k, m in {**first.matched, **second.matched}.items() if k not in ruled}, ruled)
+        self.evidence, self._weighed = both, None
+        if not self.passed:
+            self.name(explain([self.weigh()]))
+        return self
+
+    def name(self, mistake: Mistake | None) -> None:
+        """Name `mistake` (or none) as what this failure is: its help goes apart from the message."""
+        self.mistake, self.help = mistake, mistake.help if mistake is not None else ""
 
 
 @dataclass(frozen=True)
@@ -113,8 +161,9 @@ def tolerance_text(rtol: float, atol: float) -> str:
 
 
 def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: str | Label,
-                  symbol: str = "result") -> str | None:
-    """Why `returned` cannot be compared to a result of `expected_shape`, or None if it can."""
+                  symbol: str = "result", with_help: bool = True) -> str | None:
+    """Why `returned` cannot be compared to a result of `expected_shape`, or None if it can (with the help for a
+    wrong shape with the right entries, unless `with_help` is False: the caller gives it apart)."""
     if not returned.ok:
         return returned.problem()
     enc = returned.encoded
@@ -135,7 +184,7 @@ def value_problem(returned: Returned, expected_shape: tuple[int, ...], label: st
     if got.shape != expected_shape:
         mistake = shape_mistake(got.shape, expected_shape, symbol)
         return f"{label} returned shape {got.shape}; expected shape {expected_shape}." + \
-            (f" {mistake.help[0].upper()}{mistake.help[1:]}" if mistake else "")
+            (f" {mistake.help[0].upper()}{mistake.help[1:]}" if mistake and with_help else "")
     return None
 
 
@@ -143,17 +192,19 @@ def expect(returned: Returned, expected: object, *, label: str | Label, rtol: fl
            atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = (),
            exact: bool = False) -> Verdict:
     """Compare a learner's returned value with the expected number or array (see compare_arrays); a
-    wrong value is named by the first of `mistakes` (then of the generic slips) it matches."""
+    wrong value is named by the first of `mistakes` (then of the generic slips, then of the slips generated
+    from the reference at this very call) it matches."""
     expected = np.asarray(expected, dtype=np.float64)
     symbol = (entries or Entries("result")).symbol
-    problem = value_problem(returned, expected.shape, label, symbol)
+    problem = value_problem(returned, expected.shape, label, symbol, with_help=False)
     if problem is not None:
         got = returned.as_array() if returned.ok else None
-        mistake = shape_mistake(got.shape, expected.shape, symbol) if got is not None else None
-        return Verdict(False, problem, expected=expected,
-                       details={"traceback": returned.traceback} if returned.traceback else {}, mistake=mistake)
+        verdict = Verdict(False, problem, expected=expected,
+                          details={"traceback": returned.traceback} if returned.traceback else {})
+        verdict.name(shape_mistake(got.shape, expected.shape, symbol) if got is not None else None)
+        return verdict
     return compare_arrays(returned.as_array(), expected, label=label, rtol=rtol, atol=atol, entries=entries,
-                          mistakes=mistakes, exact=exact)
+                          mistakes=mistakes, exact=exact, source=returned)
 
 
 def _all_within(got: list[float], expected: list[float], rtol: float, atol: float, exact: bool) -> bool:
@@ -171,39 +222,49 @@ def _all_within(got: list[float], expected: list[float], rtol: float, atol: floa
 def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label, rtol: float = 1e-6,
                    atol: float = 1e-9, entries: Entries | None = None,
                    expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False,
-                   digits: int = 6) -> Verdict:
+                   digits: int = 6, source: Returned | None = None) -> Verdict:
     """Values of two float arrays of the same shape, with the worst entries named (to `digits` significant
-    digits), and the mistake the wrong value matches (grader.diagnose) said first. Any real dtype is a right
-    answer (the contract): unless `exact` (a check telling apart values closer than that, e.g.
+    digits), and the mistake the wrong value matches (grader.diagnose) as the verdict's help. Any real dtype
+    is a right answer (the contract): unless `exact` (a check telling apart values closer than that, e.g.
     finite-difference conventions), the tolerance is at least single-precision round-off relative to the
-    result's scale, so that float32 (jax's and torch's default), there or anywhere upstream, is right."""
+    result's scale, so that float32 (jax's and torch's default), there or anywhere upstream, is right.
+    `source`: the learner's Returned whose value `got` is, so that the slips generated from the reference at
+    that call are candidates too."""
     got = np.asarray(got, dtype=np.float64)
     expected = np.asarray(expected, dtype=np.float64)
     if got.shape != expected.shape:
         return Verdict(False, f"{label}: shape {got.shape}, expected {expected.shape}.", expected, got)
+    named_entries = (entries or Entries("result")) if expected_name == "expected" else None
     observer = _OBSERVER.get()
     if observer is not None:  # grade selftest: what this comparison could tell apart
-        observer(Comparison(expected, rtol, atol, exact, tuple(mistakes),
-                            (entries or Entries("result")) if expected_name == "expected" else None))
+        observer(Comparison(expected, rtol, atol, exact, tuple(mistakes), named_entries, source))
+
+    def evidence() -> Evidence:
+        low, high = _tolerance(expected, rtol, atol, exact)
+        candidates = list(mistakes) + (generic(expected, named_entries) if named_entries is not None else []) + \
+            (generated(source) if source is not None else [])
+        return weigh(got, expected, candidates, low, high)
+
     if got.size <= SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
-        return Verdict(True, "", expected, got)
-    if not exact:
-        scale = float(np.max(np.abs(expected[np.isfinite(expected)]), initial=0.0))
-        rtol, atol = max(rtol, SINGLE_PRECISION), max(atol, SINGLE_PRECISION * scale)
+        return Verdict(True, "", expected, got, evidence=evidence)
+    rtol, atol = _tolerance(expected, rtol, atol, exact)
     entries = entries or Entries("result")
     bad_got = ~np.isfinite(got)
     if bad_got.any() and not np.array_equal(bad_got, ~np.isfinite(expected)):
         where = [entries.name(tuple(int(i) for i in idx)) for idx in np.argwhere(bad_got)[:SHOWN_ENTRIES]]
         if got.ndim == 0:
             where = [entries.symbol]
-        return Verdict(False, f"{label} is not finite: {', '.join(where)} = {fmt(got[tuple(np.argwhere(bad_got)[0])])}.",
-                       expected, got, {"wrong": np.argwhere(bad_got).tolist()})
+        verdict = Verdict(False, f"{label} is not finite: {', '.join(where)} = "
+                                 f"{fmt(got[tuple(np.argwhere(bad_got)[0])])}.", expected, got,
+                          {"wrong": np.argwhere(bad_got).tolist()}, evidence=evidence)
+        verdict.name(explain([verdict.weigh()]))
+        return verdict
     diff = np.asarray(np.abs(got - expected))  # an array even for scalars (numpy returns a float64 there)
     diff[np.isnan(diff) & np.isnan(got) & np.isnan(expected)] = 0.0
     limit = atol + rtol * np.abs(expected)
     wrong = ~(diff <= limit)
     if not wrong.any():
-        return Verdict(True, "", expected, got)
+        return Verdict(True, "", expected, got, evidence=evidence)
     order = np.argsort(-np.where(wrong, diff, -1.0), axis=None, kind="stable")
     worst = [tuple(int(i) for i in np.unravel_index(k, got.shape)) for k in order[: min(SHOWN_ENTRIES, int(wrong.sum()))]]
     lines = []
@@ -216,11 +277,32 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
             lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny, digits)}, "
                          f"{expected_name} {fmt(expected[idx], tiny, digits)}")
     lines.append(f"  ({tolerance_text(rtol, atol)}; largest difference {fmt(diff.max())})")
-    mistake = diagnose(got, expected, mistakes, entries if expected_name == "expected" else None, rtol, atol)
-    if mistake is not None:
-        lines.insert(0, f"{label}: {mistake.help}")
-        lines[1] = "  " + lines[1].replace(f"{label}: ", "", 1)
-    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()}, mistake)
+    verdict = Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()},
+                      evidence=evidence)
+    verdict.name(explain([verdict.weigh()]))
+    return verdict
+
+
+def _tolerance(expected: np.ndarray, rtol: float, atol: float, exact: bool) -> tuple[float, float]:
+    """The tolerance compare_arrays applies: with the single-precision floor unless `exact`."""
+    if exact:
+        return rtol, atol
+    scale = float(np.max(np.abs(expected[np.isfinite(expected)]), initial=0.0))
+    return max(rtol, SINGLE_PRECISION), max(atol, SINGLE_PRECISION * scale)
+
+
+def exactly(returned: Returned, right: object = None, rtol: float = 1e-9, atol: float = 1e-12) -> Callable[[], Evidence]:
+    """The evidence of the slips generated from the reference at the call that returned `returned`, its value
+    weighed against theirs to `rtol` and `atol`: for a check that judges by another measure (a statistical
+    tolerance, a derived quantity), since a slip reproduces its value exactly from the same inputs and seed.
+    `right`: the right value there, if known (a slip equal to it says nothing)."""
+    def evidence() -> Evidence:
+        got = returned.as_array() if returned.ok else None
+        if got is None:
+            return Evidence()
+        want = np.full(got.shape, np.nan) if right is None else np.asarray(right, dtype=float)
+        return weigh(np.asarray(got, dtype=float), want, generated(returned), rtol, atol)
+    return evidence
 
 
 def expect_raises(returned: Returned, exception: str, *, label: str, why: str = "") -> Verdict:
@@ -240,14 +322,21 @@ def expect_raises(returned: Returned, exception: str, *, label: str, why: str = 
 
 
 def all_of(verdicts: list[Verdict]) -> Verdict:
-    """Pass when every verdict passes; otherwise the first failure, saying how many failed."""
+    """Pass when every verdict passes; otherwise the first failure, saying how many failed, with the mistake
+    that explains every failure (and is told apart at none of the passing inputs), if one does."""
     failures = [v for v in verdicts if not v.passed]
     if not failures:
         return Verdict(True, "", verdicts[-1].expected if verdicts else None, verdicts[-1].got if verdicts else None)
-    first = next((f for f in failures if f.mistake is not None), failures[0])  # a named mistake says most
+    first = failures[0]
+    failing = [f.weigh() for f in failures]
+    passing = [v for v in verdicts if v.passed]
+    first.name(explain(failing, (v.weigh() for v in passing)))
+    if first.mistake is not None:  # the inputs' evidence as one, for a check made of checks
+        first._weighed = combined(failing, [e for e in (v.weigh() for v in passing) if e is not None])
+    else:
+        first._weighed = Evidence()  # nothing explains these failures
     if len(verdicts) > 1 and len({f.message for f in failures}) > 1 or len(failures) < len(verdicts):
-        which = "the first" if first is failures[0] else "one of them"
-        first.message = f"wrong at {len(failures)} of {len(verdicts)} inputs; {which}:\n{first.message}"
+        first.message = f"wrong at {len(failures)} of {len(verdicts)} inputs; the first:\n{first.message}"
     return first
 
 

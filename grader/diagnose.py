@@ -1,21 +1,30 @@
 """Name the mistake: a wrong value compared with the known wrong versions of the right one.
 
 A `Mistake` is one misconception: a stable name, one sentence that says what to change, and the
-value a learner who makes it would return. Two kinds feed `diagnose`:
+value a learner who makes it would return. Three kinds feed a diagnosis, in this order of precedence:
+- the mistakes a check knows for its function (F^T P F, a missing dt, a forward difference, ...),
+  their values asked of the reference while the check plans, like any expected value;
 - generic transforms of the right answer, which any vector or matrix can suffer (every sign, one
   row's or one column's or one entry's sign, transposed, rows or columns swapped), named with the
   result's own entry names (grader.compare.Entries);
-- the mistakes a check knows for its function (F^T P F, a missing dt, a forward difference, ...),
-  their values asked of the reference while the check plans, like any expected value.
+- the mistakes generated from the reference (grader.mutants: every single slip of its code), their
+  values at the learner's own calls given by grader.expected (live in the project, recorded in a
+  handout) through `judging`, while a check judges.
 
-A diagnosis is only ever offered for a value that failed, and only when the learner's value equals
-the mistake's within the comparison's own tolerance and the mistake's value is not itself right.
+Every comparison weighs every candidate (`weigh`): the learner's value equals it (matched), or the
+candidate is told from the right value and from the learner's (ruled out), or it says nothing here
+(its value is the right one, or unknown). A mistake is named (`explain`) only when it is matched at
+every failing input of the check and ruled out at none; a generated one only when it is the only
+generated slip that is (two that say the same sentence count as one).
 """
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -25,6 +34,14 @@ class Mistake:
     name: str
     help: str
     value: object = None  # what a learner making this mistake returns (None: not known for this case)
+    origin: str = "known"  # "known" (the check's own), "generic" (a transform) or "generated" (grader.mutants)
+    key: str = ""  # what identifies it across a check's inputs, when its name does not (a mutant's key)
+
+    @property
+    def id(self) -> str:
+        """The same mistake at every input of a check: a check's own by its name (its help may quote the input),
+        a generic one by its name and help (which say which entry), a generated one by its key."""
+        return self.key or (self.name if self.origin == "known" else f"{self.name}\n{self.help}")
 
 
 def known(values: dict, helps: dict) -> list[Mistake]:
@@ -86,33 +103,203 @@ def generic(expected: np.ndarray, entries) -> list[Mistake]:
             out.append(Mistake("entries swapped", f"the two entries of {symbol} are swapped.", expected[::-1]))
     out.append(Mistake("every sign", f"every entry of {symbol} has the wrong sign." if expected.ndim else
                        f"{symbol} has the wrong sign.", -expected))
-    return out
+    return [Mistake(m.name, m.help, m.value, "generic") for m in out]
 
 
-def diagnose(got: np.ndarray, expected: np.ndarray, mistakes, entries, rtol: float, atol: float) -> Mistake | None:
-    """The first mistake (the check's own, then the generic ones) whose value `got` equals, or None."""
-    candidates = list(mistakes) + (generic(expected, entries) if entries is not None else [])
+SKETCHED = 64  # a generated slip's value of more entries than this is known by its Sketch
+
+
+@dataclass(frozen=True)
+class Sketch:
+    """A large value known by its first entries, their sum and their sum of squares: what a generated slip of a
+    function that returns thousands of samples keeps of its value (the record a handout carries stays small), and
+    what a learner's value is compared with it by."""
+
+    shape: tuple
+    values: tuple
+
+    @classmethod
+    def of(cls, array: np.ndarray) -> Sketch:
+        flat = np.asarray(array, dtype=float).ravel()
+        return cls(tuple(np.shape(array)), tuple(float(v) for v in (*flat[:16], flat.sum(), (flat * flat).sum())))
+
+
+@dataclass
+class Evidence:
+    """What one comparison says of each candidate mistake (by Mistake.id): the learner's value equals it here
+    (`matched`, in the order of precedence), or it is told from both the right value and the learner's
+    (`ruled_out`); a candidate in neither says nothing here."""
+
+    matched: dict[str, Mistake] = field(default_factory=dict)
+    ruled_out: set[str] = field(default_factory=set)
+
+
+def weigh(got: np.ndarray, expected: np.ndarray, candidates, rtol: float, atol: float) -> Evidence:
+    """Every candidate (with a value) against the learner's value `got` and the right value `expected`, within
+    the comparison's own tolerance."""
+    evidence = Evidence()
     # plain floats for small finite values: the same comparisons, without a dozen numpy calls per candidate
     plain = expected.size <= SMALL and bool(np.all(np.isfinite(expected)))
     got_list, expected_list = got.ravel().tolist(), expected.ravel().tolist()
     for mistake in candidates:
-        if mistake.value is None:
+        if mistake.value is None or mistake.id in evidence.matched:
+            continue  # no value; or a variant of a mistake already matched here
+        if isinstance(mistake.value, Sketch):
+            if mistake.value.shape != got.shape:
+                continue
+            small = weigh(np.array(Sketch.of(got).values), np.array(Sketch.of(expected).values),
+                          [Mistake(mistake.name, mistake.help, list(mistake.value.values), mistake.origin, mistake.id)],
+                          rtol, atol)
+            if mistake.id in small.matched:
+                evidence.matched[mistake.id] = mistake
+                evidence.ruled_out.discard(mistake.id)
+            elif mistake.id in small.ruled_out:
+                evidence.ruled_out.add(mistake.id)
             continue
-        value = np.asarray(mistake.value, dtype=float)
+        try:
+            value = np.asarray(mistake.value, dtype=float)
+        except (TypeError, ValueError):
+            continue
         if value.shape != got.shape:
             continue
-        if plain:
-            values = value.ravel().tolist()
-            if not all(map(math.isfinite, values)) or within(values, expected_list, rtol, atol):
-                continue  # not a value, or this slip makes no difference here
-            if within(got_list, values, rtol, atol):
-                return mistake
+        if plain and all(map(math.isfinite, values := value.ravel().tolist())):
+            if within(values, expected_list, rtol, atol):
+                continue  # this slip makes no difference here
+            matches = within(got_list, values, rtol, atol)
+        else:  # also a slip that gives NaN or inf here: it matches a value not finite in the same entries
+            if _alike(value, expected, rtol, atol):
+                continue
+            matches = _alike(got, value, rtol, atol)
+        if matches:
+            evidence.matched[mistake.id] = mistake
+            evidence.ruled_out.discard(mistake.id)
+        else:
+            evidence.ruled_out.add(mistake.id)
+    return evidence
+
+
+def _alike(got: np.ndarray, value: np.ndarray, rtol: float, atol: float) -> bool:
+    """Within |got - value| <= atol + rtol |value| where value is finite, and NaN or the same infinity where it
+    is not."""
+    finite = np.isfinite(value)
+    with np.errstate(invalid="ignore"):
+        return bool(np.array_equal(np.isnan(got), np.isnan(value)) and np.all(got[np.isinf(value)] == value[np.isinf(value)])
+                    and np.all(np.abs(got[finite] - value[finite]) <= atol + rtol * np.abs(value[finite])))
+
+
+def weigh_text(got: str, right: str, candidates) -> Evidence:
+    """weigh for a returned string: every candidate whose value is a string, compared exactly."""
+    evidence = Evidence()
+    for mistake in candidates:
+        if not isinstance(mistake.value, str) or mistake.value == right:
             continue
-        if not np.all(np.isfinite(value)) or np.allclose(value, expected, rtol=rtol, atol=atol):
-            continue
-        if np.all(np.abs(got - value) <= atol + rtol * np.abs(value)):
+        if mistake.value == got:
+            evidence.matched[mistake.id] = mistake
+        else:
+            evidence.ruled_out.add(mistake.id)
+    return evidence
+
+
+def explain(failing: list[Evidence | None], passing: Iterable[Evidence | None] = ()) -> Mistake | None:
+    """The mistake matched at every failing input and ruled out at none (the failing inputs' evidence, then,
+    drawn only if needed, the passing ones'): the first of the check's own or generic ones, else the generated
+    one, if only one generated sentence remains. None if nothing explains every failure."""
+    if not failing or any(e is None for e in failing):
+        return None
+    common = [i for i in failing[0].matched if all(i in e.matched for e in failing[1:])]
+    if not common:
+        return None
+    ruled = set().union(*(e.ruled_out for e in failing))
+    common = [i for i in common if i not in ruled]
+    if common:
+        for evidence in passing:
+            if evidence is not None:
+                common = [i for i in common if i not in evidence.ruled_out]
+    found = [failing[0].matched[i] for i in common]
+    for mistake in found:
+        if mistake.origin != "generated":
             return mistake
+    said = {(m.name, m.help) for m in found}
+    if len(said) == 1:
+        return found[0]
+    kinds = {m.name for m in found}  # slips of one kind in several places that give the same values here
+    if len(kinds) == 1 and found[0].name in OF_A_KIND:
+        return Mistake(found[0].name, OF_A_KIND[found[0].name], None, "generated", f"kind: {found[0].name}")
     return None
+
+
+# What slips of one kind (grader.mutants) have in common, said when several such slips explain the values alike.
+OF_A_KIND = {
+    "missing term": "your value misses one of its terms.",
+    "missing factor": "your value misses one of its factors.",
+    "missing divisor": "your value misses a division.",
+    "sign": "one sign is wrong.",
+    "factor 2": "a factor of 2 is missing or too many.",
+    "power": "a power is off by one.",
+    "sin for cos": "a sine and a cosine are mixed up.",
+    "arguments swapped": "two arguments are swapped.",
+    "point moved": "a function is evaluated at the wrong point.",
+    "reduction": "the values are reduced the wrong way (mean, sum, largest or smallest).",
+    "integer arithmetic": "integer arithmetic: convert the inputs to float first (np.asarray(x, dtype=float)).",
+    "degrees": "an angle is in degrees: angles are in radians.",
+    "step as given": "the step is not used exactly as given.",
+    "reciprocal": "a ratio is upside down.",
+    "order": "a matrix product is in the wrong order.",
+    "transpose": "a transpose is missing.",
+}
+
+
+def diagnose(got: np.ndarray, expected: np.ndarray, mistakes, entries, rtol: float, atol: float) -> Mistake | None:
+    """For one value (a quiz answer): the first of `mistakes`, then of the generic slips named with `entries`
+    (if given), whose value `got` equals and that is not itself right, or None."""
+    candidates = list(mistakes) + (generic(expected, entries) if entries is not None else [])
+    return explain([weigh(got, expected, candidates, rtol, atol)])
+
+
+def combined(failing: list[Evidence], passing: list[Evidence]) -> Evidence:
+    """The evidence of several inputs as one (a check made of checks): matched where matched at every failing
+    input, ruled out where ruled out at any."""
+    ruled = set().union(*(e.ruled_out for e in failing + passing))
+    common = {i: m for i, m in failing[0].matched.items() if all(i in e.matched for e in failing[1:])}
+    return Evidence({i: m for i, m in common.items() if i not in ruled}, ruled)
+
+
+# ------------------------------------------------------------------------------ mistakes generated from the reference
+
+_JUDGING: contextvars.ContextVar[tuple[Callable[[object], list[Mistake]], dict] | None] = \
+    contextvars.ContextVar("judging", default=None)
+
+
+@contextlib.contextmanager
+def judging(lookup: Callable[[object], list[Mistake]]) -> Iterator[None]:
+    """While a check judges: `lookup(returned)` gives the generated mistakes at the call that returned it."""
+    token = _JUDGING.set((lookup, {}))
+    try:
+        yield
+    finally:
+        _JUDGING.reset(token)
+
+
+def part_of(part: object, whole: object, index: int) -> None:
+    """`part` is item `index` of the value `whole` returned (x_new of ekf_update's (x_new, P_new)): its generated
+    mistakes are item `index` of the whole's."""
+    judging_now = _JUDGING.get()
+    if judging_now is not None:
+        judging_now[1][id(part)] = (part, whole, index)  # the part kept alive, so that its id stays its own
+
+
+def generated(returned: object) -> list[Mistake]:
+    """The mistakes generated from the reference, with their values at the learner call that gave `returned`
+    (or item of it: part_of) ([] outside a check's judging, or where none is known)."""
+    judging_now = _JUDGING.get()
+    if judging_now is None or returned is None:
+        return []
+    lookup, parts = judging_now
+    if id(returned) in parts:
+        _, whole, index = parts[id(returned)]
+        return [Mistake(m.name, m.help, m.value[index], m.origin, m.key) for m in generated(whole)
+                if isinstance(m.value, (tuple, list)) and len(m.value) > index]
+    return lookup(returned)
 
 
 SMALL = 64  # entries up to which plain floats compare faster than numpy's calls

@@ -11,6 +11,12 @@ asks depends only on the seed and never on what a learner returned. Three backen
 
 Values come back in one normal form whatever the backend (floats, float64 arrays, tuples, lists,
 strings), so a check judges the same in the project and in a handout.
+
+The mistakes generated from the reference (grader.mutants) travel the same way: the values every
+single slip of the reference gives at each call a check makes of its own function. Live computes them
+when a failing comparison first asks (once per call, kept in the memo), a recording computes them all
+while each check plans and writes them beside the expected values (grader/data/expected/chNN.mutants.json:
+names, sentences and numbers, never a mutated source), and a handout's replay reads them from there.
 """
 
 from __future__ import annotations
@@ -25,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterator
 
+from grader.boundary.wire import Call
 from grader.chapters import BY_ID
 
 DATA_DIR = Path(__file__).resolve().parent / "data" / "expected"
@@ -160,6 +167,19 @@ class Live:
             self.memo[key] = normal(reference_function(chapter, name)(*args, **kwargs))
         return _fresh(self.memo[key])
 
+    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
+        """The generated slips of `asked` (the check's call number `index`): [{key, name, help, value}] for every
+        one whose value there differs from the reference's."""
+        if self.memo is None:
+            return slips_at(chapter, asked)
+        key = ("slips", seed, chapter, check, index)
+        if key not in self.memo:
+            self.memo[key] = slips_at(chapter, asked)
+        return self.memo[key]
+
+    def planned(self, chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
+        """A check has planned these calls of its own function (a recording computes their slips now)."""
+
 
 @dataclass
 class Recording(Live):
@@ -167,6 +187,7 @@ class Recording(Live):
 
     seed: int
     data: dict = field(default_factory=dict)
+    slip_data: dict = field(default_factory=dict)  # {chapter: {"mistakes": {key: [name, help]}, "checks": ...}}
     memo = None
 
     def answer(self, asked: _Planning, chapter: str, name: str, args: tuple, kwargs: dict) -> object:
@@ -176,13 +197,28 @@ class Recording(Live):
              "value": encode(value)})
         return value
 
+    def planned(self, chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
+        """Compute and keep the generated slips of every call a check makes of its own function."""
+        kept = self.slip_data.setdefault(chapter, {"mistakes": {}, "checks": {}})
+        for index, asked in calls:
+            found = slips_at(chapter, asked)
+            for slip in found:
+                kept["mistakes"][slip["key"]] = [slip["name"], slip["help"]]
+            if found:
+                kept["checks"].setdefault(check, {})[str(index)] = {s["key"]: _encode_slip(s["value"]) for s in found}
+
     def write(self, folder: Path) -> list[Path]:
-        """One JSON file per chapter (a handout loads only the chapters it grades)."""
+        """One JSON file per chapter (a handout loads only the chapters it grades), and one of its generated slips
+        (loaded only when a check fails)."""
         folder.mkdir(parents=True, exist_ok=True)
         written = []
         for chapter, checks in sorted(self.data.items()):
             path = folder / f"{chapter}.json"
             path.write_text(json.dumps({"seed": self.seed, "checks": checks}, separators=(",", ":")), encoding="utf-8")
+            written.append(path)
+        for chapter, slips in sorted(self.slip_data.items()):
+            path = folder / f"{chapter}.mutants.json"
+            path.write_text(json.dumps({"seed": self.seed, **slips}, separators=(",", ":")), encoding="utf-8")
             written.append(path)
         return written
 
@@ -220,6 +256,26 @@ class Replay:
                                        f"{entry['name']} with other arguments: the handout's check data does not "
                                        "match its checks; reinstall the handout")
         return decode(entry["value"])
+
+    @functools.lru_cache(maxsize=None)
+    def _slips(self, chapter: str) -> dict:
+        path = self.folder / f"{chapter}.mutants.json"
+        try:
+            return json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return {}  # a handout without them names only the checks' own mistakes
+
+    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
+        recorded = self._slips(chapter)
+        if recorded.get("seed") != seed:
+            return []
+        names = recorded.get("mistakes", {})
+        values = recorded.get("checks", {}).get(check, {}).get(str(index), {})
+        return [{"key": key, "name": names[key][0], "help": names[key][1], "value": _decode_slip(value)}
+                for key, value in values.items() if key in names]
+
+    def planned(self, chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
+        """Nothing to do: the slips were recorded with the handout."""
 
 
 # ------------------------------------------------------------------------------ asking
@@ -297,3 +353,55 @@ def _ask(chapter: str, name: str, *args: object, **kwargs: object) -> object:
 @functools.lru_cache(maxsize=1)
 def _default() -> Live | Replay:
     return default_backend()
+
+
+# ------------------------------------------------------------------------------ generated slips
+
+def slips_at(chapter: str, asked: Call) -> list[dict]:
+    """Every slip grader.mutants makes of the reference of `asked.function`, evaluated at the call's own
+    arguments (decoded as the learner's function gets them): [{key, name, help, value}] where the value differs
+    from the reference's ([] where the references are not installed)."""
+    from grader import mutants
+
+    try:
+        _, found = mutants.at_call(chapter, asked.function, mutants.arguments_of(asked))
+    except mutants.Unavailable:
+        return []
+    from grader.diagnose import SKETCHED, Sketch
+
+    out = []
+    for mutant, value in found:
+        try:
+            value = normal(value)
+        except TypeError:
+            continue  # a value no recording could keep (an object): it names nothing
+        if hasattr(value, "shape") and value.size > SKETCHED:
+            value = Sketch.of(value)  # thousands of samples: known by a sketch, here as in a handout
+        out.append({"key": mutant.key, "name": mutant.name, "help": mutant.help, "value": value})
+    return out
+
+
+def _encode_slip(value: object) -> object:
+    from grader.diagnose import Sketch
+
+    return encode(["$sketch", list(value.shape), list(value.values)] if isinstance(value, Sketch) else value)
+
+
+def _decode_slip(data: object) -> object:
+    from grader.diagnose import Sketch
+
+    value = decode(data)
+    if isinstance(value, list) and len(value) == 3 and value[0] == "$sketch":
+        return Sketch(tuple(value[1]), tuple(value[2]))
+    return value
+
+
+def planned(chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
+    """Tell the backend the calls a check made of its own function while it planned (a recording computes their
+    generated slips now)."""
+    (_BACKEND.get() or _default()).planned(chapter, check, seed, calls)
+
+
+def slips(chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
+    """The generated slips at a check's call number `index` (asked of the backend: live, recorded or replayed)."""
+    return (_BACKEND.get() or _default()).slips(chapter, check, seed, index, asked)

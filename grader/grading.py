@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Generator
 
 from grader import checks as check_registry
-from grader import expected
+from grader import diagnose, expected
 from grader.boundary import ChapterRequest, ChapterRun, Session
 from grader.boundary.wire import NOT_IMPLEMENTED, Call, Returned
 from grader.checks.base import ChapterChecks, Check, Context, Skip
@@ -30,6 +30,8 @@ class _Pending:
     slots: list[int]  # indices into the chapter's call list, in flattening order
     setup_error: str = ""  # a grader bug while planning (its trace)
     unavailable: str = ""  # the expected values cannot be had here (e.g. a handout asked for another seed)
+    ctx: Context | None = None
+    own: dict[int, Call] | None = None  # the calls of the check's own function, by their number in the check
 
 
 def _trace() -> str:
@@ -63,28 +65,51 @@ def _rebuild(structure: object, values: list[Returned]) -> object:
     return {k: _rebuild(s, values) for k, s in structure.items()}
 
 
-def _start(name: str, body, ctx: Context, calls: list[Call]) -> _Pending:
-    """Plan one check: run it up to its yield (it asks the reference for its expected values now)."""
+def _start(name: str, body, ctx: Context, calls: list[Call], function: str = "") -> _Pending:
+    """Plan one check: run it up to its yield (it asks the reference for its expected values now, and its
+    calls of its own `function` are told to the backend, which may compute their generated slips)."""
     generator = body(ctx)
     try:
         with expected.planning(ctx.chapter, ctx.check_id, ctx.seed):
             wanted = next(generator)
         flat: list[Call] = []
         _flatten(wanted, flat)
+        own = {i: c for i, c in enumerate(flat) if c.function == function} if function else {}
+        if own:
+            expected.planned(ctx.chapter, ctx.check_id, ctx.seed, list(own.items()))
     except expected.ReferenceUnavailable as exc:
         return _Pending(name, None, None, [], unavailable=str(exc))
     except Exception:
         return _Pending(name, None, None, [], setup_error=_trace())
     start = len(calls)
     calls.extend(flat)
-    return _Pending(name, generator, wanted, list(range(start, start + len(flat))))
+    return _Pending(name, generator, wanted, list(range(start, start + len(flat))), ctx=ctx, own=own)
+
+
+def _slips_lookup(pending: _Pending, values: list[Returned]):
+    """For grader.diagnose while the check judges: the generated mistakes at the call that returned a value
+    (each call's asked once, the first time a comparison needs them)."""
+    numbers = {id(v): i for i, v in enumerate(values) if i in (pending.own or {})}
+    found: dict[int, list] = {}
+
+    def lookup(returned: object) -> list[diagnose.Mistake]:
+        index = numbers.get(id(returned))
+        if index is None or pending.ctx is None:
+            return []
+        if index not in found:
+            ctx = pending.ctx
+            found[index] = [diagnose.Mistake(s["name"], s["help"], s["value"], "generated", s["key"])
+                            for s in expected.slips(ctx.chapter, ctx.check_id, ctx.seed, index, pending.own[index])]
+        return found[index]
+    return lookup
 
 
 def _finish(pending: _Pending, run: ChapterRun) -> object:
     """Send the returned values into the check; its return value (Verdict or dict) or an exception."""
     values = [run.results[i] for i in pending.slots]
     try:
-        pending.generator.send(_rebuild(pending.wanted, values))
+        with diagnose.judging(_slips_lookup(pending, values)):
+            pending.generator.send(_rebuild(pending.wanted, values))
     except StopIteration as stop:
         return stop.value
     raise RuntimeError(f"check {pending.name} yielded twice; a check may yield only once")
@@ -99,8 +124,8 @@ class ChapterPlan:
         self.calls: list[Call] = []
         info = chapter.info
         self.checks = [c for c in chapter.checks if f"{info.id}/{c.id}" not in exclude]
-        self.pending = [(check, _start(check.id, check.body, Context(seed, info.id, check.id), self.calls))
-                        for check in self.checks]
+        self.pending = [(check, _start(check.id, check.body, Context(seed, info.id, check.id), self.calls,
+                                       check.function)) for check in self.checks]
         self.plot_pending = [(name, _start(name, body, Context(seed, info.id, f"plot/{name}"), self.calls))
                              for name, body in (plots or [])]
 
@@ -138,6 +163,7 @@ def _result(check: Check, status: Status, points: float, message: str, verdict: 
         got=None if verdict is None else verdict.got,
         details={} if verdict is None else verdict.details,
         mistake="" if verdict is None or verdict.mistake is None else verdict.mistake.name,
+        help="" if verdict is None or verdict.passed else verdict.help,
     )
 
 

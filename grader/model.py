@@ -38,6 +38,7 @@ class CheckResult:
     kind: str = "code"  # "code" or "quiz"
     details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
     mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
+    help: str = ""  # what to change (the named mistake's sentence), kept apart from the message, which says what is wrong
     practice: bool = False  # a quiz question of a practice quiz (immediate feedback): judged, never counted
     upstream: list[str] = field(default_factory=list)  # failing helpers this failure may come from (point_upstream)
     # a judged quiz answer in the quiz's own terms, for the class summary: {"options": [canonical options
@@ -63,6 +64,7 @@ class CheckResult:
             "got": jsonable(self.got),
             "kind": self.kind,
             "mistake": self.mistake or None,
+            **({"help": self.help} if self.help else {}),
             "practice": self.practice,
             "upstream": list(self.upstream),
             **({"answer": self.answer} if self.answer else {}),
@@ -240,6 +242,7 @@ class Report:
                                   status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                                   message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
                                   kind=c.get("kind", "code"), mistake=c.get("mistake") or "",
+                                  help=c.get("help") or "",
                                   practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []),
                                   answer=dict(c.get("answer") or {}))
                       for c in ch.get("checks", [])]

@@ -462,6 +462,14 @@ def reference_secrets(project: Path | None = None) -> Secrets:
                     # shorter lines are too generic to identify a reference: x = np.asarray(x, dtype=float)
                     if len(squeezed) >= 32 and not squeezed.startswith(("import", "from", "if", "for", "else")):
                         lines.add(squeezed)
+    from grader import mutants
+
+    for source in mutants.every_source():  # every slip of a reference is as secret as the reference
+        for body in _bodies(ast.parse(source)):
+            if len(body) >= 2 or len(ast.unparse(body[0])) >= 40:
+                bodies.add(_dump(body))
+            lines.update(squeezed for statement in body for squeezed in map(_squeeze, ast.unparse(statement).splitlines())
+                         if len(squeezed) >= 32 and not squeezed.startswith(("import", "from", "if", "for", "else")))
     for path in sorted((bank.QUIZ_DIR / "keys").glob("*.yaml")):
         for key in (yaml.safe_load(path.read_text(encoding="utf-8")) or {}).values():
             answer = key.get("answer")

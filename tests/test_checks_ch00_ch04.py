@@ -209,7 +209,7 @@ def test_a_realistic_mistake_fails_the_check_aimed_at_it(submission_factory, nam
     assert aimed.function == function or target in collateral
     assert aimed.status == Status.FAIL, (aimed.status, aimed.message)
     for word in words:
-        assert word in aimed.message, aimed.message
+        assert word in f"{aimed.message}\n{aimed.help}", aimed.message  # what is wrong, or the hint
     for check in chapter.checks:
         if check.function != function and check.id not in collateral:
             assert check.status == Status.PASS, (check.id, check.message)

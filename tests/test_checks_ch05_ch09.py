@@ -330,7 +330,8 @@ MUTANTS = {
             x = np.asarray(x, dtype=float)
             return np.array([(float(f(x + h * e)) - float(f(x))) / h for e in np.eye(x.size)])
         """, "gradient_fd_random_points", ["gradient[", "(d f/d "],
-        {"hessian_fd_worked_example", "hessian_fd_random_points", "hessian_fd_is_symmetric"}),
+        {"hessian_fd_worked_example", "hessian_fd_random_points", "hessian_fd_is_symmetric",
+         "hessian_fd_uses_the_step_as_given"}),
     "Hessian not symmetrised": ("ch09", "hessian_fd", """
         def hessian_fd(f, x, h=1e-4):
             return jacobian_fd(lambda v: gradient_fd(f, v, h), x, h)
@@ -409,7 +410,7 @@ def test_a_realistic_mistake_fails_the_check_aimed_at_it(submission_factory, nam
     assert aimed.function == function
     assert aimed.status == Status.FAIL, (aimed.status, aimed.message)
     for word in words:
-        assert word in aimed.message, aimed.message
+        assert word in f"{aimed.message}\n{aimed.help}", aimed.message  # what is wrong, or the hint
     for check in chapter.checks:
         if check.function != function and check.id not in collateral:
             assert check.status == Status.PASS, (check.id, check.message)

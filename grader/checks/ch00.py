@@ -18,7 +18,15 @@ from grader.boundary.wire import call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
-from grader.compare import all_of, compare_arrays, expect, fail, fmt, value_problem
+from grader.compare import (
+    all_of,
+    compare_arrays,
+    exactly,
+    expect,
+    fail,
+    fmt,
+    value_problem,
+)
 from grader.diagnose import Mistake
 from grader.expected import reference
 
@@ -88,7 +96,8 @@ def _shift_verdict(returned, law: tuple, n: int, label: str):
                                        "position.", shift + r)
     return compare_arrays(returned.as_array(), shift, label=f"{label} (about sigma^2/(2r) = {fmt(approximation)}; "
                           f"statistical, {STANDARD_ERRORS:g} standard errors)",
-                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)), mistakes=[mean_range])
+                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)), mistakes=[mean_range]) \
+        .also(exactly(returned, shift))
 
 
 @CHECKS.check("mean_shift", points=2)

@@ -33,7 +33,7 @@ from grader.compare import (
     fmt_array,
     value_problem,
 )
-from grader.diagnose import Mistake, known
+from grader.diagnose import Evidence, Mistake, generated, known
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch02")
@@ -146,9 +146,10 @@ def contour_direction_is_unit_and_perpendicular(ctx):
     """contour_direction is a unit vector with contour_direction . bowl_gradient = 0 (either orientation)"""
     calls = [call("contour_direction", float(x), float(y)) for x, y in _points(ctx.rng)]
     gradients = [REF.bowl_gradient(*c.args) for c in calls]
+    directions = [REF.contour_direction(*c.args) for c in calls]
     got = yield calls
     verdicts = []
-    for g, gradient, c in zip(got, gradients, calls):
+    for g, gradient, right, c in zip(got, gradients, directions, calls):
         problem = value_problem(g, (2,), c.label)
         if problem:
             return fail(problem)
@@ -159,8 +160,25 @@ def contour_direction_is_unit_and_perpendicular(ctx):
                                        np.array([1.0, 0.0]), label=f"{c.label} = {fmt_array(t)}; the gradient of g "
                                                                    f"there is {fmt_array(gradient)}",
                                        entries=CONTOUR, rtol=0.0, atol=UNIT_TOLERANCE,
-                                       mistakes=[Mistake(normal.name, normal.help, [1.0, sign]) for sign in (1.0, -1.0)]))
+                                       mistakes=[Mistake(normal.name, normal.help, [1.0, sign]) for sign in (1.0, -1.0)])
+                        .also(lambda g=g, t=t, right=right: _either_orientation(t, right, generated(g))))
     return all_of(verdicts)
+
+
+def _either_orientation(t: np.ndarray, right: np.ndarray, slips: list[Mistake]) -> Evidence:
+    """The generated slips at one call against the learner's direction t, a direction and its opposite being the
+    same answer (a slip that gives either right one says nothing)."""
+    found = Evidence()
+    for slip in slips:
+        value = np.asarray(slip.value, dtype=float)
+        if value.shape != t.shape or not np.all(np.isfinite(value)) or \
+                any(np.allclose(value, sign * right, rtol=0.0, atol=UNIT_TOLERANCE) for sign in (1.0, -1.0)):
+            continue
+        if any(np.allclose(t, sign * value, rtol=1e-9, atol=1e-12) for sign in (1.0, -1.0)):
+            found.matched[slip.id] = slip
+        else:
+            found.ruled_out.add(slip.id)
+    return found
 
 
 @CHECKS.check("contour_direction", points=1)

@@ -132,7 +132,7 @@ def _compose_verdict(returned, f: str, jac_f: str, jac_g: str, x: np.ndarray, fo
     if problem:
         return fail(problem, expected=candidates["right"])
     return compare_arrays(returned.as_array(), candidates["right"], label=label, entries=J_COMPOSED, rtol=1e-9,
-                          atol=1e-12, mistakes=_slips(candidates))
+                          atol=1e-12, mistakes=_slips(candidates), source=returned)
 
 
 @CHECKS.check("compose_jacobian", points=2)

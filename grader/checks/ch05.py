@@ -30,9 +30,18 @@ import numpy as np
 from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
-from grader.compare import Entries, all_of, fail, fmt, fmt_array, passed, value_problem
+from grader.compare import (
+    Entries,
+    Verdict,
+    all_of,
+    fail,
+    fmt,
+    fmt_array,
+    passed,
+    value_problem,
+)
 from grader.compare import expect as _expect
-from grader.diagnose import Mistake
+from grader.diagnose import Evidence, Mistake, explain, generated, weigh
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch05")
@@ -73,36 +82,36 @@ def _step(rng: np.random.Generator) -> float:
 
 def _difference_verdict(returned, name: str, x, h: float, function: str, law: dict, what: str):
     """The learner's difference quotient against the exact f'(x) and the interval its error must lie in
-    (law: REF.difference_law)."""
+    (law: REF.difference_law); a wrong one named by the other difference quotient or a slip of the reference."""
     label = f"{function}({name}, {fmt(x)}, {fmt(h)})"
     problem = value_problem(returned, (), label)
     if problem:
         return fail(problem)
     exact = law["exact"]
     got = float(returned.as_array())
-    low, high = law["central" if function == "central_difference" else "forward"]
+    own, other = ("central", "forward") if function == "central_difference" else ("forward", "central")
+    low, high = law[own]
     error = got - exact
+
+    def evidence() -> Evidence:  # to the quotient's last digits, as the reference computes it
+        slips = [_difference_slip(other, law), *generated(returned)]
+        return weigh(np.asarray(got), np.asarray(law[f"{own}_value"]), slips, 1e-9, 1e-9)
     if low <= error <= high:
-        return passed(expected=exact, got=got)
-    slip = _difference_slip(function, got, law)
-    verdict = fail(f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is {error:.3g}, "
-                   f"but {what} must be in [{low:.3g}, {high:.3g}]." + (f" {slip.help}" if slip else ""),
-                   expected=exact, got=got)
-    verdict.mistake = slip
+        return Verdict(True, "", exact, got, evidence=evidence)
+    verdict = Verdict(False, f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is "
+                             f"{error:.3g}, but {what} must be in [{low:.3g}, {high:.3g}].", exact, got,
+                      evidence=evidence)
+    verdict.name(explain([verdict.weigh()]))
     return verdict
 
 
-def _difference_slip(function: str, got: float, law: dict) -> Mistake | None:
-    """The other difference quotient, if that is what the learner computed."""
-    other = "forward" if function == "central_difference" else "central"
-    value = law[f"{other}_value"]
-    if abs(got - value) > 1e-9 * max(1.0, abs(value)):
-        return None
+def _difference_slip(other: str, law: dict) -> Mistake:
+    """The other difference quotient: what a learner who computed it returns."""
     if other == "forward":
         return Mistake("forward difference", "That is the forward difference (f(x+h) - f(x))/h; the central one uses "
-                                             "f(x+h) - f(x-h) over 2h.", value)
+                                             "f(x+h) - f(x-h) over 2h.", law["forward_value"])
     return Mistake("central difference", "That is the central difference; the forward one is (f(x+h) - f(x))/h.",
-                   value)
+                   law["central_value"])
 
 
 def _scalar_cases(rng: np.random.Generator) -> list:
@@ -177,10 +186,22 @@ def central_difference_worked_example(ctx):
     return expect(got, want, label="central_difference(sin, 1, 1e-05)", rtol=0.0, atol=1e-10)
 
 
-@CHECKS.check("central_difference", points=2)
+@CHECKS.check("central_difference", points=1)
 def central_difference_random_inputs(ctx):
     """central_difference is within h^2/6 max|f'''| of f'(x): sin, exp, a cubic, sqrt, log at random x, h = 0.01..0.1"""
     return (yield from _difference_check("central_difference", "a central difference's error h^2/6 f'''", ctx))
+
+
+@CHECKS.check("central_difference", points=1)
+def central_difference_uses_the_step_as_given(ctx):
+    """central_difference uses h exactly as given: (f(x+h) - f(x-h)) / (2h) to 1e-9 at steps 0.05..0.3, where a halved step shows"""
+    rng = ctx.rng
+    cases = [(name, _point(rng, name), float(rng.uniform(0.05, 0.3))) for name in ("sin", "exp", "cubic", "sqrt", "log")]
+    laws = [REF.difference_law(name, x, h) for name, x, h in cases]
+    got = yield [call("central_difference", Fn(name), x, h) for name, x, h in cases]
+    return all_of([expect(g, law["central_value"], label=f"central_difference({name}, {fmt(x)}, {fmt(h)})", rtol=1e-9,
+                          atol=1e-12, mistakes=[_difference_slip("forward", law)])
+                   for g, law, (name, x, h) in zip(got, laws, cases)])
 
 
 @CHECKS.check("central_difference", points=1)
@@ -323,18 +344,43 @@ def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
     if problem:
         return fail(problem)
     h = float(returned.as_array())
-    matches = [i for i, s in enumerate(hs) if abs(s - h) <= 1e-12 * abs(s)]
-    if not matches:
-        return fail(f"{label} returned {fmt(h)}, which is not one of the steps in hs.", got=h)
     errors, floor = np.asarray(errors_and_floor[0], dtype=float), errors_and_floor[1]
     smallest = max(float(errors.min()), floor)
-    error = float(errors[matches[0]])
-    if error <= BEST_STEP_FACTOR * smallest:
-        return passed(got=h)
-    best = hs[int(np.argmin(errors))]
-    return fail(f"{label} returned h = {fmt(h)}, where the central-difference error is {error:.3g}; at h = {fmt(best)} "
-                f"it is {errors.min():.3g}. The answer must be within {BEST_STEP_FACTOR:g}x of the smallest error "
-                f"(compare central_difference(f, x, h) with fprime(x) for every h).", expected=best, got=h)
+
+    def chosen(value: float) -> int | None:
+        """The position in hs of a step within 1e-12 of `value`, if it is one; None if it is not."""
+        return next((i for i, s in enumerate(hs) if abs(s - value) <= 1e-12 * abs(s)), None)
+
+    def acceptable(value: float) -> bool:
+        i = chosen(value)
+        return i is not None and float(errors[i]) <= BEST_STEP_FACTOR * smallest
+
+    def evidence() -> Evidence:
+        """The slips of the reference that return no acceptable step, against the learner's step."""
+        found = Evidence()
+        for slip in generated(returned):
+            if np.size(slip.value) != 1 or acceptable(float(np.asarray(slip.value, dtype=float))):
+                continue
+            value = float(np.asarray(slip.value, dtype=float))
+            if abs(value - h) <= 1e-12 * max(abs(value), 1e-300):
+                found.matched[slip.id] = slip
+            else:
+                found.ruled_out.add(slip.id)
+        return found
+    if chosen(h) is None:
+        verdict = Verdict(False, f"{label} returned {fmt(h)}, which is not one of the steps in hs.", got=h,
+                          evidence=evidence)
+    elif acceptable(h):
+        return Verdict(True, "", got=h, evidence=evidence)
+    else:
+        best = hs[int(np.argmin(errors))]
+        error = float(errors[chosen(h)])
+        verdict = Verdict(False, f"{label} returned h = {fmt(h)}, where the central-difference error is {error:.3g}; "
+                                 f"at h = {fmt(best)} it is {errors.min():.3g}. The answer must be within "
+                                 f"{BEST_STEP_FACTOR:g}x of the smallest error (compare central_difference(f, x, h) "
+                                 "with fprime(x) for every h).", expected=best, got=h, evidence=evidence)
+    verdict.name(explain([verdict.weigh()]))
+    return verdict
 
 
 @CHECKS.check("best_step", points=1)

@@ -57,7 +57,11 @@ BEARING_SLIPS = {
 
 
 def _bearing_slips(x: float, y: float) -> list[Mistake]:
-    return known(REF.bearing_mistakes(x, y), BEARING_SLIPS)
+    slips = known(REF.bearing_mistakes(x, y), BEARING_SLIPS)
+    reversed_ = next(m for m in slips if m.name == "reversed bearing")
+    # off by pi everywhere as a learner writes it, atan2(-y, -x) or atan2(y, x) +- pi: one mistake, either form
+    return slips + [Mistake(reversed_.name, reversed_.help, reversed_.value + [0.0, turn]) for turn in (-2 * np.pi,
+                                                                                                     2 * np.pi)]
 
 
 def _H_slips(x: float, y: float, H: np.ndarray) -> list[Mistake]:

@@ -32,8 +32,10 @@ from grader.checks.sampling import same_seed_same_value
 from grader.compare import (
     SINGLE_PRECISION,
     Entries,
+    Verdict,
     all_of,
     compare_arrays,
+    exactly,
     expect,
     expect_raises,
     fail,
@@ -41,7 +43,7 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Mistake
+from grader.diagnose import Evidence, Mistake, explain, part_of
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch08")
@@ -136,7 +138,7 @@ def sample_positions_statistics(ctx):
         for what, value, want, error in tests:
             verdicts.append(compare_arrays(value, want, label=f"{label}: sample {what} (sigma^2 = {fmt(var)}; statistical, "
                                                               f"{STANDARD_ERRORS:g} standard errors)",
-                                           rtol=0.0, atol=float(STANDARD_ERRORS * error)))
+                                           rtol=0.0, atol=float(STANDARD_ERRORS * error)).also(exactly(g)))
     return all_of(verdicts)
 
 
@@ -256,7 +258,10 @@ def mismatch_far_small_near_large(ctx):
         if not np.isfinite(value) or not (value < bound if side == "<" else value > bound):
             why = ("far from the sensor the linearized ellipse should describe the cloud" if side == "<" else
                    "this close to the sensor the bearing is too nonlinear for the ellipse")
-            return fail(f"{label} = {fmt(value)}; expected {side} {bound:g} ({why}).", got=value)
+            verdict = Verdict(False, f"{label} = {fmt(value)}; expected {side} {bound:g} ({why}).", got=value,
+                              evidence=exactly(g))
+            verdict.name(explain([verdict.weigh()]))
+            return verdict
     return passed()
 
 
@@ -275,7 +280,8 @@ def mismatch_matches_simulation(ctx):
     """linearization_mismatch is within 6 standard deviations of its simulated mean, also for a cloud straddling +-pi"""
     rng = ctx.rng
     cases = [(-float(rng.uniform(2.5, 3.5)), float(rng.choice([-1, 1]) * rng.uniform(0.1, 0.3)), 0.8, 2000),
-             (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 0.5, 2500),
+             # sigma 2: the covariances' size far from 1, so that a mismatch not relative to norm(S_lin) shows
+             (*(float(v) for v in planar_point(rng, 2.5, 4.0)), 2.0, 2500),
              (*(float(v) for v in planar_point(rng, 0.5, 0.8)), 0.8, 2000)]
     seeds = _seeds(rng, len(cases))
     distributions = [REF.mismatch_distribution(*case) for case in cases]
@@ -288,7 +294,7 @@ def mismatch_matches_simulation(ctx):
             return fail(problem)
         v = compare_arrays(g.as_array(), mean, label=f"{label} (statistical: the mean over {SIMULATED_CLOUDS} simulated "
                                                      f"clouds +- {SPREAD:g} standard deviations {fmt(spread)})",
-                           rtol=0.0, atol=SPREAD * spread)
+                           rtol=0.0, atol=SPREAD * spread).also(exactly(g, mean))
         if not v.passed and np.hypot(x, y) > 2 and abs(np.arctan2(y, x)) > 2.5:
             v.message += "\n  (this cloud straddles +-pi: are the bearings unwrapped around atan2(y, x)?)"
         verdicts.append(v)
@@ -330,6 +336,8 @@ def ekf_parts(returned, label: str):
     if items is None or len(items) != 2:
         what = returned.type_name if items is None else f"{returned.encoded['t']} of {len(items)} items"
         return fail(f"{label} returned {what}; expected the tuple (x_new, P_new).")
+    for index, item in enumerate(items):
+        part_of(item, returned, index)  # the slips of the reference name its parts
     return items
 
 
@@ -349,7 +357,8 @@ def _ekf_verdict(returned, case, wanted: tuple, label: str):
                        mistakes=[Mistake(name, EKF_SLIPS[name], slips[name][0]) for name in EKF_SLIPS])
     if not x_verdict.passed:
         return x_verdict
-    return expect(parts[1], P_new, label=f"P_new of {label}", rtol=1e-8, atol=1e-12 * scale, entries=P_NEW)
+    return expect(parts[1], P_new, label=f"P_new of {label}", rtol=1e-8, atol=1e-12 * scale, entries=P_NEW) \
+        .also(lambda: Evidence(ruled_out=x_verdict.weigh().ruled_out))  # a slip whose x_new differs is not this one
 
 
 @CHECKS.check("ekf_update", points=2)

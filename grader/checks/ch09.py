@@ -46,7 +46,7 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Mistake
+from grader.diagnose import Evidence, Mistake, explain, generated, weigh_text
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch09")
@@ -85,7 +85,7 @@ def _point(rng: np.random.Generator, name: str) -> np.ndarray:
 
 # ------------------------------------------------------------------------------ gradient_fd
 
-@CHECKS.check("gradient_fd", points=2)
+@CHECKS.check("gradient_fd", points=1)
 def gradient_fd_random_points(ctx):
     """gradient_fd matches the analytic gradient of four functions (2-D and 3-D) at random points, given h or not"""
     rng = ctx.rng
@@ -127,6 +127,20 @@ def gradient_fd_integer_input(ctx):
                    for g, want, slip, c in zip(got, expected, slips, calls)])
 
 
+@CHECKS.check("gradient_fd", points=1)
+def gradient_fd_uses_the_step_as_given(ctx):
+    """gradient_fd uses h exactly as given (steps 0.05..0.3, where the quotient differs from the gradient), 2-D and 3-D"""
+    rng = ctx.rng
+    cases = [(name, _point(rng, name), float(rng.uniform(0.05, 0.3)))
+             for name in ("wave_vec", "saddle3_vec", "rosenbrock_vec", "bowl_vec")]
+    expected = [REF.gradient_fd_of(name, point, h) for name, point, h in cases]
+    slips = [_forward_slip(name, point, h) for name, point, h in cases]
+    got = yield [call("gradient_fd", Fn(name), Array(point.tolist()), h) for name, point, h in cases]
+    return all_of([expect(g, want, label=f"gradient_fd({name}, {_show(point)}, {fmt(h)})", rtol=1e-8, atol=1e-10,
+                          entries=_grad_entries(point.size), mistakes=[slip], exact=True)
+                   for g, want, slip, (name, point, h) in zip(got, expected, slips, cases)])
+
+
 def _forward_slip(name: str, point, h: float) -> Mistake:
     return Mistake("forward difference", "that is a forward difference, (f(x + h e_j) - f(x)) / h: gradient_fd is "
                                          "central, (f(x + h e_j) - f(x - h e_j)) / (2h).",
@@ -153,7 +167,7 @@ def hessian_fd_worked_example(ctx):
     return _hessian_verdict(got, wanted, "hessian_fd(f, (1, 2)) for an f with the Hessian of x^2 + x y there")
 
 
-@CHECKS.check("hessian_fd", points=2)
+@CHECKS.check("hessian_fd", points=1)
 def hessian_fd_random_points(ctx):
     """hessian_fd matches the analytic Hessian of a bowl, a 3-D cubic and Rosenbrock at random points, given h or not"""
     rng = ctx.rng
@@ -172,6 +186,19 @@ def hessian_fd_random_points(ctx):
         shown = "" if h is None else (", h=1e-3" if isinstance(h, str) else ", 0.001")
         verdicts.append(_hessian_verdict(g, w, f"hessian_fd({name}, {_show(p)}{shown})"))
     return all_of(verdicts)
+
+
+@CHECKS.check("hessian_fd", points=1)
+def hessian_fd_uses_the_step_as_given(ctx):
+    """hessian_fd uses h exactly as given, in both differences (steps 0.1..0.3, where a halved step shows), 2-D and 3-D"""
+    rng = ctx.rng
+    cases = [(name, _point(rng, name), float(rng.uniform(0.1, 0.3))) for name in ("saddle3_vec", "rosenbrock_vec",
+                                                                                  "wave_vec")]
+    expected = [REF.hessian_fd_of(name, p, h) for name, p, h in cases]
+    got = yield [call("hessian_fd", Fn(name), Array(p.tolist()), h) for name, p, h in cases]
+    return all_of([expect(g, want, label=f"hessian_fd({name}, {_show(p)}, {fmt(h)})", rtol=1e-8,
+                          atol=1e-10 * max(1.0, float(np.max(np.abs(want)))), entries=_hess_entries(p.size), exact=True)
+                   for g, want, (name, p, h) in zip(got, expected, cases)])
 
 
 @CHECKS.check("hessian_fd", points=1)
@@ -207,14 +234,20 @@ def expect_text(returned, expected: str, *, label: str) -> Verdict:
     if text is None:
         shown = fmt_array(returned.as_array()) if returned.as_array() is not None else returned.type_name
         return fail(f"{label} returned {shown}; expected the string {expected!r}.", expected=expected)
+
+    def evidence() -> Evidence:
+        return weigh_text(text, expected, generated(returned))
     if text == expected:
-        return passed(expected=expected, got=text)
+        return Verdict(True, "", expected, text, evidence=evidence)
     hint = ""
     if text.strip().lower() == expected:
         hint = " (exactly, in lower case and without spaces)"
     elif text not in CLASSES:
         hint = f" (the answer is one of {', '.join(repr(c) for c in CLASSES)})"
-    return fail(f"{label} returned {text!r}; expected {expected!r}{hint}.", expected=expected, got=text)
+    verdict = Verdict(False, f"{label} returned {text!r}; expected {expected!r}{hint}.", expected, text,
+                      evidence=evidence)
+    verdict.name(explain([verdict.weigh()]))
+    return verdict
 
 
 def with_eigenvalues(rng: np.random.Generator, eigenvalues) -> np.ndarray:

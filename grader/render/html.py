@@ -69,6 +69,7 @@ STYLE = """
 #S figcaption .gave{display:block;margin-top:.3em;color:#1f2937}
 #S .problem{background:#fef2f2;color:#1f2937;border:1px solid #b91c1c;padding:8px 12px;border-radius:6px}
 #S .note{color:#4b5563}
+#S .help{background:#eff6ff;color:#1e3a8a;border-left:3px solid #1d4ed8;padding:4px 8px;margin:.4em 0}
 #S .sr-only{position:absolute;width:1px;height:1px;padding:0;margin:-1px;overflow:hidden;clip:rect(0,0,0,0);
   white-space:nowrap;border:0}
 """
@@ -107,6 +108,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 <span class="points">{% if c.practice %}practice, not counted{% else %}{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span>{% endif %}</span>
 <span class="note"> &middot; {{ ch.chapter }}/{{ c.id }}</span>
 {% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
+{% if c.status.value != "pass" and c.help %}<p class="help"><strong>Hint:</strong> {{ c.help }}</p>{% endif %}
 {% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
 {% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
 </div>{% endif %}{% endfor %}{% endif %}{% endfor %}

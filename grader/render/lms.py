@@ -42,9 +42,9 @@ RECORDED_PREFIX = "Recorded, graded on submission: "
 
 
 def check_message(check: CheckResult, chapter: ChapterResult) -> str:
-    """The check's message; for a check that could not be graded (error) the chapter's messages too, which
+    """The check's message and its hint; for a check that could not be graded (error) the chapter's messages too, which
     its message points to ("see the chapter's message")."""
-    message = check.message or ""
+    message = "\n".join(part for part in (check.message, f"hint: {check.help}" if check.help else "") if part)
     if check.status == Status.ERROR and chapter.problems:
         message = f"{message}\n\nThe chapter's message:\n" + "\n".join(chapter.problems)
     return message

@@ -40,6 +40,8 @@ def render_check(check: CheckResult, *, colour: bool, unicode_ok: bool, verbose:
         trace = check.details.get("traceback")
         if trace and verbose:
             lines.extend(f"      | {t}" for t in trace.splitlines())
+    if check.status not in (Status.PASS, Status.RECORDED) and check.help:
+        lines.append(f"      hint: {check.help}")  # what to change, apart from what is wrong
     return lines
 
 

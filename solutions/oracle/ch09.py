@@ -81,4 +81,12 @@ def gradient_fd_of(name: str, point, h: float, form: str = "central") -> np.ndar
     return out
 
 
-__all__ = ["classify_critical_point", "gradient_fd_of", "gradient_of", "gradient_of_example_f", "hessian_of", "hessian_tolerance"]
+def hessian_fd_of(name: str, point, h: float) -> np.ndarray:
+    """The reference's hessian_fd of catalogue function `name` with step h, exactly as the contract's formula gives it."""
+    from solutions.ch09_choose_your_tool import hessian_fd
+
+    return hessian_fd(CALLABLES[name], np.asarray(point, dtype=float), h)
+
+
+__all__ = ["classify_critical_point", "gradient_fd_of", "gradient_of", "gradient_of_example_f", "hessian_fd_of",
+           "hessian_of", "hessian_tolerance"]
