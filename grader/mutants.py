@@ -536,9 +536,14 @@ def _integer_points(f: Callable, given: object) -> Callable:
     return lambda point, *args, **kwargs: f(np.asarray(point).astype(dtype), *args, **kwargs)
 
 
-def _replace(fdef: ast.FunctionDef, index: int, make: Callable[[ast.AST], ast.AST]) -> ast.FunctionDef:
-    """A copy of `fdef` with its `index`-th node (in ast.walk order) replaced by make(that node)."""
-    mutated = copy.deepcopy(fdef)
+def _fresh(source: str) -> ast.FunctionDef:
+    """A new tree of the function `source` (parsing is much faster than copying a tree)."""
+    return ast.parse(source).body[0]
+
+
+def _replace(source: str, index: int, make: Callable[[ast.AST], ast.AST]) -> ast.FunctionDef:
+    """A new tree of the function `source` with its `index`-th node (in ast.walk order) replaced by make(that node)."""
+    mutated = _fresh(source)
     nodes = list(ast.walk(mutated))
     target = nodes[index]
     for parent in nodes:
@@ -556,17 +561,17 @@ def _replace(fdef: ast.FunctionDef, index: int, make: Callable[[ast.AST], ast.AS
 def mutants(chapter: str, function: str) -> tuple[Mutant, ...]:
     """Every single slip of the reference `function` of `chapter`, each once (Unavailable without the references)."""
     module = _module_of(chapter, function)
-    fdef = _definition(module, function)
+    original = ast.unparse(_definition(module, function))
+    fdef = _fresh(original)  # the tree every copy is parsed to, node for node
     shape = _Shape(fdef)
-    original = ast.unparse(fdef)
     made: list[tuple[str, str, ast.FunctionDef]] = []
     for index, node in enumerate(shape.nodes):
         if node is fdef or not shape.mutable(node):
             continue
         for kind, said, make in _node_changes(shape, node):
-            made.append((kind, said, _replace(fdef, index, make)))
+            made.append((kind, said, _replace(original, index, make)))
     for kind, said, change in _function_changes(shape):
-        mutated = copy.deepcopy(fdef)
+        mutated = _fresh(original)
         change(mutated)
         made.append((kind, said, mutated))
     out, seen = [], {original}
@@ -655,9 +660,11 @@ def arguments_of(call) -> Callable[[], tuple[tuple, dict]]:
     from grader.boundary.wire import decode_argument, encode_argument
     from grader.catalogue import CALLABLES
 
+    args = [encode_argument(a) for a in call.args]  # as the child gets them; decoded afresh for every evaluation
+    kwargs = [(k, encode_argument(v)) for k, v in call.kwargs]
+
     def arguments() -> tuple[tuple, dict]:
-        return (tuple(decode_argument(encode_argument(a), CALLABLES) for a in call.args),
-                {k: decode_argument(encode_argument(v), CALLABLES) for k, v in call.kwargs})
+        return tuple(decode_argument(a, CALLABLES) for a in args), {k: decode_argument(v, CALLABLES) for k, v in kwargs}
     return arguments
 
 
