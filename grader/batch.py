@@ -1,9 +1,11 @@
 """Batch grading of a folder of submissions: discover, stage, grade in parallel, write every output.
 
 Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied
-or safely extracted into OUT/.staging/<folder>/exercises/ (grader.staging) and graded by a worker process, in a
-child forked by that worker's sandboxed fork server (grader.boundary.forkserver), and its outputs are written
-atomically into OUT/<folder>/, where <folder> is the learner's id kept as given where it is plain
+or safely extracted into OUT/.staging/<folder>/exercises/ (grader.staging) and graded by a worker process (of
+this machine's pool, LocalPool, or of a Dask cluster, grader.cluster), in a child forked by that worker's
+sandboxed fork server (grader.boundary.forkserver); the worker returns the texts of the learner's files
+(grade_staged) and this process alone writes them, atomically, into OUT/<folder>/ (write_graded), where
+<folder> is the learner's id kept as given where it is plain
 and percent-encoded otherwise (folder_name): no id can name a class output, a hidden folder or a
 path outside OUT. A learner whose staged files hash the same as last time is not graded again. The
 gradebook, JUnit file and class summary are rebuilt from the per-learner reports at the end, so an
@@ -28,7 +30,7 @@ import time
 import zlib
 from collections.abc import Iterator, Mapping
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -123,10 +125,19 @@ def choose_boundary(sandbox: str = "required", probe: bool = False, secrets: tup
 
 
 def _boundary(sandbox: str, secrets: tuple[str, ...] = ()):
-    """This worker's boundary (its fork server started on first use), kept for every learner it grades."""
+    """This worker's boundary (its fork server started on first use), kept for every learner it grades with the
+    same `sandbox` (a cluster's worker outlives a batch: one asking another mode gets a boundary of its own)."""
+    if _worker_state.get("sandbox") != sandbox:
+        _drop_boundary()
     if "boundary" not in _worker_state:
         _worker_state["boundary"] = choose_boundary(sandbox, secrets=secrets)
+        _worker_state["sandbox"] = sandbox
     return _worker_state["boundary"]
+
+
+def worker_isolation(sandbox: str) -> str:
+    """The isolation line of this worker's boundary for `sandbox` (InfrastructureError where it cannot start)."""
+    return _boundary(sandbox).isolation
 
 
 def _drop_boundary() -> None:
@@ -179,68 +190,160 @@ def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[st
              "correct the roster or the file and grade again")]
 
 
-def _grade_one(entry: Entry, out: str, chapters: list[str], seed: int, html: bool, plots: bool,
-               limits: dict, sandboxed: bool = True, hidden: frozenset[str] = frozenset(),
-               course: Course | None = None, overrides: tuple = ()) -> tuple[str, str, str]:
-    """Stage and grade one submission (in a worker process); returns (learner, status, message).
+@dataclass(frozen=True)
+class Grading:
+    """What every learner of a batch is graded with, the same wherever it is graded (plain data: it travels with
+    each task to a cluster's workers). `hidden` (the course's hidden check ids) are shown in results.json only
+    after grades are published; `course` leaves out the checks it switches off and gives the late penalty and
+    the current handout."""
 
-    A submission whose staged files hash as at its last grading, with the same overrides, late penalty
-    and current handout, is not graded again. One whose child could not start, twice, is `error`: its
-    report.json keeps why (and no hash, so the next run grades it again), and no results.json or
-    report.html stays to look like a grade. `hidden` (the course's hidden check ids) are shown in
-    results.json only after grades are published. `overrides` (grader.overrides.Override, this learner's)
-    and the course's late penalty are applied to the report before anything is written; the manifest of
-    an archive made by `grade submit` is checked (grader.submit.check) and what it says is flagged."""
-    from grader import overrides as adjusting
+    chapters: tuple[str, ...]
+    seed: int
+    html: bool = True
+    plots: bool = False
+    limits: Mapping = field(default_factory=dict)
+    sandboxed: bool = True
+    hidden: frozenset[str] = frozenset()
+    course: Course | None = None
+
+    @property
+    def sandbox(self) -> str:
+        """The boundary's sandbox mode (grader.boundary.choose) these learners are graded behind."""
+        return "required" if self.sandboxed else "off"
+
+
+@dataclass
+class Staged:
+    """A learner staged and due for grading (plain data): where its files are staged, its content hash, what was
+    found while staging (warnings, the submission time and where it came from, its manifest), its overrides,
+    and the seconds staging took."""
+
+    learner: str
+    root: str
+    digest: str
+    warnings: list[str]
+    submitted: str
+    time_from: str | None
+    manifest: dict | None
+    other_ids: tuple[str, ...]
+    files_hash: str
+    overrides: tuple = ()
+    seconds: float = 0.0
+
+    def files(self) -> dict[str, bytes]:
+        """The staged files (relative path -> bytes): what travels to a worker that does not share this disk."""
+        package = Path(self.root) / "exercises"
+        return {path.relative_to(package).as_posix(): path.read_bytes()
+                for path in sorted(package.rglob("*")) if path.is_file()}
+
+
+@dataclass
+class Graded:
+    """One learner's outcome as plain data: status (graded, unchanged, unreadable, error), the message, and the
+    texts of its files in OUT/<folder>/ in the order they are written (None: remove that file), report.json
+    last; `infrastructure` says why it could not be graded for a reason outside the learner's code ("" when it
+    was). Written into OUT by the coordinator alone (write_graded)."""
+
+    learner: str
+    status: str
+    message: str
+    files: dict[str, str | None] = field(default_factory=dict)
+    infrastructure: str = ""
+
+
+def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = ()) -> Staged | Graded:
+    """Stage one submission into OUT/.staging and decide whether it is due: a Staged learner to grade, or its
+    Graded outcome without grading (unreadable; unchanged: its staged files hash as at its last grading, with
+    the same overrides, late penalty and current handout). The manifest of an archive made by `grade submit` is
+    checked (grader.submit.check) and what it says is flagged."""
     from grader import submit
-    from grader.render import lms
 
     started = time.monotonic()
     learner = entry.learner
     try:
-        root = stage(entry, Path(out) / STAGING)
+        root = stage(entry, out / STAGING)
     except StagingError as exc:
-        return learner, "unreadable", f"{entry.source.name}: {exc}"
+        return Graded(learner, "unreadable", f"{entry.source.name}: {exc}")
+    course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     submitted, timing = submission_time(entry, manifest, course)
     late = course.late if course else None
     settings = json.dumps([[o.key() for o in overrides], repr(late), submitted, handout, course_id], default=str)
-    digest = content_hash(root, chapters, seed, settings)
-    folder = Path(out) / folder_name(learner)
-    if _previous_hash(folder) == digest:
-        return learner, "unchanged", "already graded, files unchanged"
-    folder.mkdir(parents=True, exist_ok=True)
-    warnings = learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing
-    report = _grade_report(root, learner, chapters, seed, plots, limits, "required" if sandboxed else "off", course,
-                           other_ids=(str(manifest.get("learner")),) if manifest else ())
-    warnings += report.flags
-    warnings += adjusting.apply(report, list(overrides), late, adjusting.parse_time(submitted))
-    seconds = time.monotonic() - started
+    digest = content_hash(root, list(grading.chapters), grading.seed, settings)
+    if _previous_hash(out / folder_name(learner)) == digest:
+        return Graded(learner, "unchanged", "already graded, files unchanged")
+    return Staged(learner, str(root), digest, learner_yaml_warnings(root, learner, entry.origin) + manifest_flags
+                  + timing, submitted, _time_source(entry, submitted), _manifest_summary(manifest),
+                  (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
+                  tuple(overrides), time.monotonic() - started)
+
+
+def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, batch_extra: Mapping = ()) -> Graded:
+    """Grade a staged learner (in a worker process: here, or on a cluster's worker with its files copied to `root`)
+    into the texts of its files: report.json (the report's data and what the batch keeps, `batch_extra` added),
+    results.json and report.html. `overrides` and the course's late penalty are applied before anything is
+    rendered. One whose child could not start, twice, is `error`: its report.json keeps why (and no hash, so the
+    next run grades it again), and its results.json and report.html are removed, so that nothing looks like a
+    grade."""
+    from grader import overrides as adjusting
+    from grader.render import lms
+
+    started = time.monotonic()
+    learner, course = staged.learner, grading.course
+    report = _grade_report(root or Path(staged.root), learner, list(grading.chapters), grading.seed, grading.plots,
+                           dict(grading.limits), grading.sandbox, course, other_ids=staged.other_ids)
+    warnings = list(staged.warnings) + report.flags
+    warnings += adjusting.apply(report, list(staged.overrides), course.late if course else None,
+                                adjusting.parse_time(staged.submitted))
+    seconds = staged.seconds + time.monotonic() - started
     data = report.to_dict()
     data["batch"] = {"seconds": round(seconds, 3), "learner_output": report.learner_output[:4000],
-                     "warnings": warnings, "files_hash": submit.files_hash(root / "exercises"),
-                     "submitted": submitted or None, "time_from": _time_source(entry, submitted),
-                     "manifest": _manifest_summary(manifest)}
+                     "warnings": warnings, "files_hash": staged.files_hash, "submitted": staged.submitted or None,
+                     "time_from": staged.time_from, "manifest": staged.manifest}
     if report.infrastructure:
-        for name in ("results.json", "report.html"):
-            (folder / name).unlink(missing_ok=True)
-        write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")
-        return learner, "error", (f"not graded, twice, for a reason outside the learner's code: {report.infrastructure}"
-                                  "; the next run grades it again")
-    data["batch"]["hash"] = digest
-    write_atomically(folder / "results.json", lms.gradescope(report, hidden=hidden, execution_time=seconds,
-                                                             heading=[f"Graded as {learner}."], notes=warnings))
-    if html:
+        data["batch"].update(batch_extra)
+        return Graded(learner, "error", (f"not graded, twice, for a reason outside the learner's code: "
+                                         f"{report.infrastructure}; the next run grades it again"),
+                      {"results.json": None, "report.html": None,
+                       "report.json": json.dumps(for_json(data), allow_nan=False) + "\n"},
+                      infrastructure=report.infrastructure)
+    data["batch"]["hash"] = staged.digest
+    data["batch"].update(batch_extra)
+    files: dict[str, str | None] = {
+        "results.json": lms.gradescope(report, hidden=grading.hidden, execution_time=seconds,
+                                       heading=[f"Graded as {learner}."], notes=warnings)}
+    if grading.html:
         from grader.render import html as html_renderer
 
         # this worker draws its learner's figures itself: the other workers keep the other cores busy
-        write_atomically(folder / "report.html", html_renderer.render(report, draw_here=True))
-    write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")  # last: marks done
+        files["report.html"] = html_renderer.render(report, draw_here=True)
+    files["report.json"] = json.dumps(for_json(data), allow_nan=False) + "\n"  # last: marks done
     _settle_heap()
     problems = sum(bool(c.problems) for c in report.chapters)
     with_problems = f", {plural(problems, 'chapter')} with problems" if problems else ""
-    return learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}"
+    return Graded(learner, "graded", f"{report.score:g}/{report.max_score:g}{with_problems}", files)
+
+
+def _grade_one(entry: Entry, out: str, grading: Grading, overrides: tuple = ()) -> Graded:
+    """Stage and grade one submission in a worker process of the local pool (stage_one, then grade_staged)."""
+    staged = stage_one(entry, Path(out), grading, overrides)
+    return staged if isinstance(staged, Graded) else grade_staged(staged, grading)
+
+
+def write_graded(out: Path, graded: Graded) -> None:
+    """Write (or remove) a graded learner's files in OUT/<folder>/, each atomically, report.json last: a reader
+    never sees half a file, and a report.json with its hash marks the learner done. The coordinator alone
+    writes into OUT."""
+    if not graded.files:
+        return
+    folder = out / folder_name(graded.learner)
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in graded.files.items():
+        if text is None:
+            (folder / name).unlink(missing_ok=True)
+        else:
+            write_atomically(folder / name, text)
 
 
 def submission_time(entry: Entry, manifest: dict | None, course: Course | None) -> tuple[str, list[str]]:
@@ -319,12 +422,41 @@ def _previous_hash(folder: Path) -> str | None:
     return batch.get("hash") if isinstance(batch, dict) else None
 
 
+class LocalPool:
+    """The embedded default pool: `jobs` worker processes on this machine (default: one per core), each staging
+    and grading its learners behind its own resident boundary (a sandboxed fork server). A pool is what
+    run_batch grades through: `isolation` proves learner code can run before anyone is graded, and `grade`
+    yields each learner's Graded outcome as it completes (grader.cluster.ClusterPool is the other, on Dask)."""
+
+    def __init__(self, jobs: int | None = None) -> None:
+        if jobs is not None and jobs < 1:
+            raise ValueError(f"jobs must be at least 1, not {jobs}")
+        self.jobs = jobs or os.cpu_count() or 1
+
+    def isolation(self, sandboxed: bool) -> str:
+        """The isolation line here, after one child interpreter started the way the workers will start theirs
+        (InfrastructureError with the reason when it does not)."""
+        return choose_boundary("required" if sandboxed else "off", probe=True).isolation
+
+    def grade(self, entries: list[Entry], out: Path, grading: Grading,
+              overrides: Mapping[str, tuple]) -> Iterator[Graded]:
+        """Each learner's outcome, in the order they complete; one whose worker failed is `error`, saying why."""
+        with ProcessPoolExecutor(max_workers=self.jobs) as pool:
+            futures = {pool.submit(_grade_one, entry, str(out), grading, tuple(overrides.get(entry.learner, ()))):
+                       entry.learner for entry in entries}
+            for future in as_completed(futures):
+                try:
+                    yield future.result()
+                except Exception as exc:  # one broken submission never stops the batch
+                    yield Graded(futures[future], "error", f"{type(exc).__name__}: {exc}")
+
+
 def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None, roster: Path | None = None,
               jobs: int | None = None, seed: int, html: bool = True, plots: bool = False,
               limits: dict | None = None, progress=None, sandboxed: bool = True,
               hidden: frozenset[str] = frozenset(), lms_layouts: tuple[str, ...] = (),
               course: Course | None = None, overrides: Path | None = None, similarity: bool = False,
-              announce=None) -> dict:
+              announce=None, pool=None) -> dict:
     """Grade every submission in `submissions` into `out`; returns counts, statuses and messages per
     learner, what was skipped, what was flagged, the isolation line, the changes since the last run and
     the problems of overrides.csv, for the end summary.
@@ -335,8 +467,11 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     gradebooks; `course` (grader.course.Course) leaves out the checks it switches off and gives the late
     penalty and the current handout; `overrides` is the overrides file (default OUT/overrides.csv);
     `similarity` ranks pairs of learners by the similarity of their code (grader.similarity); `announce` is
-    given the isolation line once the boundary is chosen, before anyone is graded.
-    Every learner's result goes into OUT/gradebook.db (grader.history) as soon as it is graded."""
+    given the isolation line once the boundary is chosen, before anyone is graded; `pool` grades the learners
+    (default: LocalPool(jobs), processes on this machine; grader.cluster.ClusterPool grades on a Dask cluster),
+    and whatever it grades on, this process alone writes into `out`.
+    Every learner's result goes into OUT/gradebook.db (grader.history) as soon as it is graded, once (a result
+    that arrives twice is recorded once)."""
     from grader import history as histories
     from grader import provenance
 
@@ -350,13 +485,13 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                             + (f"; it holds only what is skipped: {what}" if what else ": it is empty"))
     rows, override_problems = read_overrides(overrides or out / "overrides.csv", [e.learner for e in entries],
                                              chapters)
-    isolation = choose_boundary("required" if sandboxed else "off", probe=True).isolation
+    pool = pool or LocalPool(jobs)
+    isolation = pool.isolation(sandboxed)
     if announce is not None:
         announce(isolation)
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}
-    jobs = jobs or os.cpu_count() or 1
     started = time.monotonic()
     done = 0
     limits = limits or {}
@@ -368,22 +503,22 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     for row in rows:
         by_learner.setdefault(row.learner, []).append(row)
     try:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            futures = {pool.submit(_grade_one, entry, str(out), chapters, seed, html, plots, limits, sandboxed,
-                                   frozenset(hidden), course, tuple(by_learner.get(entry.learner, ()))):
-                       entry.learner for entry in entries}
-            for future in as_completed(futures):
-                learner = futures[future]
-                try:
-                    _, statuses[learner], messages[learner] = future.result()
-                except Exception as exc:  # one broken submission never stops the batch
-                    statuses[learner], messages[learner] = "error", f"{type(exc).__name__}: {exc}"
-                state = _learner_state(out, learner, statuses[learner], messages[learner])
-                history.record(run, state[0])
-                collected.arrived(learner, state)
-                done += 1
-                if progress:
-                    progress(done, len(entries), time.monotonic() - started)
+        grading = Grading(tuple(chapters), seed, html, plots, limits, sandboxed, frozenset(hidden), course)
+        for graded in pool.grade(entries, out, grading, by_learner):
+            learner = graded.learner
+            if learner in statuses:  # arrived twice (a task run again elsewhere): recorded once
+                continue
+            statuses[learner], messages[learner] = graded.status, graded.message
+            try:
+                write_graded(out, graded)
+            except OSError as exc:
+                statuses[learner], messages[learner] = "error", f"its files could not be written: {exc}"
+            state = _learner_state(out, learner, statuses[learner], messages[learner])
+            history.record(run, state[0])
+            collected.arrived(learner, state)
+            done += 1
+            if progress:
+                progress(done, len(entries), time.monotonic() - started)
         summary = rebuild(out, history, run, chapters, collected, skipped, isolation, lms_layouts, rows,
                           override_problems, similarity=similarity, deadline=bool(course and course.late))
     finally:
