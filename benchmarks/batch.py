@@ -11,7 +11,10 @@ the peak resident memory of the batch's own process and of its process tree (wor
 learner children: /proc polled), and the ratio of each at the largest count to at the smallest (flat: near
 1). --discovery times grader.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
 giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
-the seconds at 10,000 against the 3.4 s the issue measured. --repeat N runs each N times: medians.
+the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades the --count submissions with
+this machine's pool, then through `grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with
+one, then two `grade worker` processes of one worker each, and prints each in submissions per second beside
+the local pool's (needs the [cluster] extra). --repeat N runs each N times: medians.
 """
 
 from __future__ import annotations
@@ -285,6 +288,78 @@ def discovery_figures(work: Path, counts: list[int], repeat: int) -> None:
                   f"{seconds[high] / DISCOVERY_BASELINE:.3f}x ({DISCOVERY_BASELINE / seconds[high]:.0f} times faster)")
 
 
+# ------------------------------------------------------------------------------------ on a Dask cluster, here
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def _start(command: list[str], log: Path) -> subprocess.Popen:
+    """`command` in a process group of its own (stopped with all it starts by _stop), its output in `log`."""
+    with log.open("wb") as handle:
+        return subprocess.Popen(command, cwd=ROOT, stdout=handle, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                start_new_session=True)
+
+
+def _stop(process: subprocess.Popen) -> None:
+    import signal
+
+    try:
+        os.killpg(process.pid, signal.SIGTERM)
+        process.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+    except ProcessLookupError:
+        process.wait()
+
+
+def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
+    """The same submissions graded by the local pool (all cores) and through --scheduler with 1 and 2 workers
+    (each a `grade worker --nworkers 1` process: one learner at a time) on a scheduler started here: submissions
+    per second (medians of `repeat` runs, each into a fresh output folder), each beside the local pool's."""
+    from distributed import Client
+
+    make(work / "submissions", count, styles)
+    env = dict(os.environ)
+    env.pop("DASK_SCHEDULER_ADDRESS", None)
+    runs = iter(range(1_000_000))
+
+    def median_wall(extra: tuple[str, ...]) -> float:
+        walls = []
+        for _ in range(repeat):
+            wall, _cpu, output = run_batch(work / "submissions", work / f"out-{next(runs)}", None, env, extra)
+            if f"{count} graded" not in output:
+                raise SystemExit(f"grade batch {' '.join(extra)} did not grade every submission:\n{output}")
+            walls.append(wall)
+        return statistics.median(walls)
+
+    local = median_wall(())
+    print(f"local pool ({os.cpu_count()} processes): {count} submissions in {local:.1f} s: {count / local:.1f} "
+          "submissions/s", flush=True)
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    started = [_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
+                       address.rsplit(":", 1)[1], "--no-dashboard"], work / "scheduler.log")]
+    try:
+        for workers in (1, 2):
+            started.append(_start([sys.executable, "-m", "grader", "worker", address, "--nworkers", "1",
+                                   "--no-dashboard", "--local-directory", str(work / f"worker-{workers}")],
+                                  work / f"worker-{workers}.log"))
+            with Client(address, timeout=60, set_as_default=False) as client:
+                client.wait_for_workers(workers, timeout=300)
+            wall = median_wall(("--scheduler", address))
+            print(f"Dask, {workers} worker{'s' * (workers > 1)} on this machine: {count} submissions in {wall:.1f} s: "
+                  f"{count / wall:.1f} submissions/s, {local / wall:.2f}x the local pool's {count / local:.1f}",
+                  flush=True)
+    finally:
+        for process in reversed(started):
+            _stop(process)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--count", type=int, default=300)
@@ -298,7 +373,17 @@ def main() -> None:
                         help="a realistic mix: right answers also in learners' styles (plain-Python loops, math, sympy), a "
                              "third zipped")
     parser.add_argument("--repeat", type=int, default=None, help="runs per figure (medians); --rss 1, --discovery 7")
+    parser.add_argument("--scheduler", action="store_true",
+                        help="throughput through grade batch --scheduler with 1 and 2 local Dask workers, beside the "
+                             "local pool")
     args = parser.parse_args()
+    if args.scheduler:
+        work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
+        try:
+            cluster_figures(work, args.count, args.styles, args.repeat or 1)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        return
     if args.rss or args.discovery:
         work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
         try:

@@ -5,7 +5,7 @@
     grade quiz ch06                        only the quiz
     grade classroom all                    GitHub Classroom's per-check results
     grade submit                           pack exercises/ into the archive your course grades
-    grade release / batch / gradescope     the instructor's side
+    grade release / batch / worker / gradescope     the instructor's side
 """
 
 from __future__ import annotations
@@ -553,10 +553,14 @@ def _learner_id_typed(typed: str) -> str:
                    "packed with another are flagged (default: the course config's `handout:`).")
 @click.option("--similarity", is_flag=True,
               help="Rank pairs of learners by how alike their code is (copydetect), for a person to look at.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Grade on a Dask cluster: its scheduler, e.g. tcp://host:8786, whose workers run `grade worker` "
+                   "(default: $DASK_SCHEDULER_ADDRESS, else the course file's `scheduler:`; `local`: this machine's "
+                   "pool). Needs the [cluster] extra.")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
                   seed: int | None, course_file: str | None, no_html: bool, plots: bool, no_sandbox: bool,
                   time_budget: float, lms_layouts: tuple[str, ...], overrides_file: str | None, handout: str | None,
-                  similarity: bool) -> None:
+                  similarity: bool, scheduler: str | None) -> None:
     """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
     at the course seed, hidden checks included; keep every run in OUT/gradebook.db and say in
     OUT/changes.csv whose score moved and why."""
@@ -577,6 +581,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
             similarities._engine()
         except similarities.SimilarityUnavailable as exc:
             raise click.UsageError(str(exc)) from None
+    pool = _cluster_pool(scheduler, the_course, jobs)
     try:
         result = batch.run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
                                  roster=Path(roster) if roster else None, jobs=jobs,
@@ -585,13 +590,16 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
                                  progress=batch.progress_bar(), hidden=the_course.hidden,
                                  lms_layouts=tuple(lms_layouts), course=the_course,
                                  overrides=Path(overrides_file) if overrides_file else None, similarity=similarity,
-                                 announce=lambda line: click.echo(line, err=True))
+                                 announce=lambda line: click.echo(line, err=True), pool=pool)
     except batch.RosterError as exc:
         hint = "--overrides" if "overrides" in str(exc) else "--roster"
         raise click.BadParameter(for_terminal(str(exc)), param_hint=hint) from None
     except batch.NoSubmissions as exc:
         raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="SUBMISSIONS") from None
     except batch.InfrastructureError as exc:
+        if pool is not None:  # the cluster cannot grade (grader.cluster.ClusterError): the message says why
+            click.echo(f"grade batch: no learner was graded: {for_terminal(str(exc), one_line=True)}", err=True)
+            sys.exit(EXIT_USAGE)
         click.echo(f"grade batch: no learner was graded: learner code cannot run here. "
                    f"{for_terminal(str(exc), one_line=True)}\n"
                    "Fix the sandbox (bubblewrap: `bwrap --version`, user namespaces) and run again, or pass "
@@ -629,6 +637,50 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     complete = all(s in ("graded", "unchanged") for s in result["statuses"].values()) and not any(
         entry.submission for entry in result["skipped"])
     sys.exit(EXIT_ALL_PASSED if complete else EXIT_NOT_ALL_PASSED)
+
+
+def _cluster_pool(option: str | None, the_course, jobs: int | None):
+    """The pool grade batch grades through: None (this machine's, grader.batch.LocalPool), or a
+    grader.cluster.ClusterPool on the scheduler that --scheduler, else $DASK_SCHEDULER_ADDRESS, else the course
+    file's `scheduler:` names (`local`: this machine's)."""
+    for address, origin in ((option, "--scheduler"), (os.environ.get("DASK_SCHEDULER_ADDRESS"), "DASK_SCHEDULER_ADDRESS"),
+                            (the_course.scheduler, the_course.where("scheduler"))):
+        if address:
+            break
+    if not address or address.strip() == "local":
+        return None
+    if jobs is not None:
+        raise click.UsageError(f"--jobs sizes this machine's pool, but the learners are graded on the cluster at {address} "
+                               f"({origin}); pass --scheduler local to grade here")
+    from grader import cluster
+    from grader.safe_text import for_terminal
+
+    return cluster.ClusterPool(address.strip(), say=lambda line: click.echo(f"  {for_terminal(line, one_line=True)}",
+                                                                             err=True))
+
+
+@main.command("worker", context_settings={"ignore_unknown_options": True})
+@click.argument("scheduler")
+@click.option("--nworkers", type=click.IntRange(min=1), default=None,
+              help="Worker processes, each grading one learner at a time (default: one per core).")
+@click.option("--no-sandbox", is_flag=True,
+              help="Start where learner code cannot run behind bubblewrap: then it grades only for `grade batch "
+                   "--no-sandbox` (each report's isolation line says so).")
+@click.argument("dask_options", nargs=-1, type=click.UNPROCESSED)
+def worker_command(scheduler: str, nworkers: int | None, no_sandbox: bool, dask_options: tuple[str, ...]) -> None:
+    """Grade for `grade batch --scheduler SCHEDULER` on this machine: join the Dask scheduler as worker processes
+    (`dask worker`; further options, e.g. --memory-limit 4GB, go to it). Refuses to start where learner code
+    cannot run behind the sandbox or where this grader is not the running coordinator's version."""
+    from grader import cluster
+    from grader.safe_text import for_terminal
+
+    try:
+        isolation = cluster.prepare_worker(scheduler, sandboxed=not no_sandbox)
+    except cluster.WorkerRefused as exc:
+        click.echo(f"grade worker: not started: {for_terminal(str(exc), one_line=True)}", err=True)
+        sys.exit(EXIT_USAGE)
+    click.echo(f"grade worker: grader {cluster.grader_version()}, joining {scheduler}\n{isolation}", err=True)
+    cluster.become(cluster.worker_command(scheduler, nworkers, dask_options))
 
 
 @main.command("gradescope")
@@ -870,7 +922,9 @@ EXAMPLES = {
                 "grade release handout/ --notebooks   stubs as notebooks (Jupyter, Colab)"],
     "batch": ["grade batch submissions/ --out graded/",
               "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas",
-              "grade batch submissions/ --out graded/ --overrides overrides.csv --handout handout/ --similarity"],
+              "grade batch submissions/ --out graded/ --overrides overrides.csv --handout handout/ --similarity",
+              "grade batch submissions/ --out graded/ --scheduler tcp://scheduler:8786   on a Dask cluster"],
+    "worker": ["grade worker tcp://scheduler:8786", "grade worker tcp://scheduler:8786 --nworkers 8 --memory-limit 16GB"],
     "submit": ["grade submit                     pack exercises/ into <your id>.zip, checked and graded",
                "grade submit --learner ada.lovelace --out ~/handin.zip"],
     "gradescope": ["grade gradescope autograder.zip",

@@ -62,6 +62,7 @@ class Course:
     # whether a submission time in the learner's own archive manifest may decide a late penalty where the roster
     # gives none (`manifest_time: accept`; by default it may not: the learner's machine wrote it)
     accepts_manifest_time: bool = False
+    scheduler: str | None = None  # instructor side: the Dask scheduler grade batch grades on (grader.cluster)
     lines: dict | None = field(default=None, compare=False, hash=False)  # setting -> the line of its file it is on
 
     def where(self, setting: str) -> str:
@@ -150,7 +151,7 @@ def _from_handout(path: Path) -> Course:
 
 
 _FIELDS = {"course", "seed", "quiz_feedback", "hidden", "exact_derivatives", "handout", "deadline", "late_penalty",
-           "manifest_time"}
+           "manifest_time", "scheduler"}
 
 
 def _key_lines(text: str) -> dict[str, int]:
@@ -214,11 +215,15 @@ def _from_yaml(path: Path) -> Course:
     if handout is not None and (not isinstance(handout, str) or not handout.strip()):
         raise CourseError(f"{where('handout')}: handout is the id of the current handout, as `grade release` prints "
                           "it (e.g. 0.1.0+handout.3f2a9c1b0d4e)")
+    scheduler = data.get("scheduler")
+    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
+        raise CourseError(f"{where('scheduler')}: scheduler is the address of the Dask scheduler grade batch grades on, "
+                          f"e.g. tcp://scheduler.example.org:8786, not {scheduler!r}")
     return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
                   exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by, lines=lines,
                   accepts_manifest_time=manifest_time == "accept",
                   current_handout=handout.strip() if handout else None,
-                  late=_late(data, where))
+                  late=_late(data, where), scheduler=scheduler.strip() if scheduler else None)
 
 
 def _quiz_feedback(value: object, where: str) -> tuple[str, dict]:

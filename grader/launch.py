@@ -12,7 +12,7 @@ import sys
 
 from grader.system import SINGLE_THREADED_BLAS
 
-_OTHER_COMMANDS = {"list", "quiz", "batch", "release", "gradescope", "classroom", "submit", "--help", "-h",
+_OTHER_COMMANDS = {"list", "quiz", "batch", "worker", "release", "gradescope", "classroom", "submit", "--help", "-h",
                    "--version"}
 
 

@@ -46,11 +46,16 @@ def _sources() -> list[Path]:
 
 @functools.lru_cache(maxsize=1)
 def code_digest() -> str:
-    """A hash of every file that decides a verdict (Python sources, YAML banks and keys, recorded data)."""
+    """A hash of every file that decides a verdict (Python sources, YAML banks and keys, recorded data). Each file
+    counts once, by its path in its own source folder: the banks inside an installed grader (grader/quizzes) hash
+    as beside it in the project, so the instructor's checkout and its wheel (a cluster's workers) agree."""
     digest = hashlib.sha256()
-    for folder in _sources():
+    folders = _sources()
+    for folder in folders:
+        inner = [other for other in folders if other != folder and other.is_relative_to(folder)]
         for path in sorted(folder.rglob("*")):
-            if path.suffix in (".py", ".yaml", ".json") and path.is_file() and "__pycache__" not in path.parts:
+            if (path.suffix in (".py", ".yaml", ".json") and path.is_file() and "__pycache__" not in path.parts
+                    and not any(path.is_relative_to(other) for other in inner)):
                 digest.update(path.relative_to(folder).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
     return digest.hexdigest()
 

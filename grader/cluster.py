@@ -1,0 +1,386 @@
+"""`grade batch --scheduler`: the batch on a Dask cluster, the coordinator staging and writing, workers grading.
+
+The coordinator (grader.batch.run_batch with a ClusterPool) stages each submission into OUT/.staging as the
+local pool does and decides which are due (one whose files, grader, seed and settings hash as at its last
+grading is not graded again, so a coordinator killed mid-batch resumes with what is missing). Each due
+learner's staged files travel in a task keyed by the learner, its content hash and the grader's version. A
+worker grades it through the local pool's path (grader.batch.grade_staged: the one door, bubblewrap, a
+resident fork server and every per-learner limit, on the worker's machine) and sends back plain data: the
+texts of the learner's files, with the worker's isolation line in its report.json. The coordinator alone
+writes into OUT, records the history and builds the class outputs (run_batch), so the outputs are those of a
+local batch but for timings and that line.
+
+Nothing lost, nothing twice: a worker process that dies mid-task has its tasks rescheduled by Dask; a result
+that arrives twice is recorded once (run_batch); a worker on which learner code cannot run (its sandbox does
+not start, or it holds another grader version) answers so for that task, never with a grade, and the task
+is tried on another worker.
+
+The workers: `grade worker SCHEDULER` (or `dask worker SCHEDULER --preload grader.cluster --nthreads 1`)
+checks on start that learner code starts here behind the sandbox and that this grader is the version of the
+coordinator using the scheduler (published on it by each coordinator while it runs), and refuses otherwise.
+The references and keys a worker grades with are those of the instructor's wheel installed with it: the
+version check proves they are the coordinator's.
+
+Dask (the [cluster] extra: dask[distributed]) is imported here only, and this module only with --scheduler.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import socket
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
+
+from grader import batch
+
+VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # scheduler metadata: the running coordinator's grader
+TRIES = 3  # workers a learner is tried on, where learner code cannot run on one
+INSTALL_HINT = "pip install 'jacobians-grader[cluster]' (Dask's distributed scheduler)"
+# `grade worker --no-sandbox`: its processes start where learner code cannot run behind bubblewrap (they then grade
+# only for a coordinator run with --no-sandbox: grader.boundary.choose decides per task, as the coordinator asks)
+START_WITHOUT_SANDBOX = "GRADER_WORKER_WITHOUT_SANDBOX"
+
+
+class ClusterError(batch.InfrastructureError):
+    """The cluster cannot grade (no scheduler answers, no worker joins, or none can run learner code): nobody is
+    graded; the message says why and what to do."""
+
+
+class WorkerRefused(RuntimeError):
+    """This machine cannot be a grading worker (learner code does not start behind the sandbox, or its grader is
+    not the coordinator's version): the message says why."""
+
+
+def _distributed():
+    """dask.distributed, or ClusterError saying how to install it."""
+    try:
+        import distributed
+    except ImportError:
+        raise ClusterError(f"grading on a cluster needs Dask: {INSTALL_HINT}") from None
+    return distributed
+
+
+def grader_version() -> str:
+    """The version of this grader: the hash of its checks, references and keys on the instructor's side."""
+    from grader import provenance
+
+    return provenance.grader_version()
+
+
+# ------------------------------------------------------------------------------------ the worker's side
+
+_lock = threading.Lock()  # one learner at a time per worker process: its resident fork server serves one session
+_started: dict[str, str] = {}  # sandbox mode -> this process's isolation line, proved when it started
+_start_method: list[str] = []  # multiprocessing's start method as Dask left it in this process, once put back
+
+
+def _as_a_local_worker() -> None:
+    """Let this worker process choose its launcher as a local pool's worker does. Dask's nanny spawned it, so
+    multiprocessing's start method reads "spawn" here, which grader.system.fork_is_safe takes for a system where
+    a process holding numpy must not fork (macOS): learner code would start in a fresh interpreter per learner
+    instead of from the resident fork server. The platform's own default is put back (still "spawn" on macOS)."""
+    import multiprocessing
+
+    if not _start_method:
+        _start_method.append(multiprocessing.get_start_method(allow_none=True) or "default")
+        multiprocessing.set_start_method(None, force=True)
+
+
+def sandbox_check(sandbox: str = "required") -> str:
+    """The isolation line of learner code here for `sandbox` (grader.boundary.choose's mode), after one child
+    interpreter started the way tasks will start theirs; WorkerRefused with the reason where it does not."""
+    _as_a_local_worker()
+    if sandbox not in _started:
+        try:
+            _started[sandbox] = batch.choose_boundary(sandbox, probe=True).isolation
+        except batch.InfrastructureError as exc:
+            raise WorkerRefused(f"learner code cannot run on {socket.gethostname()}: {exc}. Install bubblewrap "
+                                "(`bwrap --version` must work, with user namespaces), or start the worker with "
+                                "--no-sandbox: it then grades only for `grade batch --no-sandbox`, learner code "
+                                "running as the worker's user") from None
+    return _started[sandbox]
+
+
+def version_check(published: str | None) -> None:
+    """WorkerRefused where a coordinator's grader version is published and is not this grader's."""
+    mine = grader_version()
+    if published and published != mine:
+        raise WorkerRefused(f"this worker's grader is {mine}, the coordinator's is {published}: install the "
+                            f"instructor's wheel of {published} here (the same checks, references and keys), then "
+                            "start the worker again (a coordinator publishes its version on the scheduler while it "
+                            "runs; one that was killed leaves it there until the next one connects)")
+
+
+async def dask_setup(worker) -> None:
+    """`dask worker --preload grader.cluster`: refuse to start where learner code cannot run here behind the
+    sandbox or where a running coordinator grades with another grader version. Dask only logs an exception of a
+    preload and starts the worker all the same, so this process ends (status 2), having said why; its nanny then
+    fails to start and `dask worker` ends too."""
+    try:
+        sandbox_check("off" if os.environ.get(START_WITHOUT_SANDBOX) == "1" else "required")
+        try:
+            published = await worker.scheduler.get_metadata(keys=VERSION_KEY, default=None)
+        except Exception:  # noqa: BLE001  no scheduler yet: the coordinator checks every worker when it connects
+            published = None
+        version_check(published)
+    except WorkerRefused as exc:
+        print(f"grade worker: not started: {exc}", file=sys.stderr, flush=True)
+        os._exit(2)
+
+
+def worker_facts(sandbox: str, dask_worker=None) -> dict:
+    """What the coordinator checks of each worker when it connects (run there by Client.run): its grader version,
+    and its isolation line for `sandbox` or why learner code cannot run there."""
+    facts = {"version": grader_version(), "host": socket.gethostname(), "pid": os.getpid()}
+    try:
+        facts["isolation"] = sandbox_check(sandbox)
+    except WorkerRefused as exc:
+        facts["problem"] = str(exc)
+    return facts
+
+
+def grade_task(staged: batch.Staged, files: Mapping[str, bytes], grading: batch.Grading, version: str) -> dict:
+    """One learner graded on this worker, from its staged `files` (relative path -> bytes), copied into a private
+    folder of this machine; returns plain data: {"graded": grader.batch.Graded's fields, "worker": its address},
+    or {"refused": why, "worker": ...} where this worker holds another grader `version` or learner code cannot
+    run here (an infrastructure failure, never a grade: the coordinator tries another worker)."""
+    from distributed import get_worker
+
+    worker = get_worker().address
+    mine = grader_version()
+    if mine != version:
+        return {"refused": f"worker {worker} holds grader {mine}, not the coordinator's {version}", "worker": worker}
+    with _lock:
+        _as_a_local_worker()
+        try:
+            line = batch.worker_isolation(grading.sandbox)
+        except batch.InfrastructureError as exc:
+            return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
+        with tempfile.TemporaryDirectory(prefix="grade-task-") as scratch:
+            package = Path(scratch) / "exercises"
+            for relative, data in files.items():
+                parts = Path(relative).parts
+                if Path(relative).is_absolute() or ".." in parts or not parts:
+                    continue  # staging never names such a file
+                path = package.joinpath(*parts)
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_bytes(data)
+            try:
+                graded = batch.grade_staged(staged, grading, root=Path(scratch),
+                                            batch_extra={"isolation": {"line": line, "worker": worker}})
+            except (OSError, batch.InfrastructureError) as exc:  # no child process starts here at all
+                return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
+    return {"graded": dataclasses.asdict(graded), "worker": worker}
+
+
+def task_key(staged: batch.Staged, version: str, attempt: int = 1) -> str:
+    """The task's key: the learner, its content hash and the grader version (two coordinators asking for one
+    grading at once share one task), and the try where learner code could not run on the worker of the last."""
+    import hashlib
+
+    digest = hashlib.sha256(f"{staged.learner}\0{staged.digest}\0{version}".encode("utf-8", "surrogatepass"))
+    return f"grade-{digest.hexdigest()[:32]}" + (f"-try{attempt}" if attempt > 1 else "")
+
+
+def worker_command(scheduler: str, nworkers: int | None = None, dask_options: tuple[str, ...] = ()) -> list[str]:
+    """The `dask worker` command `grade worker` becomes: worker processes of one thread each (a learner at a
+    time, behind the process's resident sandbox), each checking itself on start (the preload, dask_setup)."""
+    return [sys.executable, "-m", "distributed.cli.dask_worker", scheduler, "--preload", "grader.cluster",
+            "--nthreads", "1", "--nworkers", str(nworkers or os.cpu_count() or 1), *dask_options]
+
+
+def prepare_worker(scheduler: str, sandboxed: bool = True) -> str:
+    """The checks `grade worker` makes before it joins `scheduler`: Dask installed, learner code starting here
+    behind the sandbox, and this grader the version of a coordinator running there. Returns the isolation line;
+    WorkerRefused with the reason otherwise."""
+    try:
+        distributed = _distributed()
+    except ClusterError as exc:
+        raise WorkerRefused(str(exc)) from None
+    if not sandboxed:
+        os.environ[START_WITHOUT_SANDBOX] = "1"  # inherited by the worker processes: their own start check
+    line = sandbox_check("required" if sandboxed else "off")
+    try:
+        with distributed.Client(scheduler, set_as_default=False) as client:  # Dask's connect timeout (30 s)
+            published = client.get_metadata(VERSION_KEY, default=None)
+    except (OSError, TimeoutError) as exc:
+        raise WorkerRefused(f"no Dask scheduler answers at {scheduler} ({exc}); start it (`dask scheduler`) or "
+                            "correct the address") from None
+    version_check(published)
+    return line
+
+
+def become(command: list[str]) -> None:
+    """Replace this process with `command` (its signals, its exit status); where that is not possible, run it."""
+    if hasattr(os, "execv"):
+        os.execv(command[0], command)
+    import subprocess
+
+    sys.exit(subprocess.call(command))
+
+
+# ------------------------------------------------------------------------------------ the coordinator's side
+
+class ClusterPool:
+    """The pool run_batch grades through on a Dask cluster (see grader.batch.LocalPool): connected to the
+    scheduler at `scheduler` (or through `client`, a distributed.Client made elsewhere, e.g. by Dask Gateway).
+    `say` is given what the instructor should read as it happens (a worker that cannot grade)."""
+
+    def __init__(self, scheduler: str | None = None, *, client=None, say: Callable[[str], None] | None = None,
+                 wait_for_workers: float = 60.0) -> None:
+        if scheduler is None and client is None:
+            raise ValueError("a scheduler address or a client")
+        self.scheduler = scheduler
+        self.client = client
+        self.say = say or (lambda line: None)
+        self.wait_for_workers = wait_for_workers
+        self.version = grader_version()
+        self.good: list[str] = []  # the workers that checked out when the batch started
+        self._own_client = client is None
+
+    def _connect(self):
+        distributed = _distributed()
+        if self.client is None:
+            try:
+                self.client = distributed.Client(self.scheduler, set_as_default=False)  # Dask's connect timeout
+            except (OSError, TimeoutError) as exc:
+                raise ClusterError(f"no Dask scheduler answers at {self.scheduler} ({exc}); start it (`dask scheduler`"
+                                   ", dask-jobqueue, dask-kubernetes or Dask Gateway) or correct --scheduler") from None
+        return self.client
+
+    @property
+    def where(self) -> str:
+        """The scheduler's address, for messages."""
+        return self.scheduler or self.client.scheduler.address
+
+    def isolation(self, sandboxed: bool) -> str:
+        """Connect, publish this coordinator's grader version for the workers that join later, wait for a worker,
+        and check every worker: its grader version must be this one and learner code must start there behind
+        the sandbox. Returns the workers' isolation line; ClusterError where no worker can grade."""
+        client = self._connect()
+        try:
+            return self._check_workers(client, "required" if sandboxed else "off")
+        except BaseException:
+            self.close()
+            raise
+
+    def _check_workers(self, client, sandbox: str) -> str:
+        client.set_metadata(VERSION_KEY, self.version)
+        try:
+            client.wait_for_workers(1, timeout=self.wait_for_workers)
+        except TimeoutError:
+            raise ClusterError(f"no worker joined the scheduler at {self.where} within {self.wait_for_workers:g} s; "
+                               f"start workers with `grade worker {self.where}`") from None
+        facts = client.run(worker_facts, sandbox, on_error="return")
+        lines: dict[str, list[str]] = {}
+        refused = []
+        for address, fact in sorted(facts.items()):
+            if isinstance(fact, BaseException):
+                refused.append(f"{address}: did not answer ({type(fact).__name__}: {fact})")
+            elif fact["version"] != self.version:
+                refused.append(f"{address} ({fact['host']}): holds grader {fact['version']}, not this coordinator's "
+                               f"{self.version}; install the instructor's wheel there")
+            elif "problem" in fact:
+                refused.append(f"{address}: {fact['problem']}")
+            else:
+                lines.setdefault(fact["isolation"], []).append(address)
+        self.good = sorted(address for addresses in lines.values() for address in addresses)
+        if not self.good:
+            raise ClusterError(f"no worker of the scheduler at {self.where} can grade: " + "; ".join(refused))
+        for why in refused:
+            self.say(f"a worker that cannot grade (the learners sent to it are graded by another): {why}")
+        if len(lines) == 1:
+            return next(iter(lines))
+        return "; ".join(f"on {', '.join(addresses)}: {line}" for line, addresses in sorted(lines.items()))
+
+    def grade(self, entries: list, out: Path, grading: batch.Grading,
+              overrides: Mapping[str, tuple]) -> Iterator[batch.Graded]:
+        """Stage each learner here, send the due ones to the workers (a bounded number in flight, so that memory
+        does not grow with the class) and yield each learner's outcome as it completes."""
+        try:
+            yield from self._grade(entries, out, grading, overrides)
+        finally:
+            self.close()
+
+    def _grade(self, entries: list, out: Path, grading: batch.Grading,
+               overrides: Mapping[str, tuple]) -> Iterator[batch.Graded]:
+        distributed = _distributed()
+        client = self.client or self._connect()
+        flying: dict = {}  # future -> (staged, its files, attempt, the workers it could not run on)
+        completed = distributed.as_completed(loop=client.loop)
+        waiting = iter(entries)
+        told: set[str] = set()  # the workers said to be unable to grade
+        limit, counted = 8, 0.0
+
+        def in_flight() -> int:
+            """Tasks to keep sent: four per worker thread now (workers join and leave: an adaptive cluster)."""
+            nonlocal limit, counted
+            if time.monotonic() - counted > 2:
+                limit, counted = max(8, 4 * sum(client.nthreads().values())), time.monotonic()
+            return limit
+
+        def send(staged: batch.Staged, files: dict, attempt: int, avoid: tuple[str, ...]) -> None:
+            others = [w for w in client.scheduler_info(n_workers=-1)["workers"] if w not in avoid] if avoid else None
+            future = client.submit(grade_task, staged, files, grading, self.version, key=task_key(staged, self.version,
+                                                                                                   attempt),
+                                   workers=others or None, allow_other_workers=bool(others))
+            flying[future] = (staged, files, attempt, avoid)
+            completed.add(future)
+
+        try:
+            while True:
+                while len(flying) < in_flight():
+                    entry = next(waiting, None)
+                    if entry is None:
+                        break
+                    staged = batch.stage_one(entry, out, grading, tuple(overrides.get(entry.learner, ())))
+                    if isinstance(staged, batch.Graded):
+                        yield staged
+                    else:
+                        send(staged, staged.files(), 1, ())
+                if not flying:
+                    return
+                future = next(completed)
+                staged, files, attempt, avoid = flying.pop(future)
+                try:
+                    outcome = future.result()
+                except Exception as exc:  # noqa: BLE001  a lost task is that learner's error, never the batch's
+                    yield batch.Graded(staged.learner, "error", f"not graded on the cluster ({type(exc).__name__}: "
+                                                               f"{exc}); the next run grades it again")
+                    continue
+                finally:
+                    future.release()
+                graded = batch.Graded(**outcome["graded"]) if "graded" in outcome else None
+                why = outcome.get("refused") or (graded.infrastructure if graded else "")
+                if why and attempt < TRIES:
+                    if outcome["worker"] not in told:
+                        told.add(outcome["worker"])
+                        self.say(f"{why}; its learners are graded on other workers")
+                    send(staged, files, attempt + 1, (*avoid, outcome["worker"]))
+                    continue
+                if graded is None:
+                    graded = batch.Graded(staged.learner, "error", f"not graded, on {attempt} workers, for a reason "
+                                                                   f"outside the learner's code: {why}; the next run "
+                                                                   "grades it again", infrastructure=why)
+                yield graded
+        finally:
+            for future in flying:
+                future.release()
+
+    def close(self) -> None:
+        """Withdraw this coordinator's version from the scheduler and disconnect (a client made elsewhere stays)."""
+        if self.client is None:
+            return
+        try:
+            self.client.set_metadata(VERSION_KEY, None)
+        except Exception:  # noqa: BLE001,S110  the scheduler may be gone already; nothing is left to withdraw
+            pass
+        if self._own_client:
+            self.client.close()
+            self.client = None
+
