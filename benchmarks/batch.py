@@ -11,10 +11,10 @@ the peak resident memory of the batch's own process and of its process tree (wor
 learner children: /proc polled), and the ratio of each at the largest count to at the smallest (flat: near
 1). --discovery times grader.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
 giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
-the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades the --count submissions with
-this machine's pool, then through `grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with
-one, then two `grade worker` processes of one worker each, and prints each in submissions per second beside
-the local pool's (needs the [cluster] extra). --repeat N runs each N times: medians.
+the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades the --count submissions through
+`grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with one, then two `grade worker`
+processes of one worker each, each run right after the local pool's, and prints both in submissions per second
+(needs the [cluster] extra). --repeat N runs each N times: medians.
 """
 
 from __future__ import annotations
@@ -319,9 +319,10 @@ def _stop(process: subprocess.Popen) -> None:
 
 
 def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
-    """The same submissions graded by the local pool (all cores) and through --scheduler with 1 and 2 workers
-    (each a `grade worker --nworkers 1` process: one learner at a time) on a scheduler started here: submissions
-    per second (medians of `repeat` runs, each into a fresh output folder), each beside the local pool's."""
+    """The same submissions graded through --scheduler with 1, then 2 workers (each a `grade worker --nworkers 1`
+    process: one learner at a time) on a scheduler started here, each run right after a run of the local pool
+    (all cores), this machine's speed drifting: submissions per second of each (medians of `repeat` pairs, each
+    run into a fresh output folder) and the median of the pairs' ratios."""
     from distributed import Client
 
     make(work / "submissions", count, styles)
@@ -329,18 +330,12 @@ def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
     env.pop("DASK_SCHEDULER_ADDRESS", None)
     runs = iter(range(1_000_000))
 
-    def median_wall(extra: tuple[str, ...]) -> float:
-        walls = []
-        for _ in range(repeat):
-            wall, _cpu, output = run_batch(work / "submissions", work / f"out-{next(runs)}", None, env, extra)
-            if f"{count} graded" not in output:
-                raise SystemExit(f"grade batch {' '.join(extra)} did not grade every submission:\n{output}")
-            walls.append(wall)
-        return statistics.median(walls)
+    def wall_of(extra: tuple[str, ...]) -> float:
+        wall, _cpu, output = run_batch(work / "submissions", work / f"out-{next(runs)}", None, env, extra)
+        if f"{count} graded" not in output:
+            raise SystemExit(f"grade batch {' '.join(extra)} did not grade every submission:\n{output}")
+        return wall
 
-    local = median_wall(())
-    print(f"local pool ({os.cpu_count()} processes): {count} submissions in {local:.1f} s: {count / local:.1f} "
-          "submissions/s", flush=True)
     address = f"tcp://127.0.0.1:{_free_port()}"
     started = [_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
                        address.rsplit(":", 1)[1], "--no-dashboard"], work / "scheduler.log")]
@@ -351,10 +346,13 @@ def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
                                   work / f"worker-{workers}.log"))
             with Client(address, timeout=60, set_as_default=False) as client:
                 client.wait_for_workers(workers, timeout=300)
-            wall = median_wall(("--scheduler", address))
-            print(f"Dask, {workers} worker{'s' * (workers > 1)} on this machine: {count} submissions in {wall:.1f} s: "
-                  f"{count / wall:.1f} submissions/s, {local / wall:.2f}x the local pool's {count / local:.1f}",
-                  flush=True)
+            pairs = [(wall_of(()), wall_of(("--scheduler", address))) for _ in range(repeat)]
+            local, dask = (statistics.median(walls) for walls in zip(*pairs))
+            ratio = statistics.median(here / there for here, there in pairs)
+            print(f"Dask, {workers} worker{'s' * (workers > 1)} on this machine: {count} submissions in {dask:.1f} s, "
+                  f"{count / dask:.1f} submissions/s; the local pool ({os.cpu_count()} processes) beside it: "
+                  f"{local:.1f} s, {count / local:.1f} submissions/s; Dask / local {ratio:.2f}x "
+                  f"({repeat} pair{'s' * (repeat > 1)})", flush=True)
     finally:
         for process in reversed(started):
             _stop(process)
