@@ -45,42 +45,50 @@ class Verdict:
     details: dict = field(default_factory=dict)
     mistake: Mistake | None = None  # the known mistake the wrong value matches (grader.diagnose)
     help: str = ""  # what to change (the named mistake's sentence), apart from the message, which says what is wrong
-    # what this comparison says of each candidate mistake, worked out when a check's failure asks (grader.diagnose)
-    evidence: Callable[[], Evidence] | None = field(default=None, repr=False, compare=False)
+    # what this comparison says of each candidate mistake (grader.diagnose), worked out only when a check's failure
+    # asks: evidence(None) of every candidate, evidence(ids) of those candidates only (the others not evaluated)
+    evidence: Callable[[set[str] | None], Evidence] | None = field(default=None, repr=False, compare=False)
+    explained: bool = field(default=False, init=False, repr=False, compare=False)  # its mistake is decided
     _weighed: Evidence | None = field(default=None, init=False, repr=False, compare=False)
 
-    def weigh(self) -> Evidence | None:
-        """What this comparison says of each candidate mistake; None for a failure no mistake can explain (a
-        failure with neither a comparison of values nor a mistake of its own)."""
-        if self._weighed is None:
-            if self.evidence is not None:
-                self._weighed = self.evidence()
-            elif self.mistake is not None:
-                self._weighed = Evidence({self.mistake.id: self.mistake})
-            elif self.passed:
-                self._weighed = Evidence()
-            else:
-                return None
+    def weigh(self, only: set[str] | None = None) -> Evidence | None:
+        """What this comparison says of each candidate mistake (of those in `only`, if given: the slips generated
+        from the reference are then evaluated for these only); None for a failure no mistake can explain (one
+        with neither a comparison of values nor a mistake of its own)."""
+        if self._weighed is not None:
+            return self._weighed
+        if self.evidence is not None:
+            if only is not None:
+                return self.evidence(only)
+            self._weighed = self.evidence(None)
+        elif self.mistake is not None:
+            self._weighed = Evidence({self.mistake.id: self.mistake})
+        elif self.passed:
+            self._weighed = Evidence()
         return self._weighed
 
-    def also(self, extra: Callable[[], Evidence]) -> Verdict:
+    def also(self, extra: Callable[[set[str] | None], Evidence]) -> Verdict:
         """This verdict with more evidence (e.g. the generated slips of the raw value a derived comparison was
-        made of, or a mistake of the check's own), its failure named again from all of it."""
+        made of, or a mistake of the check's own), its failure to be named from all of it."""
         own, mistake = self.evidence, self.mistake
 
-        def both() -> Evidence:
-            first = own() if own is not None else Evidence({mistake.id: mistake} if mistake is not None else {})
-            second = extra()
+        def both(only: set[str] | None) -> Evidence:
+            first = own(only) if own is not None else Evidence({mistake.id: mistake} if mistake is not None else {})
+            second = extra(only)
             ruled = first.ruled_out | second.ruled_out  # told apart anywhere: not this slip
             return Evidence({k: m for k, m in {**first.matched, **second.matched}.items() if k not in ruled}, ruled)
-        self.evidence, self._weighed = both, None
-        if not self.passed:
-            self.name(explain([self.weigh()]))
+        self.evidence, self._weighed, self.explained = both, None, False
         return self
 
     def name(self, mistake: Mistake | None) -> None:
         """Name `mistake` (or none) as what this failure is: its help goes apart from the message."""
-        self.mistake, self.help = mistake, mistake.help if mistake is not None else ""
+        self.mistake, self.help, self.explained = mistake, mistake.help if mistake is not None else "", True
+
+    def explain(self) -> Verdict:
+        """Name what this failure is, if not done yet: the mistake its comparison explains (grader.diagnose)."""
+        if not self.passed and not self.explained:
+            self.name(explain([self.weigh()]))
+        return self
 
 
 @dataclass(frozen=True)
@@ -239,10 +247,10 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
     if observer is not None:  # grade selftest: what this comparison could tell apart
         observer(Comparison(expected, rtol, atol, exact, tuple(mistakes), named_entries, source))
 
-    def evidence() -> Evidence:
+    def evidence(only: set[str] | None = None) -> Evidence:
         low, high = _tolerance(expected, rtol, atol, exact)
         candidates = list(mistakes) + (generic(expected, named_entries) if named_entries is not None else []) + \
-            (generated(source) if source is not None else [])
+            (generated(source, only) if source is not None else [])
         return weigh(got, expected, candidates, low, high)
 
     if got.size <= SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
@@ -257,8 +265,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
         verdict = Verdict(False, f"{label} is not finite: {', '.join(where)} = "
                                  f"{fmt(got[tuple(np.argwhere(bad_got)[0])])}.", expected, got,
                           {"wrong": np.argwhere(bad_got).tolist()}, evidence=evidence)
-        verdict.name(explain([verdict.weigh()]))
-        return verdict
+        return verdict  # its mistake is named when asked (Verdict.explain, all_of): the slips are weighed then
     diff = np.asarray(np.abs(got - expected))  # an array even for scalars (numpy returns a float64 there)
     diff[np.isnan(diff) & np.isnan(got) & np.isnan(expected)] = 0.0
     limit = atol + rtol * np.abs(expected)
@@ -277,10 +284,8 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
             lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny, digits)}, "
                          f"{expected_name} {fmt(expected[idx], tiny, digits)}")
     lines.append(f"  ({tolerance_text(rtol, atol)}; largest difference {fmt(diff.max())})")
-    verdict = Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()},
-                      evidence=evidence)
-    verdict.name(explain([verdict.weigh()]))
-    return verdict
+    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()},
+                   evidence=evidence)  # its mistake is named when asked (Verdict.explain, all_of)
 
 
 def _tolerance(expected: np.ndarray, rtol: float, atol: float, exact: bool) -> tuple[float, float]:
@@ -291,17 +296,18 @@ def _tolerance(expected: np.ndarray, rtol: float, atol: float, exact: bool) -> t
     return max(rtol, SINGLE_PRECISION), max(atol, SINGLE_PRECISION * scale)
 
 
-def exactly(returned: Returned, right: object = None, rtol: float = 1e-9, atol: float = 1e-12) -> Callable[[], Evidence]:
+def exactly(returned: Returned, right: object = None, rtol: float = 1e-9,
+            atol: float = 1e-12) -> Callable[[set[str] | None], Evidence]:
     """The evidence of the slips generated from the reference at the call that returned `returned`, its value
     weighed against theirs to `rtol` and `atol`: for a check that judges by another measure (a statistical
     tolerance, a derived quantity), since a slip reproduces its value exactly from the same inputs and seed.
     `right`: the right value there, if known (a slip equal to it says nothing)."""
-    def evidence() -> Evidence:
+    def evidence(only: set[str] | None = None) -> Evidence:
         got = returned.as_array() if returned.ok else None
         if got is None:
             return Evidence()
         want = np.full(got.shape, np.nan) if right is None else np.asarray(right, dtype=float)
-        return weigh(np.asarray(got, dtype=float), want, generated(returned), rtol, atol)
+        return weigh(np.asarray(got, dtype=float), want, generated(returned, only), rtol, atol)
     return evidence
 
 
@@ -328,11 +334,20 @@ def all_of(verdicts: list[Verdict]) -> Verdict:
     if not failures:
         return Verdict(True, "", verdicts[-1].expected if verdicts else None, verdicts[-1].got if verdicts else None)
     first = failures[0]
-    failing = [f.weigh() for f in failures]
+    # every candidate at the first failure; at the others only those still matched everywhere (only what is needed
+    # is evaluated of the slips generated from the reference)
+    failing = [first.weigh()]
+    common = set(failing[0].matched) if failing[0] is not None else set()
+    for failure in failures[1:]:
+        if not common:
+            break
+        evidence = failure.weigh(common)
+        failing.append(evidence)
+        common &= set(evidence.matched) if evidence is not None else set()
     passing = [v for v in verdicts if v.passed]
-    first.name(explain(failing, (v.weigh() for v in passing)))
+    first.name(explain(failing, (v.weigh(common) for v in passing)) if common else None)
     if first.mistake is not None:  # the inputs' evidence as one, for a check made of checks
-        first._weighed = combined(failing, [e for e in (v.weigh() for v in passing) if e is not None])
+        first._weighed = combined(failing, [e for e in (v.weigh(common) for v in passing) if e is not None])
     else:
         first._weighed = Evidence()  # nothing explains these failures
     if len(verdicts) > 1 and len({f.message for f in failures}) > 1 or len(failures) < len(verdicts):

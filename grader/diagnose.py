@@ -266,13 +266,14 @@ def combined(failing: list[Evidence], passing: list[Evidence]) -> Evidence:
 
 # ------------------------------------------------------------------------------ mistakes generated from the reference
 
-_JUDGING: contextvars.ContextVar[tuple[Callable[[object], list[Mistake]], dict] | None] = \
-    contextvars.ContextVar("judging", default=None)
+Lookup = Callable[[object, "set[str] | None"], list[Mistake]]
+_JUDGING: contextvars.ContextVar[tuple[Lookup, dict] | None] = contextvars.ContextVar("judging", default=None)
 
 
 @contextlib.contextmanager
-def judging(lookup: Callable[[object], list[Mistake]]) -> Iterator[None]:
-    """While a check judges: `lookup(returned)` gives the generated mistakes at the call that returned it."""
+def judging(lookup: Lookup) -> Iterator[None]:
+    """While a check judges: `lookup(returned, keys)` gives the generated mistakes at the call that returned it
+    (those of these keys only, unless keys is None)."""
     token = _JUDGING.set((lookup, {}))
     try:
         yield
@@ -288,18 +289,19 @@ def part_of(part: object, whole: object, index: int) -> None:
         judging_now[1][id(part)] = (part, whole, index)  # the part kept alive, so that its id stays its own
 
 
-def generated(returned: object) -> list[Mistake]:
+def generated(returned: object, only: set[str] | None = None) -> list[Mistake]:
     """The mistakes generated from the reference, with their values at the learner call that gave `returned`
-    (or item of it: part_of) ([] outside a check's judging, or where none is known)."""
+    (or item of it: part_of), of the ids in `only` if given (the others are then not evaluated) ([] outside a
+    check's judging, or where none is known)."""
     judging_now = _JUDGING.get()
     if judging_now is None or returned is None:
         return []
     lookup, parts = judging_now
     if id(returned) in parts:
         _, whole, index = parts[id(returned)]
-        return [Mistake(m.name, m.help, m.value[index], m.origin, m.key) for m in generated(whole)
+        return [Mistake(m.name, m.help, m.value[index], m.origin, m.key) for m in generated(whole, only)
                 if isinstance(m.value, (tuple, list)) and len(m.value) > index]
-    return lookup(returned)
+    return lookup(returned, only)
 
 
 SMALL = 64  # entries up to which plain floats compare faster than numpy's calls

@@ -167,15 +167,23 @@ class Live:
             self.memo[key] = normal(reference_function(chapter, name)(*args, **kwargs))
         return _fresh(self.memo[key])
 
-    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
-        """The generated slips of `asked` (the check's call number `index`): [{key, name, help, value}] for every
-        one whose value there differs from the reference's."""
+    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call,
+              keys: set[str] | None = None) -> list[dict]:
+        """The generated slips of `asked` (the check's call number `index`), of `keys` only if given:
+        [{key, name, help, value}] for every one whose value there differs from the reference's."""
         if self.memo is None:
-            return slips_at(chapter, asked)
+            return slips_at(chapter, asked, keys)
         key = ("slips", seed, chapter, check, index)
-        if key not in self.memo:
-            self.memo[key] = slips_at(chapter, asked)
-        return self.memo[key]
+        kept = self.memo.setdefault(key, {"complete": False, "slips": {}})  # key -> record (None: says nothing)
+        if not kept["complete"]:
+            missing = None if keys is None else {k for k in keys if k not in kept["slips"]}
+            if missing is None or missing:
+                for record in slips_at(chapter, asked, missing):
+                    kept["slips"][record["key"]] = record
+                for k in missing or ():
+                    kept["slips"].setdefault(k, None)
+                kept["complete"] = missing is None
+        return [r for k, r in kept["slips"].items() if r is not None and (keys is None or k in keys)]
 
     def planned(self, chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
         """A check has planned these calls of its own function (a recording computes their slips now)."""
@@ -265,14 +273,15 @@ class Replay:
         except (OSError, ValueError):
             return {}  # a handout without them names only the checks' own mistakes
 
-    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
+    def slips(self, chapter: str, check: str, seed: int, index: int, asked: Call,
+              keys: set[str] | None = None) -> list[dict]:
         recorded = self._slips(chapter)
         if recorded.get("seed") != seed:
             return []
         names = recorded.get("mistakes", {})
         values = recorded.get("checks", {}).get(check, {}).get(str(index), {})
         return [{"key": key, "name": names[key][0], "help": names[key][1], "value": _decode_slip(value)}
-                for key, value in values.items() if key in names]
+                for key, value in values.items() if key in names and (keys is None or key in keys)]
 
     def planned(self, chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) -> None:
         """Nothing to do: the slips were recorded with the handout."""
@@ -357,14 +366,14 @@ def _default() -> Live | Replay:
 
 # ------------------------------------------------------------------------------ generated slips
 
-def slips_at(chapter: str, asked: Call) -> list[dict]:
-    """Every slip grader.mutants makes of the reference of `asked.function`, evaluated at the call's own
-    arguments (decoded as the learner's function gets them): [{key, name, help, value}] where the value differs
-    from the reference's ([] where the references are not installed)."""
+def slips_at(chapter: str, asked: Call, keys: set[str] | None = None) -> list[dict]:
+    """Every slip grader.mutants makes of the reference of `asked.function` (of `keys` only, if given), evaluated
+    at the call's own arguments (decoded as the learner's function gets them): [{key, name, help, value}] where
+    the value differs from the reference's ([] where the references are not installed)."""
     from grader import mutants
 
     try:
-        _, found = mutants.at_call(chapter, asked.function, mutants.arguments_of(asked))
+        _, found = mutants.at_call(chapter, asked.function, mutants.arguments_of(asked), keys)
     except mutants.Unavailable:
         return []
     from grader.diagnose import SKETCHED, Sketch
@@ -402,6 +411,7 @@ def planned(chapter: str, check: str, seed: int, calls: list[tuple[int, Call]]) 
     (_BACKEND.get() or _default()).planned(chapter, check, seed, calls)
 
 
-def slips(chapter: str, check: str, seed: int, index: int, asked: Call) -> list[dict]:
-    """The generated slips at a check's call number `index` (asked of the backend: live, recorded or replayed)."""
-    return (_BACKEND.get() or _default()).slips(chapter, check, seed, index, asked)
+def slips(chapter: str, check: str, seed: int, index: int, asked: Call, keys: set[str] | None = None) -> list[dict]:
+    """The generated slips at a check's call number `index`, of `keys` only if given (asked of the backend: live,
+    recorded or replayed)."""
+    return (_BACKEND.get() or _default()).slips(chapter, check, seed, index, asked, keys)

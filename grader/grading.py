@@ -87,31 +87,40 @@ def _start(name: str, body, ctx: Context, calls: list[Call], function: str = "")
 
 
 def _slips_lookup(pending: _Pending, values: list[Returned]):
-    """For grader.diagnose while the check judges: the generated mistakes at the call that returned a value
-    (each call's asked once, the first time a comparison needs them)."""
+    """For grader.diagnose while the check judges: the generated mistakes at the call that returned a value, of
+    the keys asked for (each asked of the backend once, the first time a comparison needs it)."""
     numbers = {id(v): i for i, v in enumerate(values) if i in (pending.own or {})}
-    found: dict[int, list] = {}
+    found: dict[int, dict[str, diagnose.Mistake | None]] = {}  # per call: key -> its mistake (None: says nothing)
+    complete: set[int] = set()
 
-    def lookup(returned: object) -> list[diagnose.Mistake]:
+    def lookup(returned: object, keys: set[str] | None = None) -> list[diagnose.Mistake]:
         index = numbers.get(id(returned))
         if index is None or pending.ctx is None:
             return []
-        if index not in found:
+        known = found.setdefault(index, {})
+        missing = None if keys is None else {k for k in keys if k not in known}
+        if index not in complete and (missing is None or missing):
             ctx = pending.ctx
-            found[index] = [diagnose.Mistake(s["name"], s["help"], s["value"], "generated", s["key"])
-                            for s in expected.slips(ctx.chapter, ctx.check_id, ctx.seed, index, pending.own[index])]
-        return found[index]
+            for s in expected.slips(ctx.chapter, ctx.check_id, ctx.seed, index, pending.own[index], missing):
+                known[s["key"]] = diagnose.Mistake(s["name"], s["help"], s["value"], "generated", s["key"])
+            for key in missing or ():
+                known.setdefault(key, None)
+            if missing is None:
+                complete.add(index)
+        return [m for k, m in known.items() if m is not None and (keys is None or k in keys)]
     return lookup
 
 
 def _finish(pending: _Pending, run: ChapterRun) -> object:
     """Send the returned values into the check; its return value (Verdict or dict) or an exception."""
     values = [run.results[i] for i in pending.slots]
-    try:
-        with diagnose.judging(_slips_lookup(pending, values)):
+    with diagnose.judging(_slips_lookup(pending, values)):
+        try:
             pending.generator.send(_rebuild(pending.wanted, values))
-    except StopIteration as stop:
-        return stop.value
+        except StopIteration as stop:
+            if isinstance(stop.value, Verdict):
+                stop.value.explain()  # a lone comparison's mistake, named while the slips can still be asked
+            return stop.value
     raise RuntimeError(f"check {pending.name} yielded twice; a check may yield only once")
 
 

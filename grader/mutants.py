@@ -641,13 +641,17 @@ def quiet() -> Iterator[None]:
         yield
 
 
-def at_call(chapter: str, function: str, arguments: Callable[[], tuple[tuple, dict]]) -> tuple[object, list]:
-    """The reference's value at one call and [(mutant, value)] for every mutant whose value there differs from
-    it. `arguments()` gives fresh arguments (decoded as the learner's function gets them) for each evaluation."""
+def at_call(chapter: str, function: str, arguments: Callable[[], tuple[tuple, dict]],
+            keys: set[str] | None = None) -> tuple[object, list]:
+    """The reference's value at one call and [(mutant, value)] for every mutant (of `keys` only, if given) whose
+    value there differs from it. `arguments()` gives fresh arguments (decoded as the learner's function gets
+    them) for each evaluation."""
     out = []
     with quiet():
         right = _evaluate(reference(chapter, function), *arguments())
         for mutant in mutants(chapter, function):
+            if keys is not None and mutant.key not in keys:
+                continue
             value = _evaluate(mutant.function, *arguments())
             if value is not None and not same(value, right):
                 out.append((mutant, value))

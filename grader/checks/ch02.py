@@ -161,7 +161,7 @@ def contour_direction_is_unit_and_perpendicular(ctx):
                                                                    f"there is {fmt_array(gradient)}",
                                        entries=CONTOUR, rtol=0.0, atol=UNIT_TOLERANCE,
                                        mistakes=[Mistake(normal.name, normal.help, [1.0, sign]) for sign in (1.0, -1.0)])
-                        .also(lambda g=g, t=t, right=right: _either_orientation(t, right, generated(g))))
+                        .also(lambda only, g=g, t=t, right=right: _either_orientation(t, right, generated(g, only))))
     return all_of(verdicts)
 
 

@@ -41,7 +41,7 @@ from grader.compare import (
     value_problem,
 )
 from grader.compare import expect as _expect
-from grader.diagnose import Evidence, Mistake, explain, generated, weigh
+from grader.diagnose import Evidence, Mistake, generated, weigh
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch05")
@@ -93,16 +93,15 @@ def _difference_verdict(returned, name: str, x, h: float, function: str, law: di
     low, high = law[own]
     error = got - exact
 
-    def evidence() -> Evidence:  # to the quotient's last digits, as the reference computes it
-        slips = [_difference_slip(other, law), *generated(returned)]
+    def evidence(only: set[str] | None = None) -> Evidence:  # to the quotient's last digits, as computed
+        slips = [_difference_slip(other, law), *generated(returned, only)]
         return weigh(np.asarray(got), np.asarray(law[f"{own}_value"]), slips, 1e-9, 1e-9)
     if low <= error <= high:
         return Verdict(True, "", exact, got, evidence=evidence)
     verdict = Verdict(False, f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is "
                              f"{error:.3g}, but {what} must be in [{low:.3g}, {high:.3g}].", exact, got,
                       evidence=evidence)
-    verdict.name(explain([verdict.weigh()]))
-    return verdict
+    return verdict  # its mistake is named when asked (all_of, grading)
 
 
 def _difference_slip(other: str, law: dict) -> Mistake:
@@ -355,10 +354,10 @@ def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
         i = chosen(value)
         return i is not None and float(errors[i]) <= BEST_STEP_FACTOR * smallest
 
-    def evidence() -> Evidence:
+    def evidence(only: set[str] | None = None) -> Evidence:
         """The slips of the reference that return no acceptable step, against the learner's step."""
         found = Evidence()
-        for slip in generated(returned):
+        for slip in generated(returned, only):
             if np.size(slip.value) != 1 or acceptable(float(np.asarray(slip.value, dtype=float))):
                 continue
             value = float(np.asarray(slip.value, dtype=float))
@@ -379,8 +378,7 @@ def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
                                  f"at h = {fmt(best)} it is {errors.min():.3g}. The answer must be within "
                                  f"{BEST_STEP_FACTOR:g}x of the smallest error (compare central_difference(f, x, h) "
                                  "with fprime(x) for every h).", expected=best, got=h, evidence=evidence)
-    verdict.name(explain([verdict.weigh()]))
-    return verdict
+    return verdict  # its mistake is named when asked (all_of, grading)
 
 
 @CHECKS.check("best_step", points=1)

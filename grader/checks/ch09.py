@@ -46,7 +46,7 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Evidence, Mistake, explain, generated, weigh_text
+from grader.diagnose import Evidence, Mistake, generated, weigh_text
 from grader.expected import reference
 
 CHECKS = chapter_checks("ch09")
@@ -235,8 +235,8 @@ def expect_text(returned, expected: str, *, label: str) -> Verdict:
         shown = fmt_array(returned.as_array()) if returned.as_array() is not None else returned.type_name
         return fail(f"{label} returned {shown}; expected the string {expected!r}.", expected=expected)
 
-    def evidence() -> Evidence:
-        return weigh_text(text, expected, generated(returned))
+    def evidence(only: set[str] | None = None) -> Evidence:
+        return weigh_text(text, expected, generated(returned, only))
     if text == expected:
         return Verdict(True, "", expected, text, evidence=evidence)
     hint = ""
@@ -246,8 +246,7 @@ def expect_text(returned, expected: str, *, label: str) -> Verdict:
         hint = f" (the answer is one of {', '.join(repr(c) for c in CLASSES)})"
     verdict = Verdict(False, f"{label} returned {text!r}; expected {expected!r}{hint}.", expected, text,
                       evidence=evidence)
-    verdict.name(explain([verdict.weigh()]))
-    return verdict
+    return verdict  # its mistake is named when asked (all_of, grading)
 
 
 def with_eigenvalues(rng: np.random.Generator, eigenvalues) -> np.ndarray:

@@ -248,7 +248,7 @@ def exact_verdict(returned: Returned, exact: np.ndarray, label: "str | Label", e
                                                f"one.{single}")
     else:
         return verdict
-    return verdict.also(lambda: Evidence({mistake.id: mistake}))
+    return verdict.also(lambda only: Evidence({mistake.id: mistake}))
 
 
 def add_exact_check(checks: ChapterChecks, function: str, entries: Entries,
