@@ -6,14 +6,20 @@ what cannot be converted gets a message that says how. Real subprocesses, the re
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import HAVE_JAX, REPO, build_submission, needs_jax, replace_function
+from tests.support import (
+    HAVE_JAX,
+    build_submission,
+    grade_json,
+    needs_jax,
+    replace_function,
+)
+
+# the chapters an autograd learner's submission is graded on, code only
+GRADED = ("ch03", "ch04", "ch06", "ch07", "ch08", "--no-quiz")
 
 
 def _jax_module(module: str, function: str, body: str, x64: bool) -> str:
@@ -50,20 +56,13 @@ def jax_submission(root: Path, x64: bool) -> Path:
     })
 
 
-def _grade(root: Path, *extra: str) -> dict:
-    done = subprocess.run([sys.executable, "-m", "grader", "ch03", "ch04", "ch06", "ch07", "ch08", "--no-quiz",
-                           "--format", "json", "--submission", str(root), *extra],
-                          cwd=REPO, capture_output=True, text=True, encoding="utf-8", timeout=300)
-    assert done.returncode in (0, 1), done.stderr[-3000:]
-    return json.loads(done.stdout)
-
-
 def _failures(report: dict) -> list[str]:
     return [f"{c['chapter']}: {problem}" for c in report["chapters"] for problem in c.get("problems", [])] + [
         f"{c['chapter']}/{k['id']}: {k['message']}" for c in report["chapters"] for k in c["checks"]
         if k["status"] not in ("pass", "skip")]
 
 
+@pytest.mark.slow
 @needs_jax
 @pytest.mark.parametrize("x64", [False, True], ids=["float32", "float64"])
 @pytest.mark.parametrize("sandbox", [True, False], ids=["sandbox", "no-sandbox"])
@@ -72,14 +71,15 @@ def test_jax_jacobians_get_full_marks(tmp_path, x64, sandbox):
     derivative to float64 rounding and say how to get it (also where a Jacobian is built on a float32 one)."""
     if not HAVE_JAX:
         pytest.fail("CI must have jax (the test extras install it)")
-    report = _grade(jax_submission(tmp_path, x64), *([] if sandbox else ["--no-sandbox"]))
+    report = grade_json(*GRADED, "--submission", jax_submission(tmp_path, x64), *([] if sandbox else ["--no-sandbox"]))
     failed = [k for c in report["chapters"] for k in c["checks"] if k["status"] not in ("pass", "skip")]
     if x64:
         assert _failures(report) == []
         assert report["score"] == report["max_score"] > 0
         return
     assert failed and all(k["id"].endswith("_exact") for k in failed), _failures(report)
-    assert all('jax.config.update("jax_enable_x64", True)' in k["message"] for k in failed)
+    # what to change is the check's help, beside its message (what is wrong)
+    assert all('jax.config.update("jax_enable_x64", True)' in k.get("help", "") for k in failed), _failures(report)
     own = {"polar_to_cartesian_jacobian", "g_jacobian", "H_jacobian", "F_jacobian"}  # jax.jacfwd's float32 arrays
     assert {k["function"] for k in failed if k["mistake"] == "single precision"} == own, _failures(report)
     assert report["score"] == report["max_score"] - len(failed)
@@ -113,6 +113,7 @@ class Tensor:
 '''
 
 
+@pytest.mark.slow
 def test_a_torch_tensor_that_requires_grad_is_a_numpy_array(tmp_path):
     module = replace_function("ch06_measurement", "measurement_covariance", """
         def measurement_covariance(x, y, sigma):
@@ -123,7 +124,8 @@ def test_a_torch_tensor_that_requires_grad_is_a_numpy_array(tmp_path):
         def area_scale(r, theta):
             return Tensor(float(r), requires_grad=True)
         """) + TENSOR
-    report = _grade(build_submission(tmp_path, {"ch06_measurement": module, "ch03_jacobian": ch03}))
+    root = build_submission(tmp_path, {"ch06_measurement": module, "ch03_jacobian": ch03})
+    report = grade_json(*GRADED, "--submission", root)
     assert _failures(report) == []
 
 
@@ -132,10 +134,11 @@ def test_numpy_scalars_and_zero_d_arrays_are_numbers(tmp_path):
         def area_scale(r, theta):
             return np.array(float(r), dtype=np.float32)
         """)
-    report = _grade(build_submission(tmp_path, {"ch03_jacobian": ch03}))
+    report = grade_json(*GRADED, "--submission", build_submission(tmp_path, {"ch03_jacobian": ch03}))
     assert _failures(report) == []
 
 
+@pytest.mark.slow
 def test_an_array_that_cannot_be_converted_says_how_to_convert_it(tmp_path):
     module = replace_function("ch06_measurement", "H_jacobian", """
         def H_jacobian(x, y):
@@ -154,7 +157,7 @@ class GpuTensor(Tensor):
     def cpu(self):
         raise RuntimeError("no CUDA device here")
 '''
-    report = _grade(build_submission(tmp_path, {"ch06_measurement": module}))
+    report = grade_json(*GRADED, "--submission", build_submission(tmp_path, {"ch06_measurement": module}))
     messages = [k["message"] for c in report["chapters"] if c["chapter"] == "ch06" for k in c["checks"]
                 if k["id"] == "H_worked_example"]
     assert messages and "np.asarray" in messages[0] and ".detach().cpu().numpy()" in messages[0], messages

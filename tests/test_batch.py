@@ -18,12 +18,13 @@ from xml.etree import ElementTree
 import pytest
 from click.testing import CliRunner
 
-from grader.staging import StagingError, discover, stage
 from grader.cli import main
-from tests.conftest import (
+from grader.staging import StagingError, discover, stage
+from tests.support import (
     build_submission,
     code_points,
     replace_function,
+    run_grade,
     run_on_terminal,
 )
 
@@ -64,6 +65,7 @@ def _invoke(*args):
     return result
 
 
+@pytest.mark.slow
 def test_batch_outputs_every_format(submissions, tmp_path):
     out = tmp_path / "out"
     result = _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--jobs", "2")
@@ -99,6 +101,7 @@ def test_batch_outputs_every_format(submissions, tmp_path):
     assert worked["status"] == "fail" and html.escape(worked["message"].splitlines()[0][:160]) in summary
 
 
+@pytest.mark.slow
 def test_batch_plots_draw_each_learners_figures_from_their_own_values(tmp_path):
     """`--plots`: each learner's report.html has a figure per plotted chapter, drawn from what that learner's
     functions returned: a doubled measurement_covariance changes only ch06's figure."""
@@ -163,6 +166,7 @@ def test_a_roster_that_cannot_be_read_is_a_usage_error(submissions, tmp_path, co
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_rerun_skips_unchanged_and_regrades_changed(submissions, tmp_path):
     out = tmp_path / "out"
     _invoke(submissions, "--out", out, "--chapters", CHAPTERS, "--no-html")
@@ -200,6 +204,7 @@ def test_oversized_zip_member_is_refused(tmp_path):
         stage(Entry("bomb", target), tmp_path / "staging")
 
 
+@pytest.mark.slow
 def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissions, tmp_path):
     out = tmp_path / "out"
     for i in range(6):
@@ -256,6 +261,7 @@ def test_many_submissions_with_one_id_each_get_the_next_free_name(tmp_path):
     assert [e.origin.endswith("made unique") for e in entries] == [False, False, True, True, True, True]
 
 
+@pytest.mark.slow
 def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions, tmp_path, monkeypatch):
     """grade batch takes each learner into junit.xml and the summary's counts as they finish, in the batch's
     order, keeping few reports that finish early (HELD_REPORTS) and reading the others' report.json again
@@ -318,6 +324,7 @@ def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
     assert (staged / "ch03_jacobian.py").read_text() == "CHANGED = 1\n"
 
 
+@pytest.mark.slow
 def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_path):
     returncode, text = run_on_terminal([sys.executable, "-m", "grader", "batch", str(submissions), "--out",
                                         str(tmp_path / "out"), "--chapters", CHAPTERS, "--no-html", "--jobs", "1"],
@@ -326,6 +333,7 @@ def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_
     assert "] 1/4" in text and "] 4/4" in text and "ETA" in text and "/s" in text, text
 
 
+@pytest.mark.slow
 def test_fork_server_and_fresh_interpreters_give_the_same_verdicts(submissions, tmp_path, monkeypatch):
     """GRADER_FORK_SERVER=off (a fresh sandboxed interpreter per learner, the benchmark's baseline)
     and the fork server grade every learner alike."""
@@ -346,28 +354,30 @@ def test_fork_server_and_fresh_interpreters_give_the_same_verdicts(submissions, 
     assert any(status == "fail" for _, status, _ in verdicts["fork"]["carol"])
 
 
+@pytest.mark.slow
 def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
     """--time-budget is one learner's time for the code of all chapters together: a learner whose every
     H_jacobian call takes 1.5 s (each within the 5 s call limit) is stopped after the budget, and the
     learner after them is graded as ever."""
     folder = tmp_path / "submissions"
     slow = replace_function("ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import time\n"
-                            "    time.sleep(1.5)\n    return np.eye(2)\n")
+                            "    print('H_jacobian called', flush=True)\n    time.sleep(1.5)\n    return np.eye(2)\n")
     build_submission(folder / "slow", {"ch06_measurement": slow})
     build_submission(folder / "steady")
-    started = time.monotonic()
-    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(folder), "--out", str(tmp_path / "out"),
-                           "--chapters", "ch03,ch06", "--jobs", "1", "--no-html", "--time-budget", "3"],
-                          cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=120)
-    assert time.monotonic() - started < 15, done.stdout + done.stderr  # without the budget: over 20 s
+    done = run_grade("batch", folder, "--out", tmp_path / "out", "--chapters", "ch03,ch06", "--jobs", "1", "--no-html",
+                     "--time-budget", "3")
     assert done.returncode == 0, done.stdout + done.stderr
     rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
     assert rows["steady"]["ch06_code"] == code_points("ch06") and rows["slow"]["ch03_code"] == code_points("ch03")
     report = json.loads((tmp_path / "out" / "slow" / "report.json").read_text())
     messages = [c["message"] for c in report["chapters"][1]["checks"] if c["function"] == "H_jacobian"]
     assert any("3 s" in m and "ran out" in m for m in messages), messages
+    # the budget's work: at most two calls of 1.5 s fit in 3 s, and a third was under way (without it: 14 and more)
+    output = report["batch"]["learner_output"]
+    assert 1 <= output.count("H_jacobian called") <= 3, output
 
 
+@pytest.mark.slow
 def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preloaded_it(tmp_path):
     """The batch's fork server imports sympy before it forks (the learner's code finds it already imported); a
     learner whose gradient differentiates with sympy at every call is graded as the reference is."""
@@ -381,9 +391,7 @@ def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preload
             return np.array([float(sympy.diff(f, v).subs({X: x, Y: y})) for v in (X, Y)])
         """)
     build_submission(tmp_path / "submissions" / "sam", {"ch02_gradient": sympy_style})
-    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(tmp_path / "submissions"), "--out",
-                           str(tmp_path / "out"), "--chapters", "ch02", "--no-html"],
-                          cwd=Path(__file__).resolve().parents[1], capture_output=True, text=True, timeout=300)
+    done = run_grade("batch", tmp_path / "submissions", "--out", tmp_path / "out", "--chapters", "ch02", "--no-html")
     assert done.returncode in (0, 1), done.stderr[-2000:]
     rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
     assert rows["sam"]["status"] == "graded" and rows["sam"]["ch02_code"] == code_points("ch02"), rows["sam"]

@@ -10,12 +10,15 @@ from pathlib import Path
 
 import pytest
 
-from grader.boundary.sandbox import Sandbox
-from grader.boundary.session import Session
-from grader.grading import grade
+from grader import boundary
 from grader.model import Status
-from grader.submission import Submission
-from tests.conftest import build_submission, checks_by_id, replace_function
+from tests.support import (
+    build_submission,
+    checks_by_id,
+    grade_checks,
+    grade_code,
+    replace_function,
+)
 
 WRONG_RANGE_BEARING = """
 def range_bearing(x, y):
@@ -31,7 +34,7 @@ def range_bearing(x, y):
 def test_a_wrong_forward_function_costs_its_derivative_nothing(tmp_path, forward):
     root = build_submission(tmp_path, {"ch06_measurement": replace_function("ch06_measurement", "range_bearing",
                                                                             forward)})
-    checks = checks_by_id(grade(Session(Submission(root, "exercises")), ["ch06"]).chapters[0])
+    checks = grade_checks(root, "ch06")
     own = checks["H_jacobian_vs_own_range_bearing"]
     assert own.status == Status.SKIP and own.points == own.max_points, (own.status, own.message)
     assert "no points lost" in own.message and "fix range_bearing first" in own.message.replace("Fix", "fix")
@@ -54,7 +57,7 @@ def test_a_function_built_on_a_wrong_helper_points_at_the_helper(tmp_path):
     """
     root = build_submission(tmp_path, {"ch09_choose_your_tool": replace_function("ch09_choose_your_tool", "gradient_fd",
                                                                                  forward_gradient)})
-    report = grade(Session(Submission(root, "exercises")), ["ch05", "ch09"])
+    report = grade_code(root, ["ch05", "ch09"])
     ch09 = checks_by_id(report.chapters[1])
     hessian = [c for c in ch09.values() if c.function == "hessian_fd" and c.status == Status.FAIL]
     assert hessian, "the reference hessian_fd uses gradient_fd: it must fail with it"
@@ -71,9 +74,9 @@ def test_a_submission_in_a_private_folder_grades_normally():
         assert oct(private.stat().st_mode & 0o777) == "0o700"
         root = build_submission(private / "work")
         os.chmod(private / "work", 0o700)
-        sandbox = Sandbox()
-        assert sandbox.available or not os.environ.get("CI"), "CI must have bubblewrap"
-        report = grade(Session(Submission(root, "exercises"), wrap=sandbox if sandbox.available else None), ["ch06"])
+        chosen = boundary.choose("auto")
+        assert chosen.sandboxed or not os.environ.get("CI"), "CI must have bubblewrap"
+        report = grade_code(root, ["ch06"], boundary=chosen)
         assert report.chapters[0].score == report.chapters[0].max_score, report.chapters[0].problems
     finally:
         import shutil

@@ -9,13 +9,16 @@ import pytest
 
 import solutions.ch08_lab as ch08_ref
 from grader import checks as check_registry
-from grader.boundary.session import Session
 from grader.chapters import BY_ID
 from grader.checks import ch05, ch08, ch09
-from grader.grading import grade
 from grader.model import Status
-from grader.submission import Submission
-from tests.conftest import BEYOND_THE_WORKED_EXAMPLES, checks_by_id, replace_function
+from tests.support import (
+    BEYOND_THE_WORKED_EXAMPLES,
+    checks_by_id,
+    first_of_each,
+    grade_code,
+    replace_function,
+)
 
 CHAPTERS = ["ch05", "ch07", "ch08", "ch09"]
 MODULES = {c: BY_ID[c].module for c in CHAPTERS}
@@ -398,12 +401,12 @@ MUTANTS = {
 }
 
 
-@pytest.mark.parametrize("name", list(MUTANTS))
+@pytest.mark.parametrize("name", first_of_each(MUTANTS, lambda name: MUTANTS[name][0]))
 def test_a_realistic_mistake_fails_the_check_aimed_at_it(submission_factory, name):
     chapter_id, function, source, target, words, collateral = MUTANTS[name]
     module = MODULES[chapter_id]
     root = submission_factory({module: replace_function(module, function, source)})
-    chapter = grade(Session(Submission(root, "exercises")), [chapter_id]).chapters[0]
+    chapter = grade_code(root, [chapter_id]).chapters[0]
     assert not chapter.problems, chapter.problems
     checks = checks_by_id(chapter)
     aimed = checks[target]

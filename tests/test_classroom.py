@@ -19,8 +19,13 @@ from click.testing import CliRunner
 from grader import release
 from grader.cli import main
 from grader.render import lms
-from tests.conftest import REPO, build_submission, replace_function
-from tests.test_outputs_infrastructure import REAL_BWRAP, FakeBwrap
+from tests.support import (
+    REAL_BWRAP,
+    FakeBwrap,
+    build_submission,
+    replace_function,
+    run_grade,
+)
 
 jsonschema = pytest.importorskip("jsonschema")
 
@@ -98,8 +103,7 @@ def test_the_grade_step_gives_each_check_its_points_as_the_reporter_reads_them(w
     assert done.returncode == 0, done.stderr[-3000:]  # whatever the checks say: the reporter gives the points
     assert results is not None, done.stdout[-2000:]
     jsonschema.Draft202012Validator(lms.schema("classroom")).validate(results)
-    project = subprocess.run([sys.executable, "-m", "grader", "all", "--submission", str(root), "--format", "json"],
-                             cwd=REPO, capture_output=True, text=True, timeout=300)
+    project = run_grade("all", "--submission", root, "--format", "json")
     report = json.loads(project.stdout)
     assert _reporter_total(results) == (report["score"], report["max_score"])
     ch06 = [t for t in results["tests"] if t["name"].startswith("ch06 code:")]
@@ -111,6 +115,7 @@ def test_the_grade_step_gives_each_check_its_points_as_the_reporter_reads_them(w
     assert "ch06 total" in done.stderr  # the learner reads the usual report in the job's log
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(REAL_BWRAP is None and not os.environ.get("CI"), reason="bubblewrap is not installed")
 def test_where_bubblewrap_cannot_start_the_step_grades_without_it_and_says_so(workflow, tmp_path):
     root = build_submission(tmp_path / "learner-repo")
@@ -121,8 +126,6 @@ def test_where_bubblewrap_cannot_start_the_step_grades_without_it_and_says_so(wo
     assert "isolation: no sandbox" in done.stderr
     code = [t for t in results["tests"] if " code: " in t["name"]]
     assert code and all(t["status"] == "pass" for t in code)
-    required = subprocess.run([sys.executable, "-m", "grader", "classroom", "ch06", "--submission", str(root),
-                               "--sandbox", "required"], cwd=REPO, env=fake.env, capture_output=True, text=True,
-                              timeout=120)
+    required = run_grade("classroom", "ch06", "--submission", root, "--sandbox", "required", env=fake.env)
     assert required.returncode == 2 and "the sandbox is required and does not start here" in required.stderr
     assert required.stdout == ""

@@ -12,7 +12,12 @@ from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
 from grader.cli import main
-from tests.conftest import REPO, run_on_terminal
+from tests.support import (
+    REPO,
+    run_grade,
+    run_on_terminal,
+    slow_but_the_first,
+)
 
 CHECK_KEYS = {"id", "function", "description", "status", "points", "max_points", "message", "expected", "got"}
 
@@ -70,7 +75,7 @@ def test_stubs_score_zero_with_not_implemented_and_exit_1(runner, repo_root, mon
 
 
 def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, repo_root, tmp_path):
-    from tests.conftest import build_submission, replace_function
+    from tests.support import build_submission, replace_function
 
     root = build_submission(tmp_path, {"ch06_measurement": replace_function(
         "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    return np.zeros((2, 2))\n")})
@@ -78,7 +83,8 @@ def test_text_output_has_a_line_per_check_and_a_total_without_colour(runner, rep
     assert result.exit_code == 1
     lines = result.output.splitlines()
     assert lines[0].startswith("Quiz answers graded for learner")
-    assert lines[1].startswith("ch06")
+    assert lines[1].startswith("Your quiz numbers and option letters are those of 'anonymous'")  # no learner.yaml
+    assert lines[2].startswith("ch06")
     assert any(line.strip().startswith("✗ [0/2] H at the lesson's point (3, 4)") for line in lines)
     assert any(line.strip().startswith("✓ [1/1] range_bearing at the lesson's point") for line in lines)
     assert "ch06 total: " in result.output
@@ -113,16 +119,8 @@ def test_seed_changes_random_inputs_but_not_the_verdict(runner):
     assert got[0] != got[1]
 
 
-def _run(args, cwd, env_extra=None):
-    env = dict(os.environ)
-    env.pop("NO_COLOR", None)
-    env.update(env_extra or {})
-    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=120)
-
-
 def test_real_subprocess_all_solutions_full_marks(repo_root):
-    proc = _run(["all", "--solutions", "--format", "json"], repo_root)
+    proc = run_grade("all", "--solutions", "--format", "json", cwd=repo_root)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     data = json.loads(proc.stdout)
     assert [c["chapter"] for c in data["chapters"]] == [c.id for c in CHAPTERS]
@@ -131,9 +129,9 @@ def test_real_subprocess_all_solutions_full_marks(repo_root):
         assert chapter["score"] == chapter["max_score"] > 0, chapter["chapter"]
 
 
-@pytest.mark.parametrize("options", [["--no-sandbox"], ["--no-sandbox", "--no-quiz"], ["--no-quiz"]])
+@pytest.mark.parametrize("options", slow_but_the_first([["--no-sandbox"], ["--no-sandbox", "--no-quiz"], ["--no-quiz"]]))
 def test_real_subprocess_sandbox_and_quiz_options_keep_full_marks(repo_root, options):
-    proc = _run(["ch06", "--solutions", "--format", "json", *options], repo_root)
+    proc = run_grade("ch06", "--solutions", "--format", "json", *options, cwd=repo_root)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
     data = json.loads(proc.stdout)
     kinds = {c["kind"] for c in data["chapters"][0]["checks"]}
@@ -142,7 +140,7 @@ def test_real_subprocess_sandbox_and_quiz_options_keep_full_marks(repo_root, opt
 
 
 def test_real_subprocess_stubs_zero_and_no_error(repo_root):
-    proc = _run(["all", "--format", "json"], repo_root)
+    proc = run_grade("all", "--format", "json", cwd=repo_root)
     assert proc.returncode == 1
     data = json.loads(proc.stdout)
     statuses = {c["status"] for ch in data["chapters"] for c in ch["checks"]}
@@ -150,11 +148,12 @@ def test_real_subprocess_stubs_zero_and_no_error(repo_root):
 
 
 def test_real_subprocess_usage_error_goes_to_stderr_with_exit_2(repo_root):
-    proc = _run(["ch42"], repo_root)
+    proc = run_grade("ch42", cwd=repo_root)
     assert proc.returncode == 2
     assert "unknown chapter" in proc.stderr and proc.stdout == ""
 
 
+@pytest.mark.slow
 def test_no_color_is_respected_even_on_a_terminal(repo_root):
     """Run under a pseudo-terminal: colour by default, none with NO_COLOR."""
     pytest.importorskip("pty")
@@ -210,10 +209,11 @@ def test_an_empty_submissions_folder_is_a_usage_error(runner, tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 def test_counts_have_the_right_plural(runner, tmp_path, repo_root):
     listed = runner.invoke(main, ["list"]).output
     assert " 1 points" not in listed and "(1 points" not in listed
-    from tests.conftest import build_submission
+    from tests.support import build_submission
 
     build_submission(tmp_path / "submissions" / "alice")
     result = runner.invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(tmp_path / "out"),
@@ -223,12 +223,12 @@ def test_counts_have_the_right_plural(runner, tmp_path, repo_root):
     assert "<p>1 learner graded;" in (tmp_path / "out" / "summary.html").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("env, terminal, coloured", [
+@pytest.mark.parametrize("env, terminal, coloured", slow_but_the_first([
     ({"FORCE_COLOR": "1"}, False, True),  # force-color.org: any non-empty value, even into a pipe
     ({"FORCE_COLOR": ""}, False, False),  # empty: as if unset
     ({"NO_COLOR": ""}, True, True),  # no-color.org: an empty NO_COLOR does not count
     ({"NO_COLOR": "1", "FORCE_COLOR": "1"}, True, False),  # NO_COLOR wins, as in Python itself
-])
+]))
 def test_no_color_and_force_color_as_their_specs_say(repo_root, env, terminal, coloured):
     full = dict(os.environ)
     for name in ("NO_COLOR", "FORCE_COLOR"):

@@ -26,7 +26,13 @@ import pytest
 
 from benchmarks.misconceptions import CODE
 from grader.quiz.templates import reference_answers
-from tests.conftest import REPO, build_submission, replace_function, run_on_terminal
+from tests.support import (
+    REPO,
+    build_submission,
+    replace_function,
+    run_grade,
+    run_on_terminal,
+)
 
 CHAPTER = "ch06"
 CURRENT, OLDER = "0.1.0+handout.c0ffee000001", "0.1.0+handout.0bad00000000"
@@ -61,11 +67,6 @@ RENAMED = {"distance_squared": "d2", "variance": "var", "covariance": "cov", "in
 FRANK_COVARIANCE = re.sub(  # gina's, with every name in the body changed and its comment gone
     r"\b(distance_squared|variance|covariance|index)\b(?!\()", lambda m: RENAMED[m.group(1)],
     GINA_COVARIANCE.replace("    # the covariance of range and bearing, one entry at a time\n", ""))
-
-
-def _grade(*args: str, cwd: Path = REPO, timeout: float = 600) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout, stdin=subprocess.DEVNULL)
 
 
 def _learner(root: Path, learner: str, replacements: dict | None = None, answers_for: str | None = None,
@@ -116,7 +117,7 @@ def course(tmp_path_factory):
         "ch06_measurement", "measurement_covariance", FRANK_COVARIANCE)})
     _learner(submissions / "dave", "dave", answers_for="anonymous", learner_yaml="learner:\n")  # never set an id
     for name in ("stan", "eve"):  # they pack with grade submit
-        packed = _grade("submit", "--out", str(submissions / f"{name}.zip"), cwd=_learner(work / name, name))
+        packed = run_grade("submit", "--out", str(submissions / f"{name}.zip"), cwd=_learner(work / name, name))
         assert packed.returncode == 0, packed.stderr
         assert "The archive, graded again: " in packed.stdout and f"{name}.zip" in packed.stdout
     manifest = "exercises/submission-manifest.json"
@@ -130,7 +131,7 @@ def course(tmp_path_factory):
     out = base / "out"
 
     def batch(*extra: str) -> subprocess.CompletedProcess:
-        done = _grade("batch", str(submissions), "--out", str(out), "--chapters", CHAPTER, "--course",
+        done = run_grade("batch", str(submissions), "--out", str(out), "--chapters", CHAPTER, "--course",
                       str(base / "course.yaml"), "--roster", str(base / "roster.csv"), "--no-html", "--jobs", "2",
                       *extra)
         assert done.returncode == 0, done.stdout + done.stderr
@@ -155,6 +156,7 @@ def _report(course, learner: str) -> dict:
     return json.loads((course["out"] / learner / "report.json").read_text(encoding="utf-8"))
 
 
+@pytest.mark.slow
 def test_the_unset_id_learner_is_flagged_and_told_whose_numbers_the_answers_fit(course):
     report = _report(course, "dave")
     quiz = [c for c in report["chapters"][0]["checks"] if c["kind"] == "quiz" and c["status"] == "fail"]
@@ -164,6 +166,7 @@ def test_the_unset_id_learner_is_flagged_and_told_whose_numbers_the_answers_fit(
     assert "numbers of 'anonymous'" in _rows(course["out"] / "gradebook.csv")["dave"]["message"]
 
 
+@pytest.mark.slow
 def test_stale_and_edited_archives_are_flagged_with_their_reason(course):
     stan, eve = _report(course, "stan"), _report(course, "eve")
     assert any(f"packed with an older or other handout ({OLDER}, released 2026-03-01" in w and CURRENT in w
@@ -177,6 +180,7 @@ def test_stale_and_edited_archives_are_flagged_with_their_reason(course):
     assert "edited after packing" in page and OLDER in page
 
 
+@pytest.mark.slow
 def test_the_copied_pair_tops_the_similarity_list(course):
     similar = course["first"]["similar"]
     assert similar and similar[0]["learners"] == ["frank", "gina"], similar
@@ -187,6 +191,24 @@ def test_the_copied_pair_tops_the_similarity_list(course):
         "alike: frank and gina")
 
 
+def test_similarity_ranks_a_renamed_copy_first_among_learners_who_wrote_alike(tmp_path):
+    """grader.similarity on its own (the batch above runs it with --similarity): frank's renamed copy of gina's
+    measurement_covariance makes them the most alike pair, above two learners who both handed in the references."""
+    from grader import similarity
+
+    staging = tmp_path / "staging"
+    for name in ("alice", "bob"):
+        build_submission(staging / name)
+    for name, source in (("gina", GINA_COVARIANCE), ("frank", FRANK_COVARIANCE)):
+        build_submission(staging / name, {"ch06_measurement": replace_function(
+            "ch06_measurement", "measurement_covariance", source)})
+    pairs, left_out = similarity.rank(staging, ["alice", "bob", "frank", "gina"])
+    assert left_out == []
+    assert pairs and (pairs[0].first, pairs[0].second) == ("frank", "gina"), [p.to_dict() for p in pairs]
+    assert "ch06_measurement.measurement_covariance" in pairs[0].functions
+
+
+@pytest.mark.slow
 def test_an_override_survives_two_rebuilds_and_a_late_penalty_follows_the_roster(course):
     out = course["out"]
     hank = _report(course, "hank")
@@ -209,6 +231,7 @@ def test_an_override_survives_two_rebuilds_and_a_late_penalty_follows_the_roster
     assert any("overrides.csv, line 3: no learner 'nobody'" in line for line in course["runs"][1].stderr.splitlines())
 
 
+@pytest.mark.slow
 def test_changes_csv_names_exactly_the_learners_whose_score_moved(course):
     first, second, third, fourth = (list(csv.DictReader(text.splitlines())) for text in course["changes"])
     assert {r["learner"] for r in first} == {"alice", "bob", "carol", "dave", "eve", "frank", "gina", "hank", "ivy",
@@ -221,6 +244,7 @@ def test_changes_csv_names_exactly_the_learners_whose_score_moved(course):
     assert "2 scores moved" in course["runs"][1].stdout and "0 scores moved" in course["runs"][3].stdout
 
 
+@pytest.mark.slow
 def test_the_named_mistake_counts_match_the_corpus(course):
     summary = json.loads((course["out"] / "summary.json").read_text(encoding="utf-8"))
     counted = {(m["chapter"], m["function"], m["mistake"]): m["learners"] for m in summary["mistakes"]
@@ -235,6 +259,7 @@ def test_the_named_mistake_counts_match_the_corpus(course):
     assert any(c["failed_upstream"] for c in upstream.values())  # H's failures make covariance fail, apart
 
 
+@pytest.mark.slow
 def test_every_json_validates_against_its_schema(course):
     jsonschema = pytest.importorskip("jsonschema")
     from referencing import Registry, Resource
@@ -267,10 +292,10 @@ def test_submit_asks_for_the_id_on_a_terminal_and_writes_it_into_learner_yaml(tm
 
 def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
     unset = _learner(tmp_path / "unset", "x", learner_yaml="learner:\n")
-    refused = _grade("submit", cwd=unset)
+    refused = run_grade("submit", cwd=unset)
     assert refused.returncode == 2 and "no learner id" in refused.stderr and not list(unset.glob("*.zip"))
     other = _learner(tmp_path / "other", "ann")
-    refused = _grade("submit", "--learner", "bea", cwd=other)
+    refused = run_grade("submit", "--learner", "bea", cwd=other)
     assert refused.returncode == 2 and "learner.yaml names 'ann' but --learner gives 'bea'" in refused.stderr
 
 
@@ -279,13 +304,14 @@ def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
 @pytest.fixture(scope="module")
 def solutions_report():
     """ch05 and ch06 of the references, graded once in a course whose ch06 quiz is practice."""
-    from grader.boundary.session import Session
+    from grader import boundary
     from grader.course import Course
     from grader.pipeline import Request, build_report
     from grader.submission import solutions_submission
 
     course = Course(id="practice-course", quiz_feedback="recorded", quiz_feedback_by={"ch06": "immediate"})
-    return build_report(Session(solutions_submission()), Request(("ch05", "ch06"), 20261122), course)
+    session = boundary.choose("off").open_session(solutions_submission())
+    return build_report(session, Request(("ch05", "ch06"), 20261122), course)
 
 
 def test_a_practice_quiz_is_judged_never_counted_and_a_counted_one_never_shown_at_once(solutions_report):
@@ -310,10 +336,12 @@ def test_every_output_says_what_made_it(solutions_report, tmp_path):
     assert footer == (f"Graded by grader {made['grader']}, handout none, course practice-course, seed 20261122, "
                       "learner reference.")
     data = json.loads(json_report.render(solutions_report))
-    assert data["provenance"] == made and data["version"] == "1.2"
+    assert data["provenance"] == made and data["version"] == "1.3"
     assert all(c["stable_id"] == f"{ch['chapter']}/{c['id']}" for ch in data["chapters"] for c in ch["checks"])
     assert footer in html.render(solutions_report)
-    assert json.loads(lms.gradescope(solutions_report))["extra_data"]["provenance"] == made
+    # Gradescope's results.json says all but the seed (each submission's own seed is drawn from the course's)
+    assert json.loads(lms.gradescope(solutions_report))["extra_data"]["provenance"] == {
+        k: v for k, v in made.items() if k != "seed"}
     assert made["grader"] in lms.junit([("x", solutions_report)])
 
 

@@ -12,7 +12,7 @@ import time
 import pytest
 
 from grader.system import fork_is_safe
-from tests.conftest import REPO
+from tests.support import REPO
 
 pytestmark = pytest.mark.skipif(not fork_is_safe(), reason="the drawing process is forked (Linux)")
 
@@ -28,9 +28,10 @@ SCRIPT = textwrap.dedent("""
     spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
 
     from grader.grading import grade
-    from grader.boundary.session import Session
+    from grader.boundary import open_session
     from grader.submission import Submission
-    report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch01", "ch06", "ch08"], with_plots=True)
+    session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+    report = grade(session, ["ch01", "ch06", "ch08"], with_plots=True)
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the figures were drawn here, not by the drawing process")
@@ -69,12 +70,13 @@ def test_an_unused_drawing_process_ends_with_the_grader():
     pytest.fail(f"the drawing process {pid} outlived the grader that started it")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra", [[], ["--seed", "not-a-number"]], ids=["graded", "usage-error"])
 def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
     """`grade ... --html` forks the drawing process before anything else (grader.launch, before click parses
     the command line): when the command ends, graded (with every figure) or refused as misused, no process of
     it is left, not even for a moment. Forked processes keep the command line, which names the report."""
-    from tests.conftest import processes_with
+    from tests.support import processes_with
 
     out = tmp_path / "report-of-this-test.html"
     said = tmp_path / "said.txt"
@@ -90,6 +92,7 @@ def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
     assert not processes_with(str(out))  # stopped, not left to end by itself
 
 
+@pytest.mark.slow
 def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_same(tmp_path):
     """If the drawing process is gone before the chapters reach it, the grader draws them itself and
     leaves no zombie behind (its /proc entry is gone, not in state Z)."""
@@ -104,9 +107,10 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
             pass  # dead and unreaped: a zombie until someone waits for it
 
         from grader.grading import grade
-        from grader.boundary.session import Session
+        from grader.boundary import open_session
         from grader.submission import Submission
-        report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
+        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        report = grade(session, ["ch06", "ch07"], with_plots=True)
         drawn = drawer.figures_due([c for c in report.chapters if c.plots])()
         print(os.path.exists(f"/proc/{process.pid}"), [len(f) for f in drawn],
               all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))
@@ -117,6 +121,7 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
     assert proc.stdout.split() == ["False", "[1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]
 
 
+@pytest.mark.slow
 def test_figures_due_here_draws_them_in_this_process_alone():
     """`here` (a batch worker's report): every figure drawn by the calling process, neither by a started
     drawing process (which keeps its place, unsent) nor by two processes forked for it."""
@@ -127,9 +132,10 @@ def test_figures_due_here_draws_them_in_this_process_alone():
 
         assert drawer.start()
         from grader.grading import grade
-        from grader.boundary.session import Session
+        from grader.boundary import open_session
         from grader.submission import Submission
-        report = grade(Session(Submission(Path(sys.argv[1]), "solutions")), ["ch06", "ch07"], with_plots=True)
+        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        report = grade(session, ["ch06", "ch07"], with_plots=True)
 
         def must_not_run(*args, **kwargs):
             raise AssertionError("the figures were drawn by processes forked for them")

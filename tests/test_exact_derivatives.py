@@ -13,16 +13,15 @@ import pytest
 
 from grader import checks as check_registry
 from grader import course as courses
-from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
-from grader.grading import grade
 from grader.model import Status
 from grader.pipeline import Request, build_report
-from grader.submission import Submission
-from tests.conftest import (
+from tests.support import (
     HAVE_JAX,
     build_submission,
+    grade_code,
     needs_jax,
+    open_session,
     replace_function,
     replace_functions,
 )
@@ -73,7 +72,7 @@ def test_every_derivative_of_the_derivative_chapters_has_one_exact_check():
 
 
 def test_numerical_H_and_lidar_jacobians_lose_the_exact_check_and_nothing_else(tmp_path):
-    report = grade(Session(Submission(_numerical_submission(tmp_path / "numerical"), "exercises")), ["ch04", "ch06"])
+    report = grade_code(_numerical_submission(tmp_path / "numerical"), ["ch04", "ch06"])
     by_chapter = {c.chapter: c for c in report.chapters}
     assert _lost(by_chapter["ch06"]) == [("H_jacobian", "H_jacobian_exact")]
     assert _lost(by_chapter["ch04"]) == [("lidar_to_world_jacobian", "lidar_to_world_jacobian_exact")]
@@ -87,7 +86,7 @@ def test_the_course_can_turn_the_exact_checks_off(tmp_path):
     """Then the numerical Jacobians get full marks, and the chapters' maximum drops by those checks' points."""
     root = _numerical_submission(tmp_path / "numerical")
     off = courses.Course(exact_derivatives=False)
-    report = build_report(Session(Submission(root, "exercises")), Request(("ch04", "ch06"), 20261122, quiz=False), off)
+    report = build_report(open_session(root), Request(("ch04", "ch06"), 20261122, quiz=False), off)
     for chapter in report.chapters:
         registered = check_registry.load(chapter.chapter)
         assert not any(c.id.endswith("_exact") for c in chapter.checks)
@@ -121,6 +120,7 @@ def test_a_handout_of_a_course_without_exact_checks_records_none_and_grades_none
     assert switched_off(courses._from_handout(handout), ("ch06",)) == {"ch06/H_jacobian_exact", "ch06/H3_jacobian_exact"}
 
 
+@pytest.mark.slow
 def test_grade_batch_honours_the_course_setting(tmp_path):
     from grader.batch import run_batch
 
@@ -174,12 +174,13 @@ def _jax_submission(root: Path, x64: bool) -> Path:
                                    for module, functions in JAX_JACOBIANS.items()})
 
 
+@pytest.mark.slow
 @needs_jax
 @pytest.mark.parametrize("x64", [False, True], ids=["float32", "float64"])
 def test_jax_jacobians_pass_in_float64_and_get_the_float64_hint_in_float32(tmp_path, x64):
     if not HAVE_JAX:
         pytest.fail("CI must have jax (the test extras install it)")
-    report = grade(Session(Submission(_jax_submission(tmp_path / "jax", x64), "exercises")), ["ch04", "ch06"])
+    report = grade_code(_jax_submission(tmp_path / "jax", x64), ["ch04", "ch06"])
     lost = [item for chapter in report.chapters for item in _lost(chapter)]
     if x64:
         assert lost == []

@@ -6,11 +6,8 @@ from __future__ import annotations
 import pytest
 
 from grader import expected
-from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
-from grader.grading import grade
-from grader.submission import Submission
-from tests.conftest import build_submission, replace_function
+from tests.support import build_submission, grade_code, replace_function
 
 BUGGY = {"ch07_dynamics": replace_function("ch07_dynamics", "propagate_covariance", """
     def propagate_covariance(P, F, Q=None):
@@ -26,12 +23,12 @@ def test_the_memo_answers_as_the_references_do_and_again_the_same(tmp_path):
     root = build_submission(tmp_path, BUGGY)
     ids = [c.id for c in CHAPTERS]
     with expected.using(expected.Live()):
-        plain = _results(grade(Session(Submission(root, "exercises")), ids, seed=9))
+        plain = _results(grade_code(root, ids, seed=9))
     memo = expected.Live(memo=True)
     with expected.using(memo):
-        first = _results(grade(Session(Submission(root, "exercises")), ids, seed=9))
+        first = _results(grade_code(root, ids, seed=9))
         asked = len(memo.memo)
-        again = _results(grade(Session(Submission(root, "exercises")), ids, seed=9))
+        again = _results(grade_code(root, ids, seed=9))
     assert first == plain and again == plain
     assert asked > 500 and len(memo.memo) == asked  # the second run computed nothing new
 

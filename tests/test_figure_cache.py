@@ -6,7 +6,6 @@ from __future__ import annotations
 import base64
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -14,7 +13,12 @@ import pytest
 
 from grader.render.figure_cache import FigureCache, default_folder
 from grader.system import fork_is_safe
-from tests.conftest import REPO, build_submission, processes_with, replace_function
+from tests.support import (
+    build_submission,
+    processes_with,
+    replace_function,
+    run_grade,
+)
 
 SVG_MARK = "data:image/svg+xml;base64," + base64.b64encode(b"<svg xmlns='http://www.w3.org/2000/svg'>"
                                                              b"<title>kept</title></svg>").decode()
@@ -26,8 +30,7 @@ def _grade_html(args: list[str], out: Path, cache: str | None, home: Path | None
         environment["GRADER_CACHE_DIR"] = cache
     if home is not None:
         environment["HOME"] = str(home)
-    proc = subprocess.run([sys.executable, "-m", "grader", *args, "--html", str(out)], cwd=REPO, env=environment,
-                          capture_output=True, text=True, timeout=300)
+    proc = run_grade(*args, "--html", out, env=environment)
     assert proc.returncode in (0, 1), proc.stderr[-2000:]
     return out.read_text(encoding="utf-8")
 
@@ -40,6 +43,7 @@ def _mark(entry: Path) -> None:
     entry.write_text(json.dumps(kept), encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_figures_are_reused_while_a_chapters_plot_data_is_unchanged_and_drawn_when_it_changes(tmp_path):
     cache = tmp_path / "cache"
     first = _grade_html(["ch06", "ch07", "--solutions"], tmp_path / "first.html", str(cache))
@@ -64,6 +68,7 @@ def test_figures_are_reused_while_a_chapters_plot_data_is_unchanged_and_drawn_wh
     assert SVG_MARK not in json.loads((entries / "ch06.json").read_text(encoding="utf-8"))["figures"][0]["uri"]
 
 
+@pytest.mark.slow
 def test_with_the_cache_off_nothing_is_kept_and_by_default_it_is_in_the_users_cache_folder(tmp_path):
     home = tmp_path / "home"
     home.mkdir()

@@ -12,44 +12,39 @@ from pathlib import Path
 
 import pytest
 
-from grader.boundary.forkserver import ForkServer
-from grader.boundary.sandbox import Sandbox
-from grader.boundary.session import Limits, Session
-from grader.grading import grade
+from grader import boundary
 from grader.model import Status
-from grader.submission import Submission
-from tests.conftest import processes_with, replace_function
+from tests.support import BWRAP, grade_checks, processes_with, replace_function
 
 MARKER = "271.828"  # sleep duration of the learner's background process, to find it in /proc
-BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
-LIMITS = Limits(import_seconds=3.0, call_seconds=3.0, chapter_seconds=10.0)
-
-
-def _grade(server: ForkServer, root: Path):
-    report = grade(Session(Submission(root, "exercises"), LIMITS, launcher=server.start), ["ch06"], seed=3)
-    return {c.id: c for c in report.chapters[0].checks}
+LIMITS = boundary.Limits(import_seconds=3.0, call_seconds=3.0, chapter_seconds=10.0)
 
 
 @pytest.fixture
-def server(tmp_path):
+def server(monkeypatch):
+    """A resident fork server, sandboxed where bubblewrap is installed (CI has it)."""
     if not BWRAP and os.environ.get("CI"):
         pytest.fail("CI must have bubblewrap (.ci/run installs it)")
-    forks = ForkServer(Sandbox() if BWRAP else None)
+    with monkeypatch.context() as env:  # whatever the environment says about fork servers
+        env.setenv("GRADER_LAUNCHER", "fork-server")
+        forks = boundary.choose("required" if BWRAP else "off", resident=True)
+    assert forks.launch is boundary.Launch.FORK_SERVER, forks.launch
     yield forks
     forks.close()
 
 
+@pytest.mark.slow
 def test_background_processes_of_a_run_are_killed_before_the_next(server, submission_factory):
     spawner = submission_factory({"ch06_measurement": replace_function(
         "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import subprocess, sys\n"
         f"    sleep = [sys.executable, '-c', 'import time; time.sleep({MARKER})']\n"
         "    subprocess.Popen(sleep, start_new_session=True)\n"
         "    subprocess.Popen(sleep)\n    return np.eye(2)\n")})
-    spawned = _grade(server, spawner)
+    spawned = grade_checks(spawner, "ch06", seed=3, limits=LIMITS, boundary=server)
     assert "entries differ" in spawned["H_worked_example"].message  # it returned: both processes started
     time.sleep(0.2)
     assert processes_with(MARKER) == []
-    good = _grade(server, submission_factory())
+    good = grade_checks(submission_factory(), "ch06", seed=3, limits=LIMITS, boundary=server)
     assert all(c.status == Status.PASS for c in good.values())
 
 
@@ -59,13 +54,13 @@ def test_files_a_run_leaves_in_tmp_are_gone_for_the_next(server, submission_fact
         "ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import os\n"
         "    os.makedirs('/tmp/left/deeper', exist_ok=True)\n    open('/tmp/left/deeper/answers.txt', 'w').write('x')\n"
         "    open('/tmp/left-behind.txt', 'w').write('x')\n    os.chmod('/tmp/left', 0o500)\n    return np.eye(2)\n")})
-    _grade(server, leaver)
+    grade_checks(leaver, "ch06", seed=3, limits=LIMITS, boundary=server)
     looker = submission_factory({"ch06_measurement": replace_function(
         "ch06_measurement", "range_bearing", "def range_bearing(x, y):\n    import os\n"
         "    if os.path.exists('/tmp/left-behind.txt') or os.path.exists('/tmp/left'):\n"
         "        raise RuntimeError('the last learner left files in /tmp')\n"
         "    return np.array([np.hypot(x, y), np.arctan2(y, x)])\n")})
-    checks = _grade(server, looker)
+    checks = grade_checks(looker, "ch06", seed=3, limits=LIMITS, boundary=server)
     assert checks["range_bearing_worked_example"].status == Status.PASS, checks["range_bearing_worked_example"].message
 
 
@@ -74,21 +69,22 @@ def test_a_learner_who_kills_the_server_ends_only_their_own_run(server, submissi
         "ch06_measurement", "H_jacobian",
         "def H_jacobian(x, y):\n    import os, signal\n    os.kill(os.getppid(), signal.SIGKILL)\n"
         "    return np.eye(2)\n")})
-    checks = _grade(server, killer)
+    checks = grade_checks(killer, "ch06", seed=3, limits=LIMITS, boundary=server)
     h_checks = [c for c in checks.values() if c.function == "H_jacobian" and c.id != "H_raises_at_origin"]
     assert h_checks and all(c.status != Status.PASS and c.message for c in h_checks)
-    good = _grade(server, submission_factory())
+    good = grade_checks(submission_factory(), "ch06", seed=3, limits=LIMITS, boundary=server)
     assert all(c.status == Status.PASS for c in good.values()), [(c.id, c.message) for c in good.values()
                                                                    if c.status != Status.PASS]
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"), reason="hiding folders needs the bubblewrap sandbox")
 def test_batch_hides_the_submissions_and_output_folders_wherever_they_are(tmp_path):
     """Outside /tmp (which the sandbox replaces anyway): a folder in the project itself."""
     import tempfile
 
     from grader.batch import run_batch
-    from tests.conftest import build_submission
+    from tests.support import build_submission
 
     base = Path(tempfile.mkdtemp(prefix=".pytest-batch-", dir=Path(__file__).resolve().parents[1]))
     base.chmod(0o755)  # readable to anyone: only the sandbox's hiding can stop the thief

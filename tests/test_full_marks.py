@@ -5,18 +5,20 @@ from __future__ import annotations
 
 import pytest
 
-from grader.boundary.session import Session
 from grader.chapters import CHAPTERS
-from grader.grading import DEFAULT_SEED, grade
+from grader.grading import DEFAULT_SEED
 from grader.model import Status
-from grader.submission import Submission
+from tests.support import (
+    grade_code,
+    slow_but_the_first,
+)
 
 ALL = [c.id for c in CHAPTERS]
 
 
 @pytest.mark.parametrize("seed", [DEFAULT_SEED, 1, 2])
 def test_reference_solutions_get_full_marks(repo_root, seed):
-    report = grade(Session(Submission(repo_root, "solutions")), ALL, seed=seed)
+    report = grade_code(repo_root, ALL, "solutions", seed=seed)
     assert [c.chapter for c in report.chapters] == ALL
     for chapter in report.chapters:
         failed = [(c.id, c.message) for c in chapter.checks if c.status != Status.PASS]
@@ -25,7 +27,7 @@ def test_reference_solutions_get_full_marks(repo_root, seed):
 
 
 def test_stubs_get_zero_and_every_check_fails_as_not_implemented(repo_root):
-    report = grade(Session(Submission(repo_root, "exercises")), ALL)
+    report = grade_code(repo_root, ALL)
     for chapter in report.chapters:
         assert not chapter.problems, chapter.problems
         assert chapter.score == 0
@@ -38,7 +40,7 @@ def _results(report) -> list:
     return [(ch.chapter, c.id, c.status, c.points, c.message) for ch in report.chapters for c in ch.checks]
 
 
-@pytest.mark.parametrize("form", ["relative", "qualified", "plain", "stub"])
+@pytest.mark.parametrize("form", slow_but_the_first(["relative", "qualified", "plain", "stub"]))
 def test_solution_files_copied_into_exercises_grade_as_the_references(repo_root, tmp_path, form):
     """The three import forms of an earlier chapter the contract allows: from .ch03_jacobian,
     from exercises.ch03_jacobian and the plain from ch03_jacobian; and the stubs' own form (relative,
@@ -56,7 +58,7 @@ def test_solution_files_copied_into_exercises_grade_as_the_references(repo_root,
         (package / source.name).write_text(re.sub(r"from \.(ch0\d_\w+) import(.*)", replacement, text),
                                            encoding="utf-8")
     shutil.copyfile(repo_root / "exercises" / "__init__.py", package / "__init__.py")
-    copied = grade(Session(Submission(tmp_path, "exercises")), ALL)
-    references = grade(Session(Submission(repo_root, "solutions")), ALL)
+    copied = grade_code(tmp_path, ALL)
+    references = grade_code(repo_root, ALL, "solutions")
     assert _results(copied) == _results(references)
     assert copied.score == copied.max_score

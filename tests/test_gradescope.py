@@ -13,7 +13,6 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 import tempfile
 import zipfile
 from pathlib import Path
@@ -21,9 +20,14 @@ from pathlib import Path
 import pytest
 
 from grader.render import lms
-from tests.conftest import REPO, build_submission, replace_function
-from tests.test_outputs_infrastructure import REAL_BWRAP, FakeBwrap
-from tests.test_outputs_safety import hostile_module
+from tests.support import (
+    REAL_BWRAP,
+    FakeBwrap,
+    build_submission,
+    hostile_module,
+    replace_function,
+    run_grade,
+)
 
 jsonschema = pytest.importorskip("jsonschema")
 needs_bwrap = pytest.mark.skipif(REAL_BWRAP is None and not os.environ.get("CI"), reason="bubblewrap is not installed")
@@ -52,9 +56,7 @@ def autograder():
     base.chmod(0o755)
     try:
         (base / "course.yaml").write_text(COURSE, encoding="utf-8")
-        built = subprocess.run([sys.executable, "-m", "grader", "gradescope", str(base / "autograder.zip"),
-                                "--course", str(base / "course.yaml")], cwd=REPO, capture_output=True, text=True,
-                               timeout=300)
+        built = run_grade("gradescope", base / "autograder.zip", "--course", base / "course.yaml")
         assert built.returncode == 0, built.stderr
         root = base / "autograder"
         _unzip(base / "autograder.zip", root / "source")
@@ -112,6 +114,7 @@ def _tests(results: dict) -> dict[str, dict]:
     return {t["extra_data"]["id"]: t for t in results["tests"]}
 
 
+@pytest.mark.slow
 def test_the_zip_has_gradescopes_layout(autograder):
     archive, root, setup = autograder
     with zipfile.ZipFile(archive) as opened:
@@ -130,6 +133,7 @@ def test_the_zip_has_gradescopes_layout(autograder):
     assert "isolation: bubblewrap sandbox" in setup.stdout or "isolation: no sandbox" in setup.stdout
 
 
+@pytest.mark.slow
 def test_a_right_submission_gets_every_code_point_with_the_hidden_check_after_publishing(autograder):
     _, root, _ = autograder
     results, run = _grade(root, lambda s: _copy_right(s, "learner: ann+cs101@uni.edu\n"),
@@ -151,6 +155,7 @@ def test_a_right_submission_gets_every_code_point_with_the_hidden_check_after_pu
     assert ("isolation: bubblewrap sandbox" if REAL_BWRAP else "isolation: no sandbox") in results["output"]
 
 
+@pytest.mark.slow
 def test_a_buggy_submission_gets_partial_points_errors_apart_and_its_learner_yaml_flagged(autograder, tmp_path):
     _, root, _ = autograder
     broken = {"ch06_measurement": replace_function("ch06_measurement", "H_jacobian", WRONG_H),
@@ -171,15 +176,14 @@ def test_a_buggy_submission_gets_partial_points_errors_apart_and_its_learner_yam
     assert "learner.yaml names 'bob', but this submission is graded as 'bob@uni.edu'" in results["output"]
     # the course seed: the random-input check fails with the very message `grade` gives at that seed
     submission = build_submission(tmp_path / "same", broken)
-    project = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(submission), "--seed",
-                              str(COURSE_SEED), "--no-quiz", "--format", "json"], cwd=REPO, capture_output=True,
-                             text=True, timeout=120)
+    project = run_grade("ch06", "--submission", submission, "--seed", COURSE_SEED, "--no-quiz", "--format", "json")
     here = {c["id"]: c for c in json.loads(project.stdout)["chapters"][0]["checks"]}
     random_check = "H_jacobian_random_points"
     assert here[random_check]["status"] == "fail"
     assert tests[f"ch06/{random_check}"]["output"] == here[random_check]["message"]
 
 
+@pytest.mark.slow
 def test_an_empty_submission_gets_score_0_and_says_why(autograder):
     _, root, _ = autograder
     results, run = _grade(root, lambda s: (s / "notes.txt").write_text("forgot the files\n"), _metadata("c@uni.edu"))
@@ -188,6 +192,7 @@ def test_an_empty_submission_gets_score_0_and_says_why(autograder):
     assert "no chapter files" in results["output"] and "Submit your chapter files" in results["output"]
 
 
+@pytest.mark.slow
 def test_a_hostile_submission_cannot_forge_results_or_read_the_course(autograder):
     """Learner code that writes results.json with a perfect score and reads the course config at import,
     and raises and prints escape sequences; no submission metadata: the id is learner.yaml's."""
@@ -210,6 +215,7 @@ def test_a_hostile_submission_cannot_forge_results_or_read_the_course(autograder
     assert results["output"].startswith("Graded as mallory (submission_metadata.json cannot be read")
 
 
+@pytest.mark.slow
 @needs_bwrap
 def test_where_bubblewrap_cannot_start_grading_goes_on_and_says_so(autograder, tmp_path):
     _, root, _ = autograder
@@ -222,6 +228,7 @@ def test_where_bubblewrap_cannot_start_grading_goes_on_and_says_so(autograder, t
     assert code and all(t["status"] == "passed" for t in code)  # never zeros for the sandbox's sake
 
 
+@pytest.mark.slow
 @needs_bwrap
 def test_with_the_sandbox_required_and_not_starting_nothing_is_graded(autograder, tmp_path):
     _, root, _ = autograder
@@ -241,11 +248,11 @@ def test_with_the_sandbox_required_and_not_starting_nothing_is_graded(autograder
 
 def test_a_course_without_a_seed_builds_no_autograder(tmp_path):
     (tmp_path / "course.yaml").write_text("course: c\nquiz_feedback: recorded\n", encoding="utf-8")
-    done = subprocess.run([sys.executable, "-m", "grader", "gradescope", str(tmp_path / "a.zip"), "--course",
-                           str(tmp_path / "course.yaml")], cwd=REPO, capture_output=True, text=True, timeout=120)
+    done = run_grade("gradescope", tmp_path / "a.zip", "--course", tmp_path / "course.yaml")
     assert done.returncode == 1 and "the course has no seed" in done.stderr and not (tmp_path / "a.zip").exists()
 
 
+@pytest.mark.slow
 def test_a_failed_setup_still_writes_results_that_say_not_graded(autograder, tmp_path):
     """run_autograder on an image where setup.sh failed (no venv): results.json all the same."""
     _, root, _ = autograder

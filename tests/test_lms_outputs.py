@@ -10,17 +10,19 @@ from __future__ import annotations
 import csv
 import io
 import json
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
 import pytest
 
-from grader.staging import folder_name
 from grader.render import lms
-from tests.conftest import REPO, build_submission, replace_function
-from tests.test_outputs_safety import hostile_module
+from grader.staging import folder_name
+from tests.support import (
+    build_submission,
+    hostile_module,
+    replace_function,
+    run_grade,
+)
 
 jsonschema = pytest.importorskip("jsonschema")
 pandas = pytest.importorskip("pandas")
@@ -68,10 +70,8 @@ def graded(tmp_path_factory):
     roster.write_bytes(buffer.getvalue().encode("utf-8-sig"))
     (base / "course.yaml").write_text(COURSE, encoding="utf-8")
     out = base / "out"
-    done = subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out), "--roster",
-                           str(roster), "--chapters", ",".join(CHAPTERS), "--course", str(base / "course.yaml"),
-                           "--lms", "canvas", "--lms", "moodle", "--no-html", "--jobs", "2"],
-                          cwd=REPO, capture_output=True, text=True, timeout=300)
+    done = run_grade("batch", submissions, "--out", out, "--roster", roster, "--chapters", ",".join(CHAPTERS),
+                     "--course", base / "course.yaml", "--lms", "canvas", "--lms", "moodle", "--no-html", "--jobs", "2")
     return out, done
 
 
@@ -98,8 +98,9 @@ def test_canvas_and_moodle_gradebooks_have_their_imports_columns_and_points_poss
     out, _ = graded
     canvas = pandas.read_csv(out / "gradebook-canvas.csv", dtype=str, keep_default_na=False)
     titles = [lms._column(c) for c in CHAPTERS]
-    assert list(canvas.columns) == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *titles]
-    assert canvas.iloc[0]["Student"].strip() == "Points Possible"
+    assert list(canvas.columns) == ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", *titles,
+                                    lms.BEYOND_CHAPTERS]
+    assert canvas.iloc[0]["Student"].strip() == "Points Possible" and canvas.iloc[0][lms.BEYOND_CHAPTERS] == "0"
     possible = {c: float(canvas.iloc[0][lms._column(c)]) for c in CHAPTERS}
     alice = json.loads((out / "alice" / "report.json").read_text(encoding="utf-8"))
     assert possible == {c["chapter"]: c["max_score"] for c in alice["chapters"]}  # code and quiz, as graded
@@ -110,7 +111,8 @@ def test_canvas_and_moodle_gradebooks_have_their_imports_columns_and_points_poss
     assert float(learners.loc["bob", titles[1]]) < float(learners.loc["alice", titles[1]])
     moodle = pandas.read_csv(out / "gradebook-moodle.csv", dtype=str, keep_default_na=False)
     assert list(moodle.columns) == ["Learner id", *[f"{t} (out of {possible[c]:g})" for t, c in zip(titles, CHAPTERS)],
-                                    f"Total (out of {sum(possible.values()):g})", "Feedback"]
+                                    f"{lms.BEYOND_CHAPTERS} (out of 0)", f"Total (out of {sum(possible.values()):g})",
+                                    "Feedback"]
     rows = moodle.set_index("Learner id")
     assert rows.loc["O'Brien, \"Jr\"", f"Total (out of {sum(possible.values()):g})"] != ""
     assert rows.loc["dave"].iloc[0] == "" and rows.loc["dave", "Feedback"].startswith("unreadable: ")

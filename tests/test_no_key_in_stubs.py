@@ -20,8 +20,6 @@ import ast
 import functools
 import math
 import re
-import subprocess
-import sys
 import warnings
 import zipfile
 from dataclasses import dataclass
@@ -34,7 +32,10 @@ import yaml
 from grader import checks as check_registry
 from grader.chapters import CHAPTERS
 from grader.expected import reference_function
-from tests.conftest import REPO
+from tests.support import (
+    REPO,
+    run_grade,
+)
 
 sympy = pytest.importorskip("sympy")
 from sympy.parsing.sympy_parser import (  # noqa: E402
@@ -456,8 +457,7 @@ def handout_texts(out: Path) -> dict[str, str]:
 def handout(tmp_path_factory) -> dict[str, str]:
     """The texts of a handout `grade release` built."""
     out = tmp_path_factory.mktemp("release") / "handout"
-    done = subprocess.run([sys.executable, "-m", "grader", "release", str(out)], cwd=REPO, capture_output=True,
-                          text=True, encoding="utf-8", timeout=600)
+    done = run_grade("release", out)
     assert done.returncode == 0, done.stderr[-3000:]
     texts = handout_texts(out)
     assert any(n.startswith("exercises/") for n in texts) and any("grader/quizzes/" in n for n in texts)
@@ -490,17 +490,21 @@ def test_the_reader_finds_the_keys_the_old_stubs_held():
     assert leaks({"exercises/ch08_lab.py": "sample_covariance([[0, 0], [2, 2]]) -> [[2, 2], [2, 2]]"}) != []
 
 
+@pytest.mark.slow
 def test_no_stub_holds_a_key():
     assert [str(leak) for leak in leaks(stub_texts())] == []
 
 
+@pytest.mark.slow
 def test_no_check_description_or_named_mistake_holds_a_key():
     assert [str(leak) for leak in leaks(check_texts())] == []
 
 
+@pytest.mark.slow
 def test_no_answer_template_holds_a_key():
     assert [str(leak) for leak in leaks(template_texts())] == []
 
 
+@pytest.mark.slow
 def test_no_text_of_the_handout_holds_a_key(handout):
     assert [str(leak) for leak in leaks(handout) if not leak.among(KNOWN)] == []

@@ -25,16 +25,17 @@ from pathlib import Path
 import pytest
 
 from grader.chapters import CHAPTERS
-from tests.conftest import REPO, build_submission, replace_function
+from tests.support import (
+    REPO,
+    build_submission,
+    code_points,
+    replace_function,
+    run_grade,
+)
 
 nbformat = pytest.importorskip("nbformat")
 
 SPLIT = re.compile(r"(?m)^(?=def |class |if __name__)")
-
-
-def _grade(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, capture_output=True, text=True,
-                          encoding="utf-8", timeout=600)
 
 
 def _as_notebook(source: str, path: Path) -> list[tuple[int, int, int]]:
@@ -113,12 +114,13 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_a_notebook_chapter_grades_exactly_as_its_py(tmp_path, case):
     submission = build_submission(tmp_path / "py", CASES[case])
     twin = _notebook_twin(submission, tmp_path / "notebooks")
-    as_py = json.loads(_grade("all", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
-    as_notebook = json.loads(_grade("all", "--submission", str(twin), "--format", "json", "--no-quiz").stdout)
+    as_py = json.loads(run_grade("all", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
+    as_notebook = json.loads(run_grade("all", "--submission", str(twin), "--format", "json", "--no-quiz").stdout)
     assert _verdicts(as_notebook) == _verdicts(as_py)
     assert as_notebook["score"] == as_py["score"]
     assert {ch["source"] for ch in as_notebook["chapters"]} == {f"exercises/{c.module}.ipynb" for c in CHAPTERS}
@@ -144,12 +146,12 @@ def test_messages_and_tracebacks_point_at_cell_and_line(tmp_path):
     # where the .py raises, in the notebook's cell of H_jacobian
     line = source.splitlines().index("    scale = 1.0 / (float(x) - float(x))") + 1
     cell, first, _ = next(w for w in where if w[1] <= line < w[1] + w[2])
-    report = json.loads(_grade("ch06", "ch02", "--submission", str(twin), "--format", "json", "--no-quiz",
+    report = json.loads(run_grade("ch06", "ch02", "--submission", str(twin), "--format", "json", "--no-quiz",
                                "-v").stdout)
     ch06 = next(c for c in report["chapters"] if c["chapter"] == "ch06")
     message = next(c["message"] for c in ch06["checks"] if c["id"] == "H_worked_example")
     assert f"(exercises/ch06_measurement.ipynb, cell {cell}, line {line - first + 1})" in message, message
-    text = _grade("ch06", "--submission", str(twin), "--no-quiz", "-v").stdout
+    text = run_grade("ch06", "--submission", str(twin), "--no-quiz", "-v").stdout
     assert f'File "exercises/ch06_measurement.ipynb", cell {cell}, line {line - first + 1}, in H_jacobian' in text
     ch02 = next(c for c in report["chapters"] if c["chapter"] == "ch02")
     assert ch02["problems"][0].startswith("exercises/ch02_gradient.ipynb, cell 4, line 3: SyntaxError"), ch02["problems"]
@@ -158,12 +160,12 @@ def test_messages_and_tracebacks_point_at_cell_and_line(tmp_path):
 def test_a_py_beside_the_notebook_is_graded_and_the_output_says_so(tmp_path):
     submission = build_submission(tmp_path / "both")
     _as_notebook("def range_bearing(x, y):\n    return 0\n", submission / "exercises" / "ch06_measurement.ipynb")
-    report = json.loads(_grade("ch06", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
+    report = json.loads(run_grade("ch06", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
     chapter = report["chapters"][0]
     assert chapter["source"] == "exercises/ch06_measurement.py" and chapter["score"] == chapter["max_score"]
     assert "both exercises/ch06_measurement.py and ch06_measurement.ipynb exist: graded exercises/ch06_measurement.py" \
         in chapter["notes"][0]
-    assert "note: both exercises/ch06_measurement.py" in _grade("ch06", "--submission", str(submission),
+    assert "note: both exercises/ch06_measurement.py" in run_grade("ch06", "--submission", str(submission),
                                                                "--no-quiz").stdout
 
 
@@ -171,7 +173,7 @@ def test_a_notebook_that_is_not_one_is_said(tmp_path):
     submission = build_submission(tmp_path / "broken")
     (submission / "exercises" / "ch06_measurement.py").unlink()
     (submission / "exercises" / "ch06_measurement.ipynb").write_text("{not json", encoding="utf-8")
-    report = json.loads(_grade("ch06", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
+    report = json.loads(run_grade("ch06", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
     chapter = report["chapters"][0]
     assert chapter["problems"][0].startswith("exercises/ch06_measurement.ipynb could not be read: not a Jupyter "
                                              "notebook: not valid JSON")
@@ -195,6 +197,7 @@ def test_ipython_lines_are_left_out_and_python_is_kept():
     assert module.where(module.text.splitlines().index("x = 1") + 1) == "cell 3, line 2"
 
 
+@pytest.mark.slow
 def test_batch_grades_zipped_notebooks_as_their_py(tmp_path):
     from grader.batch import run_batch
 
@@ -222,9 +225,10 @@ def test_batch_grades_zipped_notebooks_as_their_py(tmp_path):
 
 # ------------------------------------------------------------------------------ one function at a time
 
+@pytest.mark.slow
 def test_grade_one_function_grades_it_alone_and_says_what_it_left_out():
-    whole = json.loads(_grade("ch06", "--solutions", "--format", "json", "--no-quiz").stdout)
-    alone = _grade("ch06", "H_jacobian", "--solutions", "--format", "json")
+    whole = json.loads(run_grade("ch06", "--solutions", "--format", "json", "--no-quiz").stdout)
+    alone = run_grade("ch06", "H_jacobian", "--solutions", "--format", "json")
     assert alone.returncode == 0, alone.stderr
     chapter = json.loads(alone.stdout)["chapters"][0]
     assert {c["function"] for c in chapter["checks"]} == {"H_jacobian"}
@@ -237,16 +241,17 @@ def test_grade_one_function_grades_it_alone_and_says_what_it_left_out():
                                 f"({whole['chapters'][0]['max_score'] - chapter['max_score']:g} points) of "
                                 "range_bearing, measurement_covariance, range_bearing_elevation, H3_jacobian, and the "
                                 "quiz: `grade ch06` grades the whole chapter"]
-    assert json.loads(_grade("H_jacobian", "--solutions", "--format", "json").stdout)["chapters"] == \
+    assert json.loads(run_grade("H_jacobian", "--solutions", "--format", "json").stdout)["chapters"] == \
         json.loads(alone.stdout)["chapters"]
-    wrong = _grade("ch06", "H_jacobain", "--solutions")
+    wrong = run_grade("ch06", "H_jacobain", "--solutions")
     assert wrong.returncode == 2 and "did you mean H_jacobian?" in wrong.stderr
-    elsewhere = _grade("ch03", "H_jacobian", "--solutions")
+    elsewhere = run_grade("ch03", "H_jacobian", "--solutions")
     assert elsewhere.returncode == 2 and "H_jacobian is a function of ch06, not of ch03" in elsewhere.stderr
 
 
 # ------------------------------------------------------------------------------ files that run, import forms
 
+@pytest.mark.slow
 def test_every_stub_runs_as_a_script_and_prints_its_worked_example(tmp_path):
     for info in CHAPTERS:
         done = subprocess.run([sys.executable, str(REPO / "exercises" / f"{info.module}.py")], cwd=tmp_path,
@@ -272,7 +277,7 @@ def test_every_stub_runs_as_a_script_and_prints_its_worked_example(tmp_path):
     imported = subprocess.run([sys.executable, "-c", "import ch04_chain_rule as m; print(m.pipeline_jacobian(4, 1))"],
                               cwd=package, capture_output=True, text=True, timeout=120)  # a notebook in exercises/
     assert imported.returncode == 0, imported.stderr
-    graded = json.loads(_grade("ch03", "ch04", "--submission", str(tmp_path), "--format", "json",
+    graded = json.loads(run_grade("ch03", "ch04", "--submission", str(tmp_path), "--format", "json",
                                "--no-quiz").stdout)
     assert graded["score"] == graded["max_score"] > 0  # the stubs' import form grades too
 
@@ -280,7 +285,7 @@ def test_every_stub_runs_as_a_script_and_prints_its_worked_example(tmp_path):
 def test_an_import_error_names_the_accepted_forms(tmp_path):
     source = (REPO / "solutions" / "ch04_chain_rule.py").read_text(encoding="utf-8")
     submission = build_submission(tmp_path, {"ch04_chain_rule": source.replace("from .ch03_jacobian", "from ch03")})
-    report = json.loads(_grade("ch04", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
+    report = json.loads(run_grade("ch04", "--submission", str(submission), "--format", "json", "--no-quiz").stdout)
     problem = report["chapters"][0]["problems"][0]
     assert "No module named 'ch03'" in problem
     assert ("How to import: an earlier chapter's file is imported in one of three forms, all graded alike: "
@@ -291,7 +296,7 @@ def test_an_import_error_names_the_accepted_forms(tmp_path):
 # ------------------------------------------------------------------------------ %grade in IPython
 
 IPYTHON_SCRIPT = r'''
-import json, sys, time
+import json, sys
 from IPython.terminal.interactiveshell import TerminalInteractiveShell
 
 shell = TerminalInteractiveShell.instance()
@@ -303,12 +308,12 @@ def run(code):
 
 run("%load_ext grader")
 for step in json.loads(sys.argv[1]):
-    started = time.perf_counter()
     value = run(step)
     if step.startswith("%grade"):
+        from grader import magic  # the resident grading process that answered
         out.setdefault("grades", []).append({"score": value.score, "max_score": value.max_score, "text": value.text,
                                              "html": value._repr_html_(), "repr": repr(value),
-                                             "seconds": time.perf_counter() - started})
+                                             "server": magic._PROCESS.process.pid})
 print("RESULT" + json.dumps(out))
 '''
 
@@ -321,12 +326,13 @@ def _ipython(cells: list[str], cwd: Path) -> list[dict]:
     return json.loads(done.stdout.split("RESULT", 1)[1])["grades"]
 
 
+@pytest.mark.slow
 def test_percent_grade_shows_the_score_grade_shows(tmp_path):
     submission = build_submission(tmp_path / "project", {"ch06_measurement": CASES["buggy"]["ch06_measurement"]})
     grades = _ipython(["%grade ch06", "%grade ch06 --no-quiz", "%grade ch06 H_jacobian", "%grade all --no-quiz"],
                       cwd=submission / "exercises")
     for grade, args in zip(grades, (["ch06"], ["ch06", "--no-quiz"], ["ch06", "H_jacobian"], ["all", "--no-quiz"])):
-        report = json.loads(_grade(*args, "--format", "json", cwd=submission).stdout)
+        report = json.loads(run_grade(*args, "--format", "json", cwd=submission).stdout)
         assert (grade["score"], grade["max_score"]) == (report["score"], report["max_score"]), args
         assert grade["html"] is None and grade["repr"] == grade["text"].rstrip("\n")  # a terminal: text
         assert f"ch06 total: {report['chapters'][-4]['score'] if args[0] == 'all' else report['score']:g}/" \
@@ -334,9 +340,33 @@ def test_percent_grade_shows_the_score_grade_shows(tmp_path):
     assert 0 < grades[1]["score"] < grades[1]["max_score"]
 
 
+def test_the_notebook_grading_process_grades_the_cells_the_kernel_ran(tmp_path, monkeypatch):
+    """grader.notebook_server's Server, in this process, given what grader.magic gathers in a kernel (the functions
+    the notebook defined, the cells it ran): the references typed into cells get the marks the file gets. (The
+    whole route, IPython and the resident process included: the two tests around this one.)"""
+    from grader import magic, notebook_server
+
+    source = (REPO / "solutions" / "ch06_measurement.py").read_text(encoding="utf-8")
+    cells = [part for part in SPLIT.split(source) if part.strip()]
+    namespace = {"__name__": "__main__"}
+    for cell in cells:
+        exec(compile(cell, "<cell>", "exec"), namespace)  # noqa: S102  (the references, as a kernel runs them)
+    shell = type("Shell", (), {"history_manager": type("History", (), {"input_hist_raw": ["", *cells]})()})()
+    monkeypatch.chdir(tmp_path)  # the server works in the kernel's folder: here an empty one, as in Colab
+    server = notebook_server.Server()
+    try:
+        answer = server.handle({"args": ["ch06", "--no-quiz", "--no-sandbox"], "cwd": str(tmp_path), "html": False,
+                                "defined": magic.defined_functions(namespace), "cells": magic.kernel_cells(shell)})
+    finally:
+        server.close()
+    assert "graded: the code this notebook's kernel ran" in answer["text"], answer
+    assert answer["score"] == answer["max_score"] == float(code_points("ch06")), answer["text"]
+
+
+@pytest.mark.slow
 def test_percent_grade_grades_the_code_the_kernel_ran(tmp_path):
     """No exercises/ folder (as in Colab): the notebook's own cells are graded, in the order they ran, a cell that
-    raised in the kernel included; after an edit the second %grade is quick."""
+    raised in the kernel included; after an edit the same resident process grades again (no interpreter to start)."""
     source = CASES["buggy"]["ch06_measurement"]
     cells = [part for part in SPLIT.split(textwrap.dedent(source)) if part.strip()]
     fixed = replace_function("ch06_measurement", "H_jacobian", """
@@ -354,11 +384,11 @@ def test_percent_grade_grades_the_code_the_kernel_ran(tmp_path):
                       cwd=colab)
     for grade, code in zip(grades, (source, fixed)):
         submission = build_submission(tmp_path / f"as_file_{grade is grades[1]}", {"ch06_measurement": code})
-        report = json.loads(_grade("ch06", "--no-quiz", "--format", "json", cwd=submission).stdout)
+        report = json.loads(run_grade("ch06", "--no-quiz", "--format", "json", cwd=submission).stdout)
         assert (grade["score"], grade["max_score"]) == (report["score"], report["max_score"])
         assert "graded: the code this notebook's kernel ran" in grade["text"]
     assert grades[0]["score"] < grades[1]["score"] == grades[1]["max_score"]
-    assert grades[1]["seconds"] < 5, grades[1]["seconds"]  # a resident process: no interpreter, no imports
+    assert grades[1]["server"] == grades[0]["server"]  # the same resident process: no interpreter, no imports
 
 
 def test_the_grade_command_never_imports_ipython_or_nbformat():
@@ -376,11 +406,12 @@ def test_the_grade_command_never_imports_ipython_or_nbformat():
 @pytest.fixture(scope="module")
 def notebook_handout(tmp_path_factory):
     out = tmp_path_factory.mktemp("handout") / "out"
-    done = _grade("release", str(out), "--notebooks", "--no-classroom")
+    done = run_grade("release", str(out), "--notebooks", "--no-classroom")
     assert done.returncode == 0, done.stderr
     return out
 
 
+@pytest.mark.slow
 def test_the_notebook_handout_holds_notebooks_and_no_answer(notebook_handout):
     from grader import checks, release
 
@@ -399,6 +430,7 @@ def test_the_notebook_handout_holds_notebooks_and_no_answer(notebook_handout):
     assert release.scan(notebook_handout) == []
 
 
+@pytest.mark.slow
 def test_the_scan_finds_a_reference_planted_in_a_notebook(notebook_handout, tmp_path):
     from grader import release
 
@@ -414,6 +446,7 @@ def test_the_scan_finds_a_reference_planted_in_a_notebook(notebook_handout, tmp_
                release.scan(planted))
 
 
+@pytest.mark.slow
 def test_a_handout_notebook_grades_in_a_jupyter_kernel(notebook_handout, tmp_path):
     """The handout's ch06 notebook, filled in, run by a real Jupyter kernel (ipykernel, through nbclient) in a
     folder of its own: its last cell shows the report as HTML with plots, and the score `grade` gives."""
@@ -433,7 +466,7 @@ def test_a_handout_notebook_grades_in_a_jupyter_kernel(notebook_handout, tmp_pat
     errors = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"]
     assert not errors, errors
     shown = notebook.cells[-1].outputs[0]["data"]
-    expected = json.loads(_grade("ch06", "--solutions", "--no-quiz", "--format", "json").stdout)["score"]
+    expected = json.loads(run_grade("ch06", "--solutions", "--no-quiz", "--format", "json").stdout)["score"]
     assert f"ch06 total: {expected:g}/{expected:g}" in shown["text/plain"]
     assert 'class="jl-report fragment"' in shown["text/html"] and "<img" in shown["text/html"]
     assert f"{expected:g} / {expected:g}" in shown["text/html"]

@@ -20,8 +20,7 @@ from xml.etree import ElementTree
 import pytest
 
 from grader.staging import folder_name, id_problem
-from tests.conftest import REPO, build_submission, code_points
-from tests.test_outputs_safety import hostile_module
+from tests.support import REPO, build_submission, code_points, hostile_module
 
 RIGHT = ("gradebook.csv", "junit.xml", "zoë", "ann+cs101@uni.edu", "=1+2")
 
@@ -93,6 +92,7 @@ def _gradebook(out: Path) -> dict[str, dict]:
         return {row["learner"]: row for row in csv.DictReader(handle)}
 
 
+@pytest.mark.slow
 def test_every_id_kept_as_given_and_every_class_output_intact(batch):
     out, first, _, _ = batch
     assert first.returncode == 1, first.stderr.decode(errors="replace")[-3000:]  # zipper, and the bad roster id
@@ -110,6 +110,7 @@ def test_every_id_kept_as_given_and_every_class_output_intact(batch):
     assert (out / "gradebook%2Ecsv" / "results.json").is_file() and (out / "zo%C3%AB" / "report.json").is_file()
 
 
+@pytest.mark.slow
 def test_every_file_is_valid_in_its_format(batch):
     out, _, _, _ = batch
     suites = ElementTree.parse(out / "junit.xml").getroot()
@@ -124,6 +125,7 @@ def test_every_file_is_valid_in_its_format(batch):
     assert "\x1b" not in summary and "\x1b" not in (out / "gradebook.csv").read_text(encoding="utf-8")
 
 
+@pytest.mark.slow
 def test_skipped_entries_are_listed_with_their_reasons(batch):
     out, first, _, roster = batch
     said = first.stdout.decode("utf-8") + first.stderr.decode("utf-8")
@@ -143,6 +145,7 @@ def test_skipped_entries_are_listed_with_their_reasons(batch):
     assert "zipper: zipper.zip: " in said and "OK/ch06_measurement.py is" in said  # the name, without its escapes
 
 
+@pytest.mark.slow
 def test_a_rerun_finds_every_learner_unchanged_in_the_new_layout(batch):
     _, _, again, _ = batch
     said = again.stdout.decode("utf-8")

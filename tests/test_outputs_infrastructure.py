@@ -9,50 +9,26 @@ from __future__ import annotations
 import csv
 import json
 import os
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from tests.conftest import REPO, build_submission, code_points
+from tests.support import (
+    REAL_BWRAP,
+    FakeBwrap,
+    build_submission,
+    code_points,
+    run_grade,
+)
 
-REAL_BWRAP = None if os.environ.get("GRADER_SANDBOX") == "off" else shutil.which("bwrap")
 pytestmark = pytest.mark.skipif(REAL_BWRAP is None and not os.environ.get("CI"),
                                 reason="bubblewrap (bwrap) is not installed")
 
-FAKE = """#!/bin/sh
-n=$(( $(cat {counter} 2>/dev/null || echo 0) + 1 ))
-echo "$n" > {counter}
-if grep -qx "$n" {failing}; then echo "bwrap: creating new namespace failed (fake failure $n)" >&2; exit 1; fi
-exec {real} "$@"
-"""
-
-
-class FakeBwrap:
-    """A bwrap that fails on the calls (1, 2, ...) in `failing` and runs the real one otherwise."""
-
-    def __init__(self, folder: Path, failing) -> None:
-        assert REAL_BWRAP, "CI must have bubblewrap (.ci/run installs it)"
-        (folder / "bin").mkdir(parents=True)
-        self.counter, failing_file = folder / "calls", folder / "failing"
-        failing_file.write_text("".join(f"{n}\n" for n in failing))
-        script = folder / "bin" / "bwrap"
-        script.write_text(FAKE.format(counter=self.counter, failing=failing_file, real=REAL_BWRAP))
-        script.chmod(0o755)
-        self.env = dict(os.environ, PATH=f"{folder / 'bin'}{os.pathsep}{os.environ.get('PATH', '')}")
-        self.env.pop("GRADER_SANDBOX", None)
-
-    @property
-    def calls(self) -> int:
-        return int(self.counter.read_text()) if self.counter.exists() else 0
-
 
 def _batch(submissions: Path, out: Path, *extra: str, env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out),
-                           "--chapters", "ch06", "--jobs", "1", "--no-html", *extra],
-                          cwd=REPO, capture_output=True, text=True, timeout=180, env=env)
+    return run_grade("batch", submissions, "--out", out, "--chapters", "ch06", "--jobs", "1", "--no-html", *extra,
+                     env=env)
 
 
 def _rows(out: Path) -> dict[str, dict]:
@@ -85,6 +61,7 @@ def test_a_sandbox_that_does_not_start_stops_the_batch_before_any_learner(submis
     assert _rows(out)["alice"]["ch06_code"] == code_points("ch06")
 
 
+@pytest.mark.slow
 def test_a_child_that_fails_to_start_once_is_started_again_and_the_learner_graded(submissions, tmp_path):
     fake = FakeBwrap(tmp_path / "fake", failing=[2])  # 1: the probe; 2: the worker's fork server
     out = tmp_path / "out"
@@ -95,6 +72,7 @@ def test_a_child_that_fails_to_start_once_is_started_again_and_the_learner_grade
     assert row["status"] == "graded" and row["ch06_code"] == code_points("ch06") and row["message"] == ""
 
 
+@pytest.mark.slow
 def test_a_child_that_never_starts_is_an_error_never_a_zero_and_the_next_run_grades_it(submissions, tmp_path):
     fake = FakeBwrap(tmp_path / "fake", failing=range(2, 100))
     out = tmp_path / "out"

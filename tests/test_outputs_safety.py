@@ -7,27 +7,19 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
 import sys
 
 import pytest
 
 from grader import safe_text
-from tests.conftest import REPO, build_submission, code_points, run_on_terminal
-
-HOSTILE_H = '''
-
-def H_jacobian(x, y):
-    print("\\x1b[2J\\x1b[H\\x1b]0;pwned\\x07\\x1b[32mall checks pass\\r")
-    Fake = type("\\x1b[2J\\x1b[1;32mPASS\\x1b[0m", (Exception,), {})
-    raise Fake("\\x1b[1;32m\\u2713 [2/2] all good\\x1b[0m\\r\\udcff \\x00 \\u202e\\x9b2J")
-'''
-
-
-def hostile_module() -> str:
-    """The reference ch06 with H_jacobian replaced by one that raises and prints hostile text."""
-    text = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / "ch06_measurement.py").read_text())
-    return text + HOSTILE_H
+from tests.support import (
+    REPO,
+    build_submission,
+    code_points,
+    hostile_module,
+    run_grade,
+    run_on_terminal,
+)
 
 
 @pytest.fixture(scope="module")
@@ -91,8 +83,7 @@ def test_a_report_is_cleaned_as_a_copy(hostile):
 # ----------------------------------------------------------------------- grade chNN, for real
 
 def test_grade_chapter_text_output_shows_no_learner_escape_sequence(hostile):
-    done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile), "--no-quiz", "-v"],
-                          cwd=REPO, capture_output=True, timeout=120)
+    done = run_grade("ch06", "--submission", hostile, "--no-quiz", "-v", raw=True)
     assert done.returncode == 1, done.stderr.decode(errors="replace")[-2000:]
     out = done.stdout.decode("utf-8")  # strict: a lone surrogate would not have been written at all
     assert "Traceback" not in done.stderr.decode(errors="replace")
@@ -113,8 +104,7 @@ def test_on_a_terminal_only_the_graders_own_colours_remain(hostile):
 
 def test_grade_chapter_json_and_html_are_valid_utf8(hostile, tmp_path):
     page = tmp_path / "report.html"
-    done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(hostile), "--no-quiz",
-                           "--format", "json", "--html", str(page)], cwd=REPO, capture_output=True, timeout=120)
+    done = run_grade("ch06", "--submission", hostile, "--no-quiz", "--format", "json", "--html", page, raw=True)
     assert done.returncode == 1, done.stderr.decode(errors="replace")[-2000:]
     data = json.loads(done.stdout.decode("utf-8"))
     messages = [c["message"] for ch in data["chapters"] for c in ch["checks"] if c["function"] == "H_jacobian"]

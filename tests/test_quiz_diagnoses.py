@@ -15,32 +15,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from test_quiz import REPO, run_grade
 
 from grader.chapters import CHAPTERS
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import right_numbers
 from grader.quiz.templates import reference_answers
-
-
-def _question(chapter, qid):
-    return next(q for q in bank.questions(chapter) if q.id == qid)
+from tests.support import REPO, question_of, run_grade
 
 
 def _right(chapter, qid, learner="alice"):
     key = bank.keys(chapter)[qid]
-    values = _question(chapter, qid).values_for(learner, chapter)
+    values = question_of(chapter, qid).values_for(learner, chapter)
     return right_numbers(key.value_for(chapter, values), key, values)
-
-
-def _grade(tmp_path, chapter, qid, text, learner="alice"):
-    folder = tmp_path / "answers"
-    folder.mkdir(exist_ok=True)
-    (folder / f"{chapter}.yaml").write_text(f"{qid}: {text}\n", encoding="utf-8")
-    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers")
-    assert not problems
-    return next(r for r in results if r.function == qid)
 
 
 def _written(value: np.ndarray, decimals: int = 2) -> str:
@@ -76,18 +63,18 @@ GENERIC = [
 
 
 @pytest.mark.parametrize("name, where, slip, sentence", GENERIC, ids=[f"{g[0]}-{g[1][1]}" for g in GENERIC])
-def test_a_generic_slip_is_named_and_a_near_miss_of_it_is_not(tmp_path, name, where, slip, sentence):
+def test_a_generic_slip_is_named_and_a_near_miss_of_it_is_not(quiz, name, where, slip, sentence):
     chapter, qid = where
     right = _right(chapter, qid)
     wrong = slip(right)
-    result = _grade(tmp_path, chapter, qid, _written(wrong, 3))
+    result = quiz.one(chapter, qid, _written(wrong, 3))
     assert (result.status, result.points, result.mistake) == (Status.FAIL, 0, name), result.message
     assert result.message.splitlines()[0] == sentence
     assert result.message.splitlines()[1].startswith("not within the tolerance of the right value (tolerance |got")
     assert result.expected is None
     near = np.array(wrong, dtype=float)
     near.flat[0] += 0.05 + 0.05 * abs(near.flat[0])  # outside the tolerance of the slip, and of the key
-    result = _grade(tmp_path, chapter, qid, _written(near, 3))
+    result = quiz.one(chapter, qid, _written(near, 3))
     assert result.status == Status.FAIL and result.mistake == ""
     assert result.message.startswith("not within the tolerance of the right value")
 
@@ -100,8 +87,8 @@ def test_a_generic_slip_is_named_and_a_near_miss_of_it_is_not(tmp_path, name, wh
     ("6xy^2 + 1", "", "not equivalent to the right expression"),
     ("6 x^2 y", "", "not equivalent to the right expression"),
 ])
-def test_an_expression_that_is_minus_or_a_multiple_of_the_key_is_named(tmp_path, text, name, sentence):
-    result = _grade(tmp_path, "ch09", "mixed_partial", text)
+def test_an_expression_that_is_minus_or_a_multiple_of_the_key_is_named(quiz, text, name, sentence):
+    result = quiz.one("ch09", "mixed_partial", text)
     assert result.status == Status.FAIL and result.mistake == name
     assert result.message.startswith(sentence)
 
@@ -117,31 +104,29 @@ def test_an_expression_that_is_minus_or_a_multiple_of_the_key_is_named(tmp_path,
     ("ch05", "forward_value", "5.68", "exact derivative"),
     ("ch03", "polar_jacobian", "[[0.88, -0.48], [0.48, 0.88]]", "missing r"),
 ])
-def test_a_keys_own_mistake_is_named_with_its_feedback(tmp_path, chapter, qid, text, name):
-    result = _grade(tmp_path, chapter, qid, text)
+def test_a_keys_own_mistake_is_named_with_its_feedback(quiz, chapter, qid, text, name):
+    result = quiz.one(chapter, qid, text)
     feedback = next(w["feedback"] for w in bank.keys(chapter)[qid].wrong if w["name"] == name)
     assert (result.status, result.mistake) == (Status.FAIL, name)
     assert result.message.splitlines()[0] == feedback
 
 
-def test_a_known_mistake_is_named_only_within_the_tolerance(tmp_path):
+def test_a_known_mistake_is_named_only_within_the_tolerance(quiz, tmp_path):
     # alice: r = 2.3; 1/r = 0.4348 is "r for r^2"; within 3 significant digits, and no further
-    assert _grade(tmp_path, "ch06", "bearing_variance", "0.435").mistake == "r for r^2"
-    assert _grade(tmp_path, "ch06", "bearing_variance", "0.44").mistake == ""
+    assert quiz.one("ch06", "bearing_variance", "0.435").mistake == "r for r^2"
+    assert quiz.one("ch06", "bearing_variance", "0.44").mistake == ""
     # a slip that makes no difference for this learner is never named: area_scale is r = 0.6 for alice, and
     # for a learner with r = 1 "missing r" (det J = 1) is the right answer (the bank's `avoid` draws such numbers
     # again since grade selftest found them: here a bank without it)
     banks = tmp_path / "banks"
-    (banks / "keys").mkdir(parents=True)
+    banks.mkdir()
+    (banks / "keys").mkdir()
     (banks / "keys" / "ch03.yaml").write_bytes((bank.QUIZ_DIR / "keys" / "ch03.yaml").read_bytes())
     text = (bank.QUIZ_DIR / "ch03.yaml").read_text(encoding="utf-8")
     (banks / "ch03.yaml").write_text(text.replace('avoid: {"r - 1": 0}', "avoid: {}"), encoding="utf-8")
     area_scale = next(q for q in bank.questions("ch03", banks) if q.id == "area_scale")
     who = next(f"learner{i}" for i in range(500) if area_scale.values_for(f"learner{i}", "ch03")["r"] == 1.0)
-    (tmp_path / "answers").mkdir(exist_ok=True)
-    (tmp_path / "answers" / "ch03.yaml").write_text("area_scale: 1\n", encoding="utf-8")
-    results, _ = grade_quiz("ch03", tmp_path / "answers", who, "exercises/answers", quiz_dir=banks)
-    result = next(r for r in results if r.function == "area_scale")
+    result = quiz.one("ch03", "area_scale", "1", learner=who, quiz_dir=banks)
     assert result.status == Status.PASS and result.mistake == ""
 
 
@@ -189,12 +174,12 @@ def test_cli_reports_the_mistake_in_json_and_text(tmp_path):
     assert "      That is d bearing / d y; d bearing / d x is -y / r^2." in text
 
 
-def test_degrees_is_named_only_where_the_key_is_an_angle(tmp_path):
+def test_degrees_is_named_only_where_the_key_is_an_angle(quiz):
     assert bank.keys("ch08")["wrapped_innovation"].angle
     assert not any(key.angle for info in CHAPTERS for qid, key in bank.keys(info.id).items()
                    if qid != "wrapped_innovation")
     gap = _right("ch00", "superposition_gap")
-    assert _grade(tmp_path, "ch00", "superposition_gap", f"{math.degrees(gap):.2f}").mistake == ""
+    assert quiz.one("ch00", "superposition_gap", f"{math.degrees(gap):.2f}").mistake == ""
 
 
 def test_the_quiz_path_imports_no_sympy_for_diagnoses(tmp_path):
@@ -224,10 +209,10 @@ from misconceptions import QUIZ, grade_quiz_answer  # noqa: E402
 def test_the_corpus_is_realistic_in_size_and_spread():
     assert len(QUIZ) >= 20
     assert {chapter for chapter, *_ in QUIZ} == {c.id for c in CHAPTERS}
-    kinds = {_question(chapter, qid).kind for chapter, qid, *_ in QUIZ}
+    kinds = {question_of(chapter, qid).kind for chapter, qid, *_ in QUIZ}
     assert kinds == {"numeric", "vector", "matrix", "symbolic"}
     for chapter, qid, _, learner, _ in QUIZ:
-        assert (learner is not None) == bool(_question(chapter, qid).params), (chapter, qid)
+        assert (learner is not None) == bool(question_of(chapter, qid).params), (chapter, qid)
     derivations = {(c.id, q.id) for c in CHAPTERS for q in bank.questions(c.id) if q.kind == "symbolic" and q.params}
     assert len(derivations) >= 5 and derivations <= {(chapter, qid) for chapter, qid, *_ in QUIZ}
 

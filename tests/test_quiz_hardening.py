@@ -14,30 +14,26 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from test_quiz import RIGHT_CHOICE, RIGHT_FACTS
 
 from grader.chapters import CHAPTERS
 from grader.cli import main
 from grader.model import Status
-from grader.quiz import bank, grade_quiz, learner_id, symbolic
+from grader.quiz import bank, learner_id, symbolic
 from grader.quiz.judge import judge
 from grader.quiz.symbolic import AnswerError, equivalent, number, parse
+from tests.support import (
+    REPO,
+    RIGHT_CHOICE,
+    RIGHT_FACTS,
+    CpuTime,
+    question_of,
+    slow_but_the_first,
+    sympy_workers,
+    watch_simplifiers,
+)
 
 ALL = [c.id for c in CHAPTERS]
 SYMBOLIC = [(c, q) for c in ALL for q in bank.questions(c) if q.kind == "symbolic"]
-
-
-def _grade(tmp_path, chapter, text, learner="alice", **kwargs):
-    folder = tmp_path / "answers"
-    folder.mkdir(exist_ok=True)
-    path = folder / f"{chapter}.yaml"
-    path.write_bytes(text) if isinstance(text, bytes) else path.write_text(text)
-    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers", **kwargs)
-    return {r.function: r for r in results}, problems
-
-
-def _question(chapter, qid):
-    return next(q for q in bank.questions(chapter) if q.id == qid)
 
 
 # ---------------------------------------------------------------- expressions that would hang sympy
@@ -62,28 +58,36 @@ def _question(chapter, qid):
     ("\uff58 + 1", "not plain ASCII"),  # fullwidth x
     ("x\u200b + 1", "not plain ASCII"),  # zero-width space
 ])
-def test_expression_bombs_are_refused_before_sympy(hostile, says):
-    started = time.perf_counter()
-    with pytest.raises(AnswerError) as info:
+def test_expression_bombs_are_refused_before_sympy(hostile, says, monkeypatch):
+    from sympy.parsing import sympy_parser
+
+    def never(*args, **kwargs):
+        raise AssertionError(f"{hostile!r} reached sympy")
+
+    monkeypatch.setattr(sympy_parser, "parse_expr", never)
+    with CpuTime() as work, pytest.raises(AnswerError) as info:
         parse(hostile, ("x", "y"))
-    assert time.perf_counter() - started < 1.0
+    assert work.seconds < 1.0  # refused by reading alone: milliseconds of this process's CPU
     assert says in str(info.value)
 
 
 @pytest.mark.parametrize("text", ["9**(9*9*9*9*9*9*9*9)", "exp(exp(exp(exp(10))))", "e^(99999*99999)",
                                   "sqrt(-1)", "1/0", "nan", "inf", "log(0)", "x"])
 def test_numbers_that_are_not_finite_reals_are_refused_quickly(text):
-    started = time.perf_counter()
-    with pytest.raises(AnswerError):
+    with CpuTime() as work, pytest.raises(AnswerError):
         number(text)
-    assert time.perf_counter() - started < 1.0
+    assert work.seconds < 1.0  # no big-number arithmetic: milliseconds of this process's CPU
 
 
-def test_allowed_but_odd_expressions_are_decided_quickly_and_never_equal_by_default():
+@pytest.mark.slow
+def test_allowed_but_odd_expressions_are_decided_quickly_and_never_equal_by_default(monkeypatch):
+    simplifiers = watch_simplifiers(monkeypatch)
     for answer in ["exp(exp(exp(exp(10))))", "sqrt(-1 - x^2)", "e^(x*99999)", "log(-x^2 - y^2)"]:
-        started = time.perf_counter()
-        assert not equivalent(answer, "-y/(x^2 + y^2)", ("x", "y"))
-        assert time.perf_counter() - started < symbolic.SIMPLIFY_SECONDS + 3.0  # + starting sympy's process
+        with CpuTime() as work:
+            assert not equivalent(answer, "-y/(x^2 + y^2)", ("x", "y"))
+        assert work.seconds < 2.0, answer  # numbers here; sympy, if asked, in a process of its own
+    assert all(s.process is None for s in simplifiers)  # each sympy process ended with its question
+    assert sympy_workers() == []
 
 
 def test_undecided_is_never_equal(monkeypatch):
@@ -100,32 +104,17 @@ def test_simplify_time_limit(monkeypatch):
     """sympy runs in a process of its own that is killed at the time limit (a thread could not be
     stopped: sympy works on this one for many seconds)."""
     monkeypatch.setattr(symbolic, "SIMPLIFY_SECONDS", 0.5)
-    started = time.perf_counter()
+    simplifiers = watch_simplifiers(monkeypatch)
     assert symbolic._simplify_is_zero("x*exp(exp(exp(exp(exp(1)))))", "-y/(x^2 + y^2)", ("x", "y")) is None
-    assert time.perf_counter() - started < 0.5 + 5  # + starting the process and importing sympy
-    assert _sympy_workers() == []
+    # its process started, then was stopped without an answer at the time limit (there is no learner deadline)
+    assert [(s.started, s.stopped, s.out_of_time) for s in simplifiers] == [(True, True, False)]
+    assert sympy_workers() == []
     cpu = time.process_time()
     time.sleep(0.5)
     assert time.process_time() - cpu < 0.2  # nothing of it goes on in this process
 
 
-def _sympy_workers() -> list[int]:
-    """Live processes of grader.quiz.symbolic.Simplifier started by this process."""
-    found = []
-    for entry in os.listdir("/proc"):
-        try:
-            with open(f"/proc/{entry}/cmdline", "rb") as handle:
-                if b"grader-sympy" not in handle.read():
-                    continue
-            with open(f"/proc/{entry}/stat", "rb") as handle:
-                state, parent = handle.read().rsplit(b")", 1)[1].split()[:2]
-        except (OSError, ValueError):
-            continue
-        if state != b"Z" and int(parent) == os.getpid():
-            found.append(int(entry))
-    return found
-
-
+@pytest.mark.slow
 @pytest.mark.parametrize("chapter, question", SYMBOLIC, ids=lambda v: getattr(v, "id", v))
 def test_symbolic_keys_and_known_wrong_answers_agree_with_sympy(chapter, question):
     import sympy
@@ -146,44 +135,43 @@ def test_symbolic_keys_and_known_wrong_answers_agree_with_sympy(chapter, questio
 
 
 def test_vector_answers_go_through_the_same_whitelist(tmp_path):
-    question, key = _question("ch06", "H_at_point"), bank.keys("ch06")["H_at_point"]
+    question, key = question_of("ch06", "H_at_point"), bank.keys("ch06")["H_at_point"]
     for hostile in ["[[9**(9*9*9*9*9*9*9*9), 1], [1, 1]]", "[[().__class__, 1], [1, 1]]",
                     "[[__import__('os'), 1], [1, 1]]", "1, 2; 3, x"]:
-        started = time.perf_counter()
-        with pytest.raises(AnswerError):
+        with CpuTime() as work, pytest.raises(AnswerError):
             judge(question, key, hostile, [[1, 0], [0, 1]], seed=0)
-        assert time.perf_counter() - started < 1.0
+        assert work.seconds < 1.0, hostile
 
 
 # ------------------------------------------------------------------------------- answer files
 
-def test_alias_bomb_is_refused_and_the_rest_graded(tmp_path):
+def test_alias_bomb_is_refused_and_the_rest_graded(quiz):
     text = 'a0: &a0 ["1","1","1","1","1","1","1","1","1"]\n'
     for i in range(1, 12):
         text += f"a{i}: &a{i} [" + ",".join([f"*a{i - 1}"] * 9) + "]\n"
     text += f"H_at_point: *a11\nbearing_near_dish: {RIGHT_CHOICE}\n"
-    started = time.perf_counter()
-    results, problems = _grade(tmp_path, "ch06", text)
-    assert time.perf_counter() - started < 2.0
+    with CpuTime() as work:
+        results, problems = quiz("ch06", text)
+    assert work.seconds < 2.0  # the aliases are never expanded (9^11 values)
     assert "line 13, question H_at_point: " in results["H_at_point"].message
     assert any("anchors and aliases" in p for p in problems), problems  # a1 ... a11: unknown ids too
     assert results["bearing_near_dish"].status == Status.PASS
     assert results["H_at_point"].status == Status.FAIL
 
 
-@pytest.mark.parametrize("depth", [50, 30_000])
-def test_deeply_nested_answer_is_refused_without_crashing(tmp_path, depth):
+@pytest.mark.parametrize("depth", slow_but_the_first([50, 30_000]))
+def test_deeply_nested_answer_is_refused_without_crashing(quiz, depth):
     text = f"bearing_near_dish: {RIGHT_CHOICE}\nH_at_point: " + "[" * depth + "]" * depth + f"\nH_facts: {RIGHT_FACTS}\n"
-    results, _ = _grade(tmp_path, "ch06", text)
+    results, _ = quiz("ch06", text)
     assert "exercises/answers/ch06.yaml, line 2, question H_at_point" in results["H_at_point"].message
     assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
 
 
-def test_other_shapes_of_bad_answers(tmp_path):
+def test_other_shapes_of_bad_answers(quiz):
     text = ("bearing_near_dish: {a: 1}\nH_at_point: [" + ", ".join(["1"] * 500) + "]\n"
             "H_facts: !!python/object:os.system x\ndbearing_dx: *nothing\n")
-    results, problems = _grade(tmp_path, "ch06", text)
-    assert any("line 4: not valid YAML" in p for p in problems)
+    results, problems = quiz("ch06", text)
+    assert not problems  # each said at its own answer's line, the line 4 alias among them
     assert "line 1, question bearing_near_dish: a mapping" in results["bearing_near_dish"].message
     assert "line 2, question H_at_point: more than 100 values" in results["H_at_point"].message
     assert "line 3, question H_facts: could not determine a constructor" in results["H_facts"].message
@@ -191,21 +179,21 @@ def test_other_shapes_of_bad_answers(tmp_path):
     assert all(r.status == Status.FAIL and r.points == 0 for r in results.values())
 
 
-def test_oversized_file_is_reported_not_read(tmp_path):
-    results, problems = _grade(tmp_path, "ch06", "bearing_near_dish: a\n" + "# padding\n" * 10_000)
+def test_oversized_file_is_reported_not_read(quiz):
+    results, problems = quiz("ch06", "bearing_near_dish: a\n" + "# padding\n" * 10_000)
     assert any("bytes" in p for p in problems)
     assert all(r.message == "not answered yet" for r in results.values())
 
 
-def test_bytes_that_are_not_utf8_cost_only_their_answer(tmp_path):
+def test_bytes_that_are_not_utf8_cost_only_their_answer(quiz):
     text = f"bearing_near_dish: {RIGHT_CHOICE}\ndbearing_dx: \xff\xfe\nH_facts: {RIGHT_FACTS}\n"
-    results, _ = _grade(tmp_path, "ch06", text.encode("latin-1"))
+    results, _ = quiz("ch06", text.encode("latin-1"))
     assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
     assert "line 2, question dbearing_dx" in results["dbearing_dx"].message
     assert "ASCII" in results["dbearing_dx"].message
 
 
-def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(tmp_path):
+def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(quiz, tmp_path):
     text = "\n".join([
         "bearing_near_dish: \"__import__('os').system('touch pwned')\"",
         "H_at_point: \"[[x.__class__, 1], [1, 1]]\"",
@@ -213,20 +201,20 @@ def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(tmp_path):
         f"bearing_variance: \"{'9' * 10_000}\"",
         "H_facts: \"a, b, c, d, e\"",
     ]) + "\n"
-    started = time.perf_counter()
-    results, _ = _grade(tmp_path, "ch06", text)
-    assert time.perf_counter() - started < 2.0
+    with CpuTime() as work:
+        results, _ = quiz("ch06", text)
+    assert work.seconds < 2.0
     assert all(r.status == Status.FAIL and r.points == 0 for r in results.values())
     for qid in ("bearing_near_dish", "H_at_point", "dbearing_dx", "bearing_variance"):
         assert "exercises/answers/ch06.yaml, line" in results[qid].message and qid in results[qid].message
     assert not (tmp_path / "pwned").exists() and not Path("pwned").exists()
 
 
-def test_got_is_the_answer_as_written_and_expected_only_when_right(tmp_path):
-    question = _question("ch06", "H_at_point")
+def test_got_is_the_answer_as_written_and_expected_only_when_right(quiz):
+    question = question_of("ch06", "H_at_point")
     right = bank.keys("ch06")["H_at_point"].value_for("ch06", question.values_for("alice", "ch06"))
     written = json.dumps(right.round(6).tolist())
-    results, _ = _grade(tmp_path, "ch06", f"H_at_point: {written}\ndbearing_dx: -y/rho\n")
+    results, _ = quiz("ch06", f"H_at_point: {written}\ndbearing_dx: -y/rho\n")
     assert results["H_at_point"].got == written and results["H_at_point"].expected is not None
     assert results["dbearing_dx"].got == "-y/rho" and results["dbearing_dx"].expected is None
     assert "unknown name 'rho'" in results["dbearing_dx"].message
@@ -235,12 +223,12 @@ def test_got_is_the_answer_as_written_and_expected_only_when_right(tmp_path):
 # ------------------------------------------------------------------------ per-learner numbers
 
 def test_learner_numbers_are_pinned_and_the_same_in_a_fresh_interpreter():
-    question = _question("ch06", "H_at_point")
+    question = question_of("ch06", "H_at_point")
     here = {learner: question.values_for(learner, "ch06") for learner in ("alice", "bob", "reference")}
     code = ("import json; from grader.quiz import bank; q = [q for q in bank.questions('ch06') "
             "if q.id == 'H_at_point'][0]; print(json.dumps({l: q.values_for(l, 'ch06') "
             "for l in ('alice', 'bob', 'reference')}))")
-    env = dict(os.environ, PYTHONHASHSEED="12345", PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    env = dict(os.environ, PYTHONHASHSEED="12345", PYTHONPATH=str(REPO))
     there = json.loads(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                                       check=True, env=env).stdout)
     assert here == there
@@ -265,7 +253,7 @@ def test_cli_names_the_learner_and_its_source(tmp_path):
     root = tmp_path / "project"
     answers = root / "exercises" / "answers"
     answers.mkdir(parents=True)
-    shutil.copytree(Path(__file__).resolve().parents[1] / "exercises", root / "exercises", dirs_exist_ok=True,
+    shutil.copytree(REPO / "exercises", root / "exercises", dirs_exist_ok=True,
                     ignore=shutil.ignore_patterns("__pycache__"))
     (answers / "learner.yaml").write_text("learner: carol\n")
     runner = CliRunner()
@@ -274,7 +262,7 @@ def test_cli_names_the_learner_and_its_source(tmp_path):
     assert "carol (from exercises/answers/learner.yaml)" in result.output.splitlines()[0]
     assert "error" not in result.output.lower()
     result = runner.invoke(main, ["quiz", "ch06", "--submission", str(root), "--learner", "dave", "--show"])
-    numbers = _question("ch06", "H_at_point").values_for("dave", "ch06")
+    numbers = question_of("ch06", "H_at_point").values_for("dave", "ch06")
     assert "dave (from --learner)" in result.output and f"({numbers['x']:g}, {numbers['y']:g})" in result.output
 
 

@@ -9,12 +9,12 @@ import re
 from collections import Counter
 
 import pytest
-from test_quiz import _grade, run_grade
 
 from grader.chapters import CHAPTERS
-from grader.model import Status
+from grader.model import Status, rounded_points
 from grader.quiz import bank
 from grader.quiz.templates import template
+from tests.support import run_grade
 
 CHOICES = [(c.id, q) for c in CHAPTERS for q in bank.questions(c.id) if q.kind == "choice"]
 LETTERED = [(c.id, q) for c in CHAPTERS for q in bank.questions(c.id) if q.options]
@@ -57,11 +57,11 @@ def test_the_option_order_is_pinned_to_its_own_sha256_seed():
 
 
 @pytest.mark.parametrize("chapter, question", CHOICES, ids=lambda v: getattr(v, "id", v))
-def test_a_shown_letter_is_graded_as_the_option_it_labels_with_that_options_feedback(tmp_path, chapter, question):
+def test_a_shown_letter_is_graded_as_the_option_it_labels_with_that_options_feedback(quiz, chapter, question):
     key = bank.keys(chapter)[question.id]
     learner = next(who for who in LEARNERS if _letter_of(question, chapter, who)[key.answer] != key.answer)
     for shown, canonical in question.lettering(learner, chapter).items():
-        results, problems = _grade(tmp_path, chapter, f"{question.id}: {shown}\n", learner=learner)
+        results, problems = quiz(chapter, f"{question.id}: {shown}\n", learner=learner)
         result = results[question.id]
         assert not problems
         if canonical == key.answer:
@@ -70,11 +70,11 @@ def test_a_shown_letter_is_graded_as_the_option_it_labels_with_that_options_feed
         else:
             assert result.status == Status.FAIL and result.points == 0
             assert result.message == key.feedback[canonical] and result.expected is None
-    results, _ = _grade(tmp_path, chapter, f"{question.id}: {key.answer}\n", learner=learner)
+    results, _ = quiz(chapter, f"{question.id}: {key.answer}\n", learner=learner)
     assert results[question.id].status == Status.FAIL  # the bank's letter is not this learner's
 
 
-def test_multi_select_reads_the_learners_letters_and_names_wrong_picks_by_them(tmp_path):
+def test_multi_select_reads_the_learners_letters_and_names_wrong_picks_by_them(quiz):
     question = next(q for q in bank.questions("ch06") if q.id == "H_facts")
     key = bank.keys("ch06")["H_facts"]
     learner = next(who for who in LEARNERS
@@ -82,12 +82,12 @@ def test_multi_select_reads_the_learners_letters_and_names_wrong_picks_by_them(t
     letter_of = _letter_of(question, "ch06", learner)
     right = [letter_of[c] for c in key.answer]
     wrong = letter_of["d"]
-    results, _ = _grade(tmp_path, "ch06", f"H_facts: {', '.join(right)}\n", learner=learner)
+    results, _ = quiz("ch06", f"H_facts: {', '.join(right)}\n", learner=learner)
     assert results["H_facts"].status == Status.PASS and results["H_facts"].expected == sorted(right)
-    results, _ = _grade(tmp_path, "ch06", f"H_facts: {right[0]}, {right[1]}, {wrong}\n", learner=learner)
-    assert results["H_facts"].points == pytest.approx(1 / 3)
+    results, _ = quiz("ch06", f"H_facts: {right[0]}, {right[1]}, {wrong}\n", learner=learner)
+    assert results["H_facts"].points == rounded_points(1 / 3)  # rounded once, where set
     assert f"{wrong}) {key.feedback['d']}" in results["H_facts"].message
-    results, _ = _grade(tmp_path, "ch06", f"H_facts: {', '.join(key.answer)}\n", learner=learner)
+    results, _ = quiz("ch06", f"H_facts: {', '.join(key.answer)}\n", learner=learner)
     assert results["H_facts"].status == Status.FAIL  # the bank's letters are not this learner's
 
 

@@ -13,12 +13,12 @@ import shutil
 
 import pytest
 import yaml
-from test_quiz import REPO, run_grade
 
 from grader.model import Status
-from grader.quiz import bank, grade_quiz
+from grader.quiz import bank
 from grader.quiz.judge import right_answer
 from grader.quiz.symbolic import AnswerError, check_text, equivalent, substitute
+from tests.support import REPO, run_grade
 
 # chapter -> (question, a right answer written unlike the key, the lesson's own derivative, its mistake's name);
 # {name} stands for the learner's number of that parameter
@@ -47,13 +47,9 @@ def _written(template: str, values: dict[str, float]) -> str:
     return template.format(**{name: f"{value:g}" for name, value in values.items()})
 
 
-def _grade(tmp_path, chapter: str, text: str, learner: str, quiz_dir=None):
-    folder = tmp_path / "answers"
-    folder.mkdir(exist_ok=True)
-    (folder / f"{chapter}.yaml").write_text(f'{DERIVATIONS[chapter][0]}: "{text}"\n', encoding="utf-8")
-    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers", quiz_dir=quiz_dir)
-    assert not problems
-    return next(r for r in results if r.function == DERIVATIONS[chapter][0])
+def _derivation(quiz, chapter: str, text: str, learner: str, quiz_dir=None):
+    """The result of the chapter's derivation question answered with `text` (quoted)."""
+    return quiz.one(chapter, DERIVATIONS[chapter][0], f'"{text}"', learner, quiz_dir=quiz_dir)
 
 
 @pytest.mark.parametrize("chapter", CHAPTERS)
@@ -92,27 +88,27 @@ def test_two_learners_see_different_maps_in_every_derivative_chapter():
 
 
 @pytest.mark.parametrize("chapter", CHAPTERS)
-def test_a_right_answer_in_another_form_is_right_for_its_learner_and_wrong_for_another(tmp_path, chapter):
+def test_a_right_answer_in_another_form_is_right_for_its_learner_and_wrong_for_another(quiz, chapter):
     question, right = _question(chapter), DERIVATIONS[chapter][1]
     alice, bob = question.values_for("alice", chapter), question.values_for("bob", chapter)
     assert alice != bob
     for learner, values, other in (("alice", alice, "bob"), ("bob", bob, "alice")):
         text = _written(right, values)
-        result = _grade(tmp_path, chapter, text, learner)
+        result = _derivation(quiz, chapter, text, learner)
         assert result.status == Status.PASS and result.points == result.max_points == question.points, result.message
         key = bank.keys(chapter)[question.id]
         assert result.expected == right_answer(question, key, key.value_for(chapter, values), values)
         assert not set(question.params) & set(re.findall(r"[A-Za-z_]\w*", result.expected))  # numbers, not names
-        result = _grade(tmp_path, chapter, text, other)
+        result = _derivation(quiz, chapter, text, other)
         assert result.status == Status.FAIL and result.points == 0 and result.expected is None, result.message
 
 
 @pytest.mark.parametrize("chapter", CHAPTERS)
-def test_the_lessons_own_derivative_is_named_for_every_learner(tmp_path, chapter):
+def test_the_lessons_own_derivative_is_named_for_every_learner(quiz, chapter):
     question, lesson, name = _question(chapter), DERIVATIONS[chapter][2], DERIVATIONS[chapter][3]
     feedback = next(w["feedback"] for w in bank.keys(chapter)[question.id].wrong if w["name"] == name)
     for learner in LEARNERS:
-        result = _grade(tmp_path, chapter, _written(lesson, question.values_for(learner, chapter)), learner)
+        result = _derivation(quiz, chapter, _written(lesson, question.values_for(learner, chapter)), learner)
         assert (result.status, result.points, result.mistake) == (Status.FAIL, 0, name), (learner, result.message)
         assert result.message.splitlines()[0] == feedback
 
@@ -139,12 +135,12 @@ def test_the_cli_names_the_lessons_derivative_and_passes_the_learners_own(tmp_pa
 
 
 @pytest.mark.parametrize("chapter", CHAPTERS)
-def test_the_reference_answers_are_right_for_the_reference_learner_only(tmp_path, chapter):
+def test_the_reference_answers_are_right_for_the_reference_learner_only(quiz, chapter):
     """solutions/answers/ holds the key with the numbers of learner `reference`."""
     qid = DERIVATIONS[chapter][0]
     stored = yaml.safe_load((REPO / "solutions" / "answers" / f"{chapter}.yaml").read_text(encoding="utf-8"))[qid]
-    assert _grade(tmp_path, chapter, stored, "reference").status == Status.PASS
-    assert _grade(tmp_path, chapter, stored, "alice").status == Status.FAIL
+    assert _derivation(quiz, chapter, stored, "reference").status == Status.PASS
+    assert _derivation(quiz, chapter, stored, "alice").status == Status.FAIL
 
 
 @pytest.fixture
@@ -163,17 +159,17 @@ def handouts(tmp_path):
 
 
 @pytest.mark.parametrize("chapter", CHAPTERS)
-def test_a_handout_records_the_derivation_whatever_its_feedback(tmp_path, handouts, chapter):
+def test_a_handout_records_the_derivation_whatever_its_feedback(quiz, handouts, chapter):
     question, right = _question(chapter), DERIVATIONS[chapter][1]
     values = question.values_for("alice", chapter)
     for quiz_dir in handouts:
         shipped = "\n".join(p.read_text(encoding="utf-8") for p in quiz_dir.rglob("*.yaml"))
         assert str(bank.keys(chapter)[question.id].answer) not in shipped
         for text in (_written(right, values), _written(DERIVATIONS[chapter][2], values)):
-            result = _grade(tmp_path, chapter, text, "alice", quiz_dir=quiz_dir)
+            result = _derivation(quiz, chapter, text, "alice", quiz_dir=quiz_dir)
             assert (result.status, result.points, result.expected, result.mistake) == \
                 (Status.RECORDED, 0, None, ""), (quiz_dir.name, result.message)
-        assert _grade(tmp_path, chapter, "x^", "alice", quiz_dir=quiz_dir).status == Status.FAIL  # still read
+        assert _derivation(quiz, chapter, "x^", "alice", quiz_dir=quiz_dir).status == Status.FAIL  # still read
 
 
 def test_substitute_puts_the_numbers_in_and_reads_back_in_the_symbols_alone():

@@ -8,12 +8,12 @@ import shutil
 
 import pytest
 import yaml
-from test_quiz import run_grade
 
 from grader.chapters import CHAPTERS
 from grader.model import Status
 from grader.quiz import bank, grade_quiz
 from grader.quiz.templates import reference_answers
+from tests.support import run_grade
 
 ALL = [c.id for c in CHAPTERS]
 

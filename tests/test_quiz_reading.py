@@ -11,23 +11,12 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 import pytest
-from test_quiz import REPO, run_grade
 
 from grader.model import Status
-from grader.quiz import grade_quiz
 from grader.quiz.symbolic import AnswerError, check_text, normalize, parse
-
-
-def _grade(tmp_path, chapter, lines, learner="alice"):
-    folder = tmp_path / "answers"
-    folder.mkdir(exist_ok=True)
-    (folder / f"{chapter}.yaml").write_text(lines, encoding="utf-8")
-    results, problems = grade_quiz(chapter, folder, learner, "exercises/answers")
-    return {r.function: r for r in results}, problems
-
+from tests.support import REPO, CpuTime, question_of, right_value, run_grade
 
 # (chapter, question, the right answer as people type it)
 TYPED_RIGHT = [
@@ -70,15 +59,15 @@ DERIVED_RIGHT = [
 
 
 @pytest.mark.parametrize("chapter, question, text", TYPED_RIGHT + DERIVED_RIGHT)
-def test_right_answers_as_people_type_them_pass(tmp_path, chapter, question, text):
-    results, problems = _grade(tmp_path, chapter, f"{question}: {text}\n")
+def test_right_answers_as_people_type_them_pass(quiz, chapter, question, text):
+    results, problems = quiz(chapter, f"{question}: {text}\n")
     assert not problems
     assert results[question].status == Status.PASS, results[question].message
     assert results[question].got == text
 
 
-def test_a_derived_symbol_is_only_where_the_question_defines_it(tmp_path):
-    results, _ = _grade(tmp_path, "ch02", "partial_x: 2x r\n")
+def test_a_derived_symbol_is_only_where_the_question_defines_it(quiz):
+    results, _ = quiz("ch02", "partial_x: 2x r\n")
     assert results["partial_x"].status == Status.FAIL
     assert "unknown name 'r' (symbols allowed here: x, y)" in results["partial_x"].message
 
@@ -110,10 +99,10 @@ REFUSED = [
 
 
 @pytest.mark.parametrize("text, says", REFUSED)
-def test_what_cannot_be_read_says_how_to_write_it(tmp_path, text, says):
-    started = time.perf_counter()
-    results, problems = _grade(tmp_path, "ch02", f"gradient_at_point: a\npartial_x: \"{text}\"\n")
-    assert time.perf_counter() - started < 1.0
+def test_what_cannot_be_read_says_how_to_write_it(quiz, text, says):
+    with CpuTime() as work:
+        results, problems = quiz("ch02", f"gradient_at_point: a\npartial_x: \"{text}\"\n")
+    assert work.seconds < 1.0  # read and refused: milliseconds of this process's CPU
     result = results["partial_x"]
     assert result.status == Status.FAIL and result.points == 0
     assert result.message.startswith("exercises/answers/ch02.yaml, line 2, question partial_x: ")
@@ -133,30 +122,27 @@ def test_implicit_products_never_make_a_call_or_a_name_the_whitelist_refuses():
         assert says in str(info.value), (hostile, str(info.value))
 
 
-def test_an_unquoted_leading_minus_that_yaml_reads_as_a_list_says_to_quote_it(tmp_path):
+def test_an_unquoted_leading_minus_that_yaml_reads_as_a_list_says_to_quote_it(quiz):
     block = "dbearing_dx:\n  - y/(x^2 + y^2)\nbearing_variance:\n  - 0.25\n"
-    results, _ = _grade(tmp_path, "ch06", block)
+    results, _ = quiz("ch06", block)
     assert results["dbearing_dx"].message == (
         "exercises/answers/ch06.yaml, line 1, question dbearing_dx: YAML reads an answer that starts with '- ' as a "
         "list: put it in quotes, e.g. dbearing_dx: \"- y/(x^2 + y^2)\"")
     assert results["bearing_variance"].message.endswith("e.g. bearing_variance: \"- 0.25\"")
     same_line = "bearing_variance: 0.25\ndbearing_dx: - y/(x^2 + y^2)\n"
-    results, problems = _grade(tmp_path, "ch06", same_line)
+    results, problems = quiz("ch06", same_line)
     assert results["dbearing_dx"].message == (
         "exercises/answers/ch06.yaml, line 2, question dbearing_dx: YAML reads an answer that starts with '- ' as a "
         "list: put it in quotes, e.g. dbearing_dx: \"- y/(x^2 + y^2)\"")
     assert results["bearing_variance"].status == Status.FAIL and "tolerance" in results["bearing_variance"].message
     quoted = "dbearing_dx: \"- y/(x^2 + y^2)\"\n"
-    results, _ = _grade(tmp_path, "ch06", quoted)
+    results, _ = quiz("ch06", quoted)
     assert results["dbearing_dx"].status == Status.PASS
 
 
-def test_a_block_list_is_still_a_vector(tmp_path):
-    from test_quiz import _right, bank
-
-    question = next(q for q in bank.questions("ch02") if q.id == "bowl_gradient")
-    gx, gy = _right("ch02", question)
-    results, _ = _grade(tmp_path, "ch02", f"bowl_gradient:\n  - {gx}\n  - {gy}\n")
+def test_a_block_list_is_still_a_vector(quiz):
+    gx, gy = right_value("ch02", question_of("ch02", "bowl_gradient"))
+    results, _ = quiz("ch02", f"bowl_gradient:\n  - {gx}\n  - {gy}\n")
     assert results["bowl_gradient"].status == Status.PASS
 
 
@@ -186,6 +172,7 @@ def test_cli_grades_an_implicit_product_and_a_unicode_answer(tmp_path):
     assert checks["partial_x"]["status"] == "pass" and checks["dbearing_dx"]["status"] == "pass", proc.stdout
 
 
+@pytest.mark.slow
 def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path, monkeypatch):
     """Answer files are composed by libyaml where their nesting is provably shallow: the same answers, lines
     and source texts as the pure-Python loader gives, Unicode before them included; a deeply nested file goes

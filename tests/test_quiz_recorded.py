@@ -6,16 +6,15 @@ answered yet. Driven through real answer files and, where it matters, the real C
 from __future__ import annotations
 
 import json
-import shutil
 
 import pytest
 import yaml
-from test_quiz import run_grade
 
 from grader import expected
 from grader.model import ChapterResult, Status
-from grader.quiz import RECORDED_MESSAGE, bank, grade_quiz
+from grader.quiz import RECORDED_MESSAGE, bank
 from grader.quiz.templates import template
+from tests.support import run_grade
 
 SHOWN = "exercises/answers/ch06.yaml"
 # well-formed answers of every kind, right or wrong: nothing here says which
@@ -29,33 +28,15 @@ WELL_FORMED = {
 }
 
 
-@pytest.fixture
-def handout(tmp_path):
-    """A copy of the question banks without keys/, as a handout with quiz_feedback: recorded ships them."""
-    quiz_dir = tmp_path / "quizzes"
-    quiz_dir.mkdir()
-    for path in bank.QUIZ_DIR.glob("ch*.yaml"):
-        shutil.copy(path, quiz_dir / path.name)
-    return quiz_dir
+def _file(answers: dict[str, str]) -> str:
+    """An answer file holding `answers` ({question id: answer as written}), in that order."""
+    return "".join(f"{qid}: {text}\n" for qid, text in answers.items())
 
 
-def _answers(tmp_path, answers: dict[str, str]):
-    folder = tmp_path / "exercises" / "answers"
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "ch06.yaml").write_text("".join(f"{qid}: {text}\n" for qid, text in answers.items()))
-    return folder
-
-
-def _grade(tmp_path, answers, quiz_dir, learner="alice"):
-    results, problems = grade_quiz("ch06", _answers(tmp_path, answers), learner, "exercises/answers",
-                                   quiz_dir=quiz_dir)
-    return {r.function: r for r in results}, problems
-
-
-def test_well_formed_answers_are_recorded_with_their_points_pending(tmp_path, handout):
-    results, problems = _grade(tmp_path, WELL_FORMED, handout)
+def test_well_formed_answers_are_recorded_with_their_points_pending(quiz, keyless_banks):
+    results, problems = quiz("ch06", _file(WELL_FORMED), quiz_dir=keyless_banks)
     assert problems == []  # no chapter-level "keys not installed" problem: the results say it
-    for question in bank.questions("ch06", handout):
+    for question in bank.questions("ch06", keyless_banks):
         result = results[question.id]
         assert (result.status, result.points, result.max_points, result.message) == \
             (Status.RECORDED, 0, question.points, RECORDED_MESSAGE), question.id
@@ -83,9 +64,9 @@ def test_well_formed_answers_are_recorded_with_their_points_pending(tmp_path, ha
     ("dbearing_dx", "\"__import__('os')\"", "only these functions may be called"),
     ("dbearing_dx", "x^y", "an exponent must be a number"),
 ])
-def test_ill_formed_answers_fail_with_file_line_question_and_reason(tmp_path, handout, qid, answer, reason):
+def test_ill_formed_answers_fail_with_file_line_question_and_reason(quiz, keyless_banks, qid, answer, reason):
     answers = dict(WELL_FORMED, **{qid: answer})
-    results, _ = _grade(tmp_path, answers, handout)
+    results, _ = quiz("ch06", _file(answers), quiz_dir=keyless_banks)
     line = list(answers).index(qid) + 1
     result = results[qid]
     assert result.status == Status.FAIL and result.points == 0 and result.max_points > 0
@@ -93,37 +74,36 @@ def test_ill_formed_answers_fail_with_file_line_question_and_reason(tmp_path, ha
     assert all(r.status == Status.RECORDED for q, r in results.items() if q != qid)
 
 
-def test_unanswered_questions_stay_not_answered_yet(tmp_path, handout):
-    folder = _answers(tmp_path, {})
-    (folder / "ch06.yaml").write_text(template("ch06"))
-    results, problems = grade_quiz("ch06", folder, "alice", "exercises/answers", quiz_dir=handout)
+def test_unanswered_questions_stay_not_answered_yet(quiz, keyless_banks):
+    results, problems = quiz("ch06", template("ch06"), quiz_dir=keyless_banks)
     assert not problems
-    assert results and all(r.status == Status.FAIL and r.message == "not answered yet" for r in results)
+    assert results and all(r.status == Status.FAIL and r.message == "not answered yet" for r in results.values())
 
 
-def test_letters_are_checked_against_the_learners_own_letters(tmp_path, handout):
+def test_letters_are_checked_against_the_learners_own_letters(quiz, keyless_banks):
     question = next(q for q in bank.questions("ch06") if q.id == "bearing_near_dish")
     assert set(question.lettering("alice", "ch06")) == {"a", "b", "c", "d", "e"}
-    results, _ = _grade(tmp_path, {"bearing_near_dish": "f"}, handout)
+    results, _ = quiz("ch06", _file({"bearing_near_dish": "f"}), quiz_dir=keyless_banks)
     assert "choose from a, b, c, d, e" in results["bearing_near_dish"].message
 
 
-def test_a_question_missing_from_the_keys_is_recorded_the_others_judged(tmp_path, handout):
-    (handout / "keys").mkdir()
+def test_a_question_missing_from_the_keys_is_recorded_the_others_judged(quiz, keyless_banks):
+    (keyless_banks / "keys").mkdir()
     full = yaml.safe_load((bank.QUIZ_DIR / "keys" / "ch06.yaml").read_text())
-    (handout / "keys" / "ch06.yaml").write_text(yaml.safe_dump({"dbearing_dx": full["dbearing_dx"]}))
-    results, problems = _grade(tmp_path, dict(WELL_FORMED, dbearing_dx="-y/(y^2 + x^2)"), handout)
+    (keyless_banks / "keys" / "ch06.yaml").write_text(yaml.safe_dump({"dbearing_dx": full["dbearing_dx"]}))
+    results, problems = quiz("ch06", _file(dict(WELL_FORMED, dbearing_dx="-y/(y^2 + x^2)")),
+                             quiz_dir=keyless_banks)
     assert not problems
     assert results["dbearing_dx"].status == Status.PASS and results["dbearing_dx"].points == 2
     assert {q for q, r in results.items() if r.status == Status.RECORDED} == set(WELL_FORMED) - {"dbearing_dx"}
 
 
-def test_a_key_the_references_cannot_compute_here_is_recorded(tmp_path, monkeypatch):
+def test_a_key_the_references_cannot_compute_here_is_recorded(quiz, monkeypatch):
     def not_installed(chapter, name):
         raise expected.ReferenceUnavailable(f"the reference {chapter}.{name} is not installed here")
 
     monkeypatch.setattr(expected, "reference_function", not_installed)
-    results, problems = _grade(tmp_path, dict(WELL_FORMED, dbearing_dx="x/(x^2 + y^2)"), None)
+    results, problems = quiz("ch06", _file(dict(WELL_FORMED, dbearing_dx="x/(x^2 + y^2)")), quiz_dir=None)
     assert not problems
     computed = {q.id for q in bank.questions("ch06") if bank.keys("ch06")[q.id].compute}
     assert computed == {"H_at_point", "bearing_variance"}
@@ -132,10 +112,10 @@ def test_a_key_the_references_cannot_compute_here_is_recorded(tmp_path, monkeypa
     assert results["dbearing_dx"].message.startswith("That is d bearing / d y")
 
 
-def test_cli_in_a_handout_without_keys_records_exits_zero_and_imports_no_sympy(tmp_path, handout):
-    _answers(tmp_path, WELL_FORMED)
+def test_cli_in_a_handout_without_keys_records_exits_zero_and_imports_no_sympy(quiz, tmp_path, keyless_banks):
+    quiz.write("ch06", _file(WELL_FORMED))
     proc = run_grade("quiz", "ch06", "--submission", tmp_path, "--learner", "alice", "--format", "json",
-                     quiz_dir=handout, flags=("-X", "importtime"))
+                     quiz_dir=keyless_banks, flags=("-X", "importtime"))
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "sympy" not in proc.stderr  # -X importtime lists every module imported
     assert "grader.quiz.judge" in proc.stderr  # ... and the answers were format-checked
@@ -147,10 +127,10 @@ def test_cli_in_a_handout_without_keys_records_exits_zero_and_imports_no_sympy(t
     assert data["pending_score"] == sum(q.points for q in bank.questions("ch06"))
 
 
-def test_cli_in_a_handout_without_keys_fails_an_ill_formed_answer(tmp_path, handout):
-    _answers(tmp_path, dict(WELL_FORMED, H_at_point="[[1, 2], [3]]"))
+def test_cli_in_a_handout_without_keys_fails_an_ill_formed_answer(quiz, tmp_path, keyless_banks):
+    quiz.write("ch06", _file(dict(WELL_FORMED, H_at_point="[[1, 2], [3]]")))
     proc = run_grade("quiz", "ch06", "--submission", tmp_path, "--learner", "alice", "--format", "json",
-                     quiz_dir=handout)
+                     quiz_dir=keyless_banks)
     assert proc.returncode == 1, proc.stdout + proc.stderr
     checks = {c["function"]: c for c in json.loads(proc.stdout)["chapters"][0]["checks"]}
     assert checks["H_at_point"]["status"] == "fail"

@@ -18,7 +18,13 @@ from pathlib import Path
 import pytest
 
 from grader import release
-from tests.conftest import REPO, build_submission, code_points, replace_function
+from tests.support import (
+    REPO,
+    build_submission,
+    code_points,
+    replace_function,
+    run_grade,
+)
 
 COURSE_SEED = 987654321
 HIDDEN = "ch06/H_rows_orthogonal"
@@ -32,16 +38,11 @@ def _readable_folder(prefix: str) -> Path:
     return folder
 
 
-def _project(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "grader", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=300)
-
-
 @pytest.fixture(scope="session")
 def handout():
     base = _readable_folder("handout-")
     (base / "course.yaml").write_text(COURSE, encoding="utf-8")
-    done = _project("release", str(base / "out"), "--course", str(base / "course.yaml"))
+    done = run_grade("release", str(base / "out"), "--course", str(base / "course.yaml"))
     assert done.returncode == 0, done.stderr
     assert "Checked: no reference code" in done.stdout
     yield base / "out"
@@ -89,15 +90,17 @@ def _code_checks(report: dict) -> dict:
 
 # ------------------------------------------------------------------------------ what the handout holds
 
+@pytest.mark.slow
 def test_the_handout_is_stubs_templates_a_wheel_and_a_readme(handout):
     names = sorted(p.relative_to(handout).as_posix() for p in handout.rglob("*") if p.is_file())
     assert "README.md" in names and len([n for n in names if n.endswith(".whl")]) == 1
     assert {n for n in names if n.startswith("exercises/ch")} == {f"exercises/{p.name}" for p in (REPO / "exercises").glob("ch*.py")}
     assert "exercises/answers/learner.yaml" in names and "exercises/answers/ch06.yaml" in names
     readme = (handout / "README.md").read_text(encoding="utf-8")
-    assert "pip install jacobians_grader-" in readme and "1 hidden check" in readme
+    assert 'pip install "jacobians_grader-' in readme and "1 hidden check" in readme
 
 
+@pytest.mark.slow
 def test_no_answer_in_any_file_or_wheel_member(handout):
     members = []
     for path in handout.rglob("*"):
@@ -115,6 +118,7 @@ def test_no_answer_in_any_file_or_wheel_member(handout):
     assert release.scan(handout) == []
 
 
+@pytest.mark.slow
 def test_the_scan_finds_a_planted_reference_and_key(tmp_path, handout):
     planted = tmp_path / "out"
     shutil.copytree(handout, planted)
@@ -130,13 +134,14 @@ def test_the_scan_finds_a_planted_reference_and_key(tmp_path, handout):
 def test_release_refuses_a_folder_that_is_not_empty(tmp_path):
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "keep.txt").write_text("mine", encoding="utf-8")
-    done = _project("release", str(tmp_path / "out"))
-    assert done.returncode == 1 and "is not empty" in done.stderr
+    done = run_grade("release", str(tmp_path / "out"))
+    assert done.returncode == 2 and "is not empty" in done.stderr  # a usage error
     assert (tmp_path / "out" / "keep.txt").read_text(encoding="utf-8") == "mine"
 
 
 # ------------------------------------------------------------------------------ a learner with the handout
 
+@pytest.mark.slow
 def test_a_learner_grades_the_stubs_in_an_empty_folder(handout, learner_grade, tmp_path):
     shutil.copytree(handout / "exercises", tmp_path / "exercises")
     listed = _learner(learner_grade, "list", cwd=tmp_path)
@@ -192,12 +197,13 @@ def _submissions(root: Path) -> dict[str, Path]:
     return {name: build_submission(root / name, files) for name, files in cases.items()}
 
 
+@pytest.mark.slow
 def test_the_installed_handout_grades_exactly_as_the_project(handout, learner_grade):
     base = _readable_folder("equivalence-")
     try:
         for name, submission in _submissions(base).items():
             subprocess.run(["chmod", "-R", "a+rX", str(base)], check=True)
-            mine = _project("all", "--submission", str(submission), "--format", "json", "--no-quiz")
+            mine = run_grade("all", "--submission", str(submission), "--format", "json", "--no-quiz")
             theirs = _learner(learner_grade, "all", "--submission", str(submission), "--format", "json", "--no-quiz",
                               cwd=submission)
             project, handed_out = _code_checks(json.loads(mine.stdout)), _code_checks(json.loads(theirs.stdout))
@@ -207,13 +213,14 @@ def test_the_installed_handout_grades_exactly_as_the_project(handout, learner_gr
             assert (ch06["hidden_checks"], ch06["hidden_points"]) == (1, 1), name
             if name == "right":
                 code = sum(c["code_score"] for c in json.loads(theirs.stdout)["chapters"])
-                assert code == json.loads(_project("all", "--solutions", "--format", "json", "--no-quiz").stdout)["score"] - 1
+                assert code == json.loads(run_grade("all", "--solutions", "--format", "json", "--no-quiz").stdout)["score"] - 1
                 assert "All public checks pass" in _learner(learner_grade, "all", "--submission", str(submission),
                                                             "--no-quiz", cwd=submission).stdout
     finally:
         shutil.rmtree(base, ignore_errors=True)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() != 0, reason="switching to an ordinary user needs root")
 def test_an_ordinary_user_grades_with_the_handout_as_root_does(handout, learner_grade):
     base = _readable_folder("ordinary-user-")
@@ -274,6 +281,7 @@ def measurement_covariance(x, y, sigma):
 '''
 
 
+@pytest.mark.slow
 def test_hard_coded_public_values_pass_at_home_and_fail_where_submissions_are_graded(handout, learner_grade, tmp_path):
     base = _readable_folder("hard-coded-")
     try:
@@ -287,7 +295,7 @@ def test_hard_coded_public_values_pass_at_home_and_fail_where_submissions_are_gr
         submissions.mkdir()
         shutil.copytree(submission / "exercises", submissions / "copycat" / "exercises")
         (tmp_path / "course.yaml").write_text(COURSE, encoding="utf-8")
-        done = _project("batch", str(submissions), "--out", str(tmp_path / "out"), "--chapters", "ch06",
+        done = run_grade("batch", str(submissions), "--out", str(tmp_path / "out"), "--chapters", "ch06",
                         "--course", str(tmp_path / "course.yaml"), "--no-html")
         assert done.returncode in (0, 1), done.stderr
         graded = json.loads((tmp_path / "out" / "copycat" / "report.json").read_text(encoding="utf-8"))
@@ -299,11 +307,12 @@ def test_hard_coded_public_values_pass_at_home_and_fail_where_submissions_are_gr
         shutil.rmtree(base, ignore_errors=True)
 
 
+@pytest.mark.slow
 def test_an_immediate_feedback_course_ships_practice_keys_of_fixed_questions_only(tmp_path):
     import yaml
 
     (tmp_path / "course.yaml").write_text("course: practice\nseed: 5\nquiz_feedback: immediate\n", encoding="utf-8")
-    done = _project("release", str(tmp_path / "out"), "--course", str(tmp_path / "course.yaml"))
+    done = run_grade("release", str(tmp_path / "out"), "--course", str(tmp_path / "course.yaml"))
     assert done.returncode == 0, done.stderr
     with zipfile.ZipFile(next((tmp_path / "out").glob("*.whl"))) as wheel:
         practice = {n: yaml.safe_load(wheel.read(n)) for n in wheel.namelist() if "/practice/" in n}
@@ -317,6 +326,7 @@ def test_an_immediate_feedback_course_ships_practice_keys_of_fixed_questions_onl
     assert release.scan(tmp_path / "out") == []  # practice keys are allowed; nothing else is
 
 
+@pytest.mark.slow
 def test_the_project_installs_from_its_wheel_and_grades_in_an_empty_folder(tmp_path):
     """The instructor's own install (`pip install .`, not editable): question banks and keys are package
     data, the references come along, so grade list, grade all and grade quiz --show work anywhere."""
@@ -334,7 +344,7 @@ def test_the_project_installs_from_its_wheel_and_grades_in_an_empty_folder(tmp_p
     shutil.copytree(REPO / "exercises", folder / "exercises")
     grade = venv / "bin" / "grade"
     assert _learner(grade, "list", cwd=folder).stdout.count("exercises/ch0") == 10
-    project = json.loads(_project("all", "--solutions", "--format", "json").stdout)
+    project = json.loads(run_grade("all", "--solutions", "--format", "json").stdout)
     stubs = _learner(grade, "all", "--format", "json", cwd=folder)
     assert json.loads(stubs.stdout)["max_score"] == project["max_score"]  # code and quiz: the banks are installed
     assert sum(c["quiz_max_score"] for c in json.loads(stubs.stdout)["chapters"]) > 0
@@ -346,6 +356,7 @@ def test_the_project_installs_from_its_wheel_and_grades_in_an_empty_folder(tmp_p
 
 # ------------------------------------------------------------------------------ grade submit from the handout
 
+@pytest.mark.slow
 def test_a_learner_submits_from_the_handout_and_batch_knows_the_handout(handout, learner_grade, tmp_path):
     base = _readable_folder("submit-")
     try:
@@ -367,7 +378,7 @@ def test_a_learner_submits_from_the_handout_and_batch_knows_the_handout(handout,
         (tmp_path / "course.yaml").write_text(COURSE, encoding="utf-8")
         for given, stale in ((str(handout), False), ("0.0.1+handout.000000000000", True)):
             out = tmp_path / f"out-{stale}"
-            done = _project("batch", str(submissions), "--out", str(out), "--chapters", "ch06", "--course",
+            done = run_grade("batch", str(submissions), "--out", str(out), "--chapters", "ch06", "--course",
                             str(tmp_path / "course.yaml"), "--no-html", "--handout", given)
             assert done.returncode == 0, done.stderr
             warnings = json.loads((out / "ann" / "report.json").read_text(encoding="utf-8"))["batch"]["warnings"]

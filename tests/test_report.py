@@ -2,30 +2,19 @@
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
-import subprocess
-import sys
 from html.parser import HTMLParser
-from pathlib import Path
 
 import pytest
 
 from grader.chapters import CHAPTERS
+from tests.support import grade_json
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-def _grade(repo_root: Path, args: list[str], out: Path) -> dict:
-    proc = subprocess.run([sys.executable, "-m", "grader", *args, "--format", "json", "--html", str(out)],
-                          cwd=repo_root, capture_output=True, text=True, timeout=300)
-    assert proc.returncode in (0, 1), proc.stderr[-2000:]
-    assert out.exists()
-    return json.loads(proc.stdout)
 
 
 @pytest.fixture(scope="module")
@@ -35,7 +24,7 @@ def reports(repo_root, tmp_path_factory) -> dict:
     out = {}
     for name, args in (("solutions", ["all", "--solutions"]), ("stubs", ["all", "--submission", str(repo_root)])):
         path = folder / f"{name}.html"
-        out[name] = (path, _grade(repo_root, args, path))
+        out[name] = (path, grade_json(*args, html=path, cwd=repo_root))
     return out
 
 
@@ -54,6 +43,7 @@ class _Images(HTMLParser):
             self.sections.append(attrs.get("id"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["solutions", "stubs"])
 def test_report_is_self_contained_and_complete(reports, name):
     path, data = reports[name]
@@ -71,6 +61,7 @@ def test_report_is_self_contained_and_complete(reports, name):
     assert f"{data['score']:g} / {data['max_score']:g}" in text
 
 
+@pytest.mark.slow
 def test_stub_report_shows_reference_plots_and_says_so(reports):
     text = reports["stubs"][0].read_text(encoding="utf-8")
     assert text.count("gave no usable value") >= len(CHAPTERS)
@@ -78,14 +69,14 @@ def test_stub_report_shows_reference_plots_and_says_so(reports):
 
 
 def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
-    from tests.conftest import build_submission, replace_function
+    from tests.support import build_submission, replace_function
 
     source = replace_function("ch06_measurement", "H_jacobian",
                               "def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n"
                               "    return np.array([[x / r, y / r], [y / r2, x / r2]])\n")
     root = build_submission(tmp_path / "sub", {"ch06_measurement": source})
     out = tmp_path / "r.html"
-    _grade(repo_root, ["ch06", "--submission", str(root)], out)
+    grade_json("ch06", "--submission", root, html=out, cwd=repo_root)
     text = out.read_text(encoding="utf-8")
     # marked by a cross and (for screen readers) a word as well as by colour
     assert '<td class="wrong">0.16<span aria-hidden="true"> \u2717</span><span class="sr-only"> (differs)</span></td>' in text
@@ -93,6 +84,7 @@ def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
     assert "H[1,0] = d bearing/d x: got 0.16, expected -0.16" in text
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
                     reason="Debian's chromium is not installed (apt-get install chromium)")
 @pytest.mark.parametrize("name", ["solutions", "stubs"])

@@ -5,6 +5,8 @@ never end or be too slow, never a bare "an endless loop?"."""
 
 from __future__ import annotations
 
+import pytest
+
 from grader.boundary import Limits
 from tests.support import build_submission, grade_checks, needs_jax, replace_function
 
@@ -46,6 +48,7 @@ def test_the_first_call_after_a_compiling_library_loaded_gets_the_imports_time(t
     assert all(c.status.value == "pass" for c in checks.values()), {k: c.message for k, c in checks.items()}
 
 
+@pytest.mark.slow
 @needs_jax
 def test_a_jitted_function_gets_its_compile_time_with_jax_itself(tmp_path):
     module = replace_function("ch06_measurement", "range_bearing", SLOW_FIRST)

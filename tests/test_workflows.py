@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from grader import classroom
-from tests.conftest import REPO
+from tests.support import REPO
 
 CI = REPO / ".github" / "workflows" / "ci.yml"
 ACTIONLINT = shutil.which("actionlint", path=os.pathsep.join([str(Path(sys.executable).parent),
