@@ -362,7 +362,8 @@ class FakeBwrap:
 
     def __init__(self, folder: Path, failing) -> None:
         assert REAL_BWRAP, "CI must have bubblewrap (.ci/run installs it)"
-        (folder / "bin").mkdir(parents=True)
+        self.bin = folder / "bin"
+        self.bin.mkdir(parents=True)
         self.counter, failing_file = folder / "calls", folder / "failing"
         failing_file.write_text("".join(f"{n}\n" for n in failing))
         script = folder / "bin" / "bwrap"
@@ -376,6 +377,73 @@ class FakeBwrap:
         return int(self.counter.read_text()) if self.counter.exists() else 0
 
 
+# ------------------------------------------------------------------------------------------- Gradescope
+
+SYSTEM_PATH = "/usr/bin:/bin:/usr/sbin:/sbin"  # Gradescope's image: the system's python3, as setup.sh finds it
+
+
+def unzip_with_modes(archive: Path, target: Path) -> None:
+    """Extract as `unzip` does: with each member's permission bits."""
+    import zipfile
+
+    with zipfile.ZipFile(archive) as opened:
+        for info in opened.infolist():
+            path = Path(opened.extract(info, target))
+            mode = (info.external_attr >> 16) & 0o777
+            if mode:
+                path.chmod(mode)
+
+
+class GradescopeLayout:
+    """Gradescope's layout under a temporary base, as Gradescope builds it: the zip `grade gradescope` made
+    for `course` unzipped into ROOT/source, setup.sh run there once as root with the system's python3, and
+    run_autograder copied to ROOT. `grade` puts a submission and its metadata where Gradescope puts them and
+    runs ROOT/run_autograder once. The base is world-readable, as /autograder is, so that learner code run as
+    an unprivileged user reaches the interpreter."""
+
+    def __init__(self, course: str, *options: str) -> None:
+        if shutil.which("python3", path=SYSTEM_PATH) is None or shutil.which("setpriv", path=SYSTEM_PATH) is None:
+            pytest.skip("no system python3 or setpriv (.ci/run installs them)")
+        import tempfile
+
+        self.base = Path(tempfile.mkdtemp(prefix="gradescope-"))
+        self.base.chmod(0o755)
+        (self.base / "course.yaml").write_text(course, encoding="utf-8")
+        self.archive = self.base / "autograder.zip"
+        built = run_grade("gradescope", self.archive, "--course", self.base / "course.yaml", *options)
+        assert built.returncode == 0, built.stderr
+        self.root = self.base / "autograder"
+        unzip_with_modes(self.archive, self.root / "source")
+        self.setup = subprocess.run(["bash", str(self.root / "source" / "setup.sh")], cwd=self.root / "source",
+                                    capture_output=True, text=True, timeout=900,
+                                    env={"PATH": SYSTEM_PATH, "HOME": str(self.base)})
+        assert self.setup.returncode == 0, self.setup.stdout[-3000:] + self.setup.stderr[-3000:]
+        shutil.copy2(self.root / "source" / "run_autograder", self.root / "run_autograder")
+
+    def grade(self, submission, metadata: dict | None, path: str = SYSTEM_PATH,
+              timeout: float = 600) -> tuple[dict, subprocess.CompletedProcess]:
+        """(results.json, the run) for `submission`: a dict of file names and texts, or a function that fills
+        the submission folder; no metadata file where `metadata` is None; PATH as given."""
+        for name in ("submission", "results"):
+            shutil.rmtree(self.root / name, ignore_errors=True)
+        (self.root / "submission").mkdir()
+        (self.root / "submission_metadata.json").unlink(missing_ok=True)
+        if callable(submission):
+            submission(self.root / "submission")
+        else:
+            for name, text in submission.items():
+                (self.root / "submission" / name).write_text(text, encoding="utf-8")
+        if metadata is not None:
+            (self.root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
+        run = subprocess.run([str(self.root / "run_autograder")], cwd=self.root, capture_output=True, text=True,
+                             timeout=timeout, env={"PATH": path})
+        results = json.loads((self.root / "results" / "results.json").read_bytes().decode("utf-8"))
+        return results, run
+
+    def close(self) -> None:
+        shutil.rmtree(self.base, ignore_errors=True)
+
+
 # ------------------------------------------------------------------------------------------- grade --watch
 
 RIGHT_H = "    return np.array([[x / r, y / r], [-y / r2, x / r2]])"
@@ -385,9 +453,9 @@ WRONG_H = "    return np.array([[x / r, y / r], [y / r2, x / r2]])"
 class Watching:
     """`grade ch06 --watch` (or `command`) running, its output lines read as they come."""
 
-    def __init__(self, root: Path, command: list[str] | None = None) -> None:
+    def __init__(self, root: Path, command: list[str] | None = None, env: dict | None = None) -> None:
         command = command or [sys.executable, "-m", "grader", "ch06", "--watch", "--no-quiz", "--submission", str(root)]
-        self.process = subprocess.Popen(command, cwd=REPO, stdout=subprocess.PIPE,
+        self.process = subprocess.Popen(command, cwd=REPO, env=env, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, encoding="utf-8")
         self.lines: queue.Queue = queue.Queue()
         self.reader = threading.Thread(target=self._read, daemon=True)

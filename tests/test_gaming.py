@@ -17,21 +17,25 @@ from __future__ import annotations
 import ast
 import json
 import re
-import shutil
 import subprocess
 import sys
-import tempfile
 import textwrap
-import zipfile
 from pathlib import Path
 
 import pytest
 
-from tests.support import REPO, CpuTime, build_submission, replace_function, run_grade
+from tests.support import (
+    REPO,
+    SYSTEM_PATH,
+    CpuTime,
+    GradescopeLayout,
+    build_submission,
+    replace_function,
+    run_grade,
+)
 
 COURSE = "course: gaming\nseed: 8675309\nquiz_feedback: recorded\n"
 FAILING_BWRAP = "#!/bin/sh\necho 'bwrap: No permissions to create new namespace' >&2\nexit 1\n"
-SYSTEM_PATH = "/usr/bin:/bin:/usr/sbin:/sbin"  # the system's python3: a dropped user can read its library
 
 # stubs that hand back the bundled references (the red team's 25 lines)
 FROM_REFERENCES = textwrap.dedent("""\
@@ -58,51 +62,22 @@ FROM_REFERENCES = textwrap.dedent("""\
     """)
 
 
-def _unzip(archive: Path, target: Path) -> None:
-    with zipfile.ZipFile(archive) as opened:
-        for info in opened.infolist():
-            path = Path(opened.extract(info, target))
-            mode = (info.external_attr >> 16) & 0o777
-            if mode:
-                path.chmod(mode)
-
-
 @pytest.fixture(scope="module")
-def gradescope(tmp_path_factory):
-    """ROOT of a Gradescope layout for ch06 (setup.sh run as Gradescope runs it, as root, with the system's
-    python3), a folder whose `bwrap` cannot start, and a function grading a submission there."""
-    if shutil.which("python3", path=SYSTEM_PATH) is None or shutil.which("setpriv", path=SYSTEM_PATH) is None:
-        pytest.skip("no system python3 or setpriv")
-    base = Path(tempfile.mkdtemp(prefix="gaming-"))
-    base.chmod(0o755)  # the unprivileged user must reach the venv, as in Gradescope's /autograder
-    (base / "course.yaml").write_text(COURSE, encoding="utf-8")
-    built = run_grade("gradescope", base / "autograder.zip", "--course", base / "course.yaml", "--chapters", "ch06")
-    assert built.returncode == 0, built.stderr
-    root = base / "autograder"
-    _unzip(base / "autograder.zip", root / "source")
-    setup = subprocess.run(["bash", str(root / "source" / "setup.sh")], cwd=root / "source", capture_output=True,
-                           text=True, timeout=900, env={"PATH": SYSTEM_PATH, "HOME": str(base)})
-    assert setup.returncode == 0, setup.stdout[-3000:] + setup.stderr[-3000:]
-    shutil.copy2(root / "source" / "run_autograder", root / "run_autograder")
-    fake = base / "fakebin"
+def gradescope():
+    """A function grading a submission in a Gradescope layout for ch06 (root, the system's python3), by default
+    with a `bwrap` that cannot start."""
+    layout = GradescopeLayout(COURSE, "--chapters", "ch06")
+    fake = layout.base / "fakebin"
     fake.mkdir()
     (fake / "bwrap").write_text(FAILING_BWRAP, encoding="utf-8")
     (fake / "bwrap").chmod(0o755)
 
     def grade(submission: dict[str, str], metadata: dict, bwrap_fails: bool = True) -> tuple[dict, str]:
-        for name in ("submission", "results"):
-            shutil.rmtree(root / name, ignore_errors=True)
-        (root / "submission").mkdir()
-        for name, text in submission.items():
-            (root / "submission" / name).write_text(text, encoding="utf-8")
-        (root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
-        path = f"{fake}:{SYSTEM_PATH}" if bwrap_fails else SYSTEM_PATH
-        run = subprocess.run([str(root / "run_autograder")], cwd=root, capture_output=True, text=True, timeout=600,
-                             env={"PATH": path})
-        return json.loads((root / "results" / "results.json").read_text(encoding="utf-8")), run.stdout
+        results, run = layout.grade(submission, metadata, path=f"{fake}:{SYSTEM_PATH}" if bwrap_fails else SYSTEM_PATH)
+        return results, run.stdout
 
     yield grade
-    shutil.rmtree(base, ignore_errors=True)
+    layout.close()
 
 
 def _metadata(submission_id: int | None = 4242, name: str = "Ann Lee") -> dict:

@@ -2,9 +2,10 @@
 temporary root: unzipped into ROOT/source as Gradescope does, setup.sh run for real (a fresh venv with the
 grader's wheel and its dependencies), run_autograder copied to ROOT and run once per submission, with
 ROOT/submission and ROOT/submission_metadata.json as Gradescope writes them. A right, a buggy, an empty
-and a hostile submission; bubblewrap that cannot start (grading goes on and says so, or with --sandbox
-required nothing is graded and the run says NOT GRADED). Every results.json is checked against the
-published schema."""
+and a hostile submission; bubblewrap that cannot start (grading goes on as an unprivileged user and says
+so, or with --sandbox required nothing is graded and the run says NOT GRADED); no metadata (NOT GRADED: no
+id). The layout is tests.support.GradescopeLayout's. Every results.json is checked against the published
+schema."""
 
 from __future__ import annotations
 
@@ -13,16 +14,18 @@ import json
 import os
 import shutil
 import subprocess
-import tempfile
 import zipfile
 from pathlib import Path
 
 import pytest
 
+from grader import gradescope
 from grader.render import lms
 from tests.support import (
     REAL_BWRAP,
+    SYSTEM_PATH,
     FakeBwrap,
+    GradescopeLayout,
     build_submission,
     hostile_module,
     replace_function,
@@ -39,52 +42,22 @@ WRONG_H = ("def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n
            "    return np.array([[x / r, y / r], [y / r2, x / r2]])\n")
 
 
-def _unzip(archive: Path, target: Path) -> None:
-    """Extract as `unzip` does: with each member's permission bits."""
-    with zipfile.ZipFile(archive) as opened:
-        for info in opened.infolist():
-            path = Path(opened.extract(info, target))
-            mode = (info.external_attr >> 16) & 0o777
-            if mode:
-                path.chmod(mode)
-
-
 @pytest.fixture(scope="module")
 def autograder():
-    """The zip as `grade gradescope` builds it, and ROOT after setup.sh ran in ROOT/source."""
-    base = Path(tempfile.mkdtemp(prefix="gradescope-"))
-    base.chmod(0o755)
-    try:
-        (base / "course.yaml").write_text(COURSE, encoding="utf-8")
-        built = run_grade("gradescope", base / "autograder.zip", "--course", base / "course.yaml")
-        assert built.returncode == 0, built.stderr
-        root = base / "autograder"
-        _unzip(base / "autograder.zip", root / "source")
-        setup = subprocess.run(["bash", str(root / "source" / "setup.sh")], cwd=root / "source", capture_output=True,
-                               text=True, timeout=600)
-        assert setup.returncode == 0, setup.stdout[-3000:] + setup.stderr[-3000:]
-        shutil.copy2(root / "source" / "run_autograder", root / "run_autograder")
-        yield base / "autograder.zip", root, setup
-    finally:
-        shutil.rmtree(base, ignore_errors=True)
+    """The layout after setup.sh ran (tests.support.GradescopeLayout), for every chapter of the course."""
+    layout = GradescopeLayout(COURSE)
+    yield layout
+    layout.close()
 
 
 def _validate(data: dict) -> None:
     jsonschema.Draft202012Validator(lms.schema("gradescope-results")).validate(data)
 
 
-def _grade(root: Path, make_submission, metadata: dict | None, env: dict | None = None) -> tuple[dict, subprocess.CompletedProcess]:
-    """Put a submission where Gradescope puts it, run ROOT/run_autograder; (results.json, the run)."""
-    for name in ("submission", "results"):
-        shutil.rmtree(root / name, ignore_errors=True)
-    (root / "submission").mkdir()
-    (root / "submission_metadata.json").unlink(missing_ok=True)
-    make_submission(root / "submission")
-    if metadata is not None:
-        (root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
-    run = subprocess.run([str(root / "run_autograder")], cwd=root, capture_output=True, text=True, timeout=300,
-                         env=env)
-    results = json.loads((root / "results" / "results.json").read_bytes().decode("utf-8"))
+def _grade(layout: GradescopeLayout, make_submission, metadata: dict | None,
+           path: str = SYSTEM_PATH) -> tuple[dict, subprocess.CompletedProcess]:
+    """results.json of one run of ROOT/run_autograder (validated against the published schema), and the run."""
+    results, run = layout.grade(make_submission, metadata, path=path, timeout=300)
     _validate(results)
     return results, run
 
@@ -116,7 +89,7 @@ def _tests(results: dict) -> dict[str, dict]:
 
 @pytest.mark.slow
 def test_the_zip_has_gradescopes_layout(autograder):
-    archive, root, setup = autograder
+    archive, root, setup = autograder.archive, autograder.root, autograder.setup
     with zipfile.ZipFile(archive) as opened:
         names = opened.namelist()
         modes = {i.filename: (i.external_attr >> 16) & 0o777 for i in opened.infolist()}
@@ -135,8 +108,7 @@ def test_the_zip_has_gradescopes_layout(autograder):
 
 @pytest.mark.slow
 def test_a_right_submission_gets_every_code_point_with_the_hidden_check_after_publishing(autograder):
-    _, root, _ = autograder
-    results, run = _grade(root, lambda s: _copy_right(s, "learner: ann+cs101@uni.edu\n"),
+    results, run = _grade(autograder, lambda s: _copy_right(s, "learner: ann+cs101@uni.edu\n"),
                           _metadata("ann+cs101@uni.edu"))
     assert run.returncode == 0, run.stdout + run.stderr
     tests = _tests(results)
@@ -150,17 +122,16 @@ def test_a_right_submission_gets_every_code_point_with_the_hidden_check_after_pu
     assert {t["tags"][0] for t in results["tests"]} == {f"ch0{n}" for n in range(10)}
     assert isinstance(results["execution_time"], (int, float)) and results["stdout_visibility"] == "hidden"
     assert results["output"].startswith("Graded as ann+cs101@uni.edu (the submitter's email in "
-                                        "submission_metadata.json), at the course seed.")
+                                        "submission_metadata.json), at a seed of this submission's own")
     assert "learner.yaml names" not in results["output"]  # learner.yaml agrees with Gradescope's id
     assert ("isolation: bubblewrap sandbox" if REAL_BWRAP else "isolation: no sandbox") in results["output"]
 
 
 @pytest.mark.slow
 def test_a_buggy_submission_gets_partial_points_errors_apart_and_its_learner_yaml_flagged(autograder, tmp_path):
-    _, root, _ = autograder
     broken = {"ch06_measurement": replace_function("ch06_measurement", "H_jacobian", WRONG_H),
               "ch03_jacobian": "def J(:\n"}  # a syntax error: ch03 cannot be graded
-    results, run = _grade(root, lambda s: _copy_right(s, "learner: bob\n", broken, flat=True),
+    results, run = _grade(autograder, lambda s: _copy_right(s, "learner: bob\n", broken, flat=True),
                           _metadata("bob@uni.edu"))
     assert run.returncode == 0, run.stdout + run.stderr
     tests = _tests(results)
@@ -174,19 +145,20 @@ def test_a_buggy_submission_gets_partial_points_errors_apart_and_its_learner_yam
     assert "error" in ch03[0]["tags"] and tests["ch03/chapter"]["number"] == "3.0"
     assert "could not be graded (status error" in results["output"]
     assert "learner.yaml names 'bob', but this submission is graded as 'bob@uni.edu'" in results["output"]
-    # the course seed: the random-input check fails with the very message `grade` gives at that seed
+    # the submission's own seed: the random-input check fails with the very message `grade` gives at that seed
+    seed = gradescope.submission_seed(COURSE_SEED, "bob@uni.edu", "123456")
     submission = build_submission(tmp_path / "same", broken)
-    project = run_grade("ch06", "--submission", submission, "--seed", COURSE_SEED, "--no-quiz", "--format", "json")
+    project = run_grade("ch06", "--submission", submission, "--seed", seed, "--no-quiz", "--format", "json")
     here = {c["id"]: c for c in json.loads(project.stdout)["chapters"][0]["checks"]}
     random_check = "H_jacobian_random_points"
     assert here[random_check]["status"] == "fail"
-    assert tests[f"ch06/{random_check}"]["output"] == here[random_check]["message"]
+    hint = here[random_check].get("help")
+    assert tests[f"ch06/{random_check}"]["output"] == here[random_check]["message"] + (f"\nhint: {hint}" if hint else "")
 
 
 @pytest.mark.slow
 def test_an_empty_submission_gets_score_0_and_says_why(autograder):
-    _, root, _ = autograder
-    results, run = _grade(root, lambda s: (s / "notes.txt").write_text("forgot the files\n"), _metadata("c@uni.edu"))
+    results, run = _grade(autograder, lambda s: (s / "notes.txt").write_text("forgot the files\n"), _metadata("c@uni.edu"))
     assert run.returncode == 0, run.stdout + run.stderr
     assert results["score"] == 0 and [t["name"] for t in results["tests"]] == ["submission"]
     assert "no chapter files" in results["output"] and "Submit your chapter files" in results["output"]
@@ -195,14 +167,14 @@ def test_an_empty_submission_gets_score_0_and_says_why(autograder):
 @pytest.mark.slow
 def test_a_hostile_submission_cannot_forge_results_or_read_the_course(autograder):
     """Learner code that writes results.json with a perfect score and reads the course config at import,
-    and raises and prints escape sequences; no submission metadata: the id is learner.yaml's."""
-    _, root, _ = autograder
+    and raises and prints escape sequences, and whose learner.yaml names someone else."""
+    root = autograder.root
     forge = (f"import json\ntry:\n    json.dump({{'score': 999, 'tests': []}}, "
              f"open({str(root / 'results' / 'results.json')!r}, 'w'))\nexcept OSError:\n    pass\n"
              f"try:\n    print(open({str(root / 'source' / 'course.yaml')!r}).read())\nexcept OSError:\n    pass\n")
-    results, run = _grade(root, lambda s: _copy_right(s, "learner: mallory\n",
-                                                      {"ch06_measurement": hostile_module() + "\n" + forge}),
-                          metadata=None)
+    results, run = _grade(autograder, lambda s: _copy_right(s, "learner: ann@uni.edu\n",
+                                                            {"ch06_measurement": hostile_module() + "\n" + forge}),
+                          _metadata("mallory@uni.edu"))
     assert run.returncode == 0, run.stdout + run.stderr
     text = (root / "results" / "results.json").read_text(encoding="utf-8")
     assert results["score"] != 999 and "\\u001b" not in text and "\\u009b" not in text
@@ -212,18 +184,27 @@ def test_a_hostile_submission_cannot_forge_results_or_read_the_course(autograder
     assert str(COURSE_SEED) not in results["output"]  # the provenance line names the course seed, never shows it
     tests = _tests(results)
     assert tests["ch06/H_worked_example"]["status"] == "failed"
-    assert results["output"].startswith("Graded as mallory (submission_metadata.json cannot be read")
+    assert results["output"].startswith("Graded as mallory@uni.edu")  # Gradescope's id, never learner.yaml's
+    assert "learner.yaml names 'ann@uni.edu'" in results["output"]
+
+
+@pytest.mark.slow
+def test_without_usable_metadata_nothing_is_graded(autograder):
+    """No submission_metadata.json: no id to grade as, so NOT GRADED for the instructor, never learner.yaml's."""
+    results, run = _grade(autograder, lambda s: _copy_right(s, "learner: mallory\n"), None)
+    assert run.returncode == 1 and results["score"] == 0
+    assert results["output"].startswith("NOT GRADED") and "no usable learner id" in results["output"]
 
 
 @pytest.mark.slow
 @needs_bwrap
-def test_where_bubblewrap_cannot_start_grading_goes_on_and_says_so(autograder, tmp_path):
-    _, root, _ = autograder
+def test_where_bubblewrap_cannot_start_grading_goes_on_as_an_unprivileged_user_and_says_so(autograder, tmp_path):
     fake = FakeBwrap(tmp_path / "fake", failing=range(1, 1000))
-    results, run = _grade(root, lambda s: _copy_right(s), _metadata("dan@uni.edu"), env=fake.env)
+    results, run = _grade(autograder, lambda s: _copy_right(s), _metadata("dan@uni.edu"),
+                          path=f"{fake.bin}:{SYSTEM_PATH}")
     assert run.returncode == 0, run.stdout + run.stderr
     assert fake.calls >= 1
-    assert "isolation: no sandbox: bubblewrap cannot run on this image" in results["output"]
+    assert "unprivileged user" in results["output"], results["output"]
     code = [t for t in results["tests"] if "code" in t["tags"]]
     assert code and all(t["status"] == "passed" for t in code)  # never zeros for the sandbox's sake
 
@@ -231,17 +212,17 @@ def test_where_bubblewrap_cannot_start_grading_goes_on_and_says_so(autograder, t
 @pytest.mark.slow
 @needs_bwrap
 def test_with_the_sandbox_required_and_not_starting_nothing_is_graded(autograder, tmp_path):
-    _, root, _ = autograder
-    settings_file = root / "source" / "autograder.json"
+    settings_file = autograder.root / "source" / "autograder.json"
     before = settings_file.read_text(encoding="utf-8")
     settings_file.write_text(json.dumps(dict(json.loads(before), sandbox="required")), encoding="utf-8")
     try:
         fake = FakeBwrap(tmp_path / "fake", failing=range(1, 1000))
-        results, run = _grade(root, lambda s: _copy_right(s), _metadata("eve@uni.edu"), env=fake.env)
+        results, run = _grade(autograder, lambda s: _copy_right(s), _metadata("eve@uni.edu"),
+                              path=f"{fake.bin}:{SYSTEM_PATH}")
     finally:
         settings_file.write_text(before, encoding="utf-8")
     assert run.returncode == 1
-    assert results["score"] == 0 and results["output"].startswith("Graded as eve@uni.edu")
+    assert results["score"] == 0 and results["output"].startswith("NOT GRADED")
     assert "NOT GRADED" in results["output"] and "This is not your grade" in results["output"]
     assert "fake failure" in results["extra_data"]["not_graded"]
 
@@ -255,7 +236,7 @@ def test_a_course_without_a_seed_builds_no_autograder(tmp_path):
 @pytest.mark.slow
 def test_a_failed_setup_still_writes_results_that_say_not_graded(autograder, tmp_path):
     """run_autograder on an image where setup.sh failed (no venv): results.json all the same."""
-    _, root, _ = autograder
+    root = autograder.root
     bare = tmp_path / "autograder"
     (bare / "source").mkdir(parents=True)
     shutil.copy2(root / "run_autograder", bare / "run_autograder")
