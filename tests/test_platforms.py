@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -95,7 +96,9 @@ def submissions(tmp_path_factory) -> dict[str, Path]:
 
 @pytest.fixture(scope="module")
 def linux(submissions) -> dict:
-    return {name: _verdicts("linux", root, "--no-sandbox") for name, root in submissions.items()}
+    with ThreadPoolExecutor(3) as each:  # side by side: the hostile one waits out its time limits
+        return dict(zip(submissions, each.map(lambda root: _verdicts("linux", root, "--no-sandbox"),
+                                              submissions.values())))
 
 
 # ------------------------------------------------------------------------------ the emulation itself
@@ -198,19 +201,18 @@ def test_html_report_one_function_and_the_quiz(route, submissions, tmp_path):
     assert shown.returncode == 0 and "H_at_point" in shown.stdout, shown.stderr[-2000:]
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("encoding", ["cp1252", "ascii"])
 def test_a_console_without_the_marks_gets_plain_text(encoding, submissions):
-    """Output redirected in a Windows code page: no UnicodeEncodeError, learner text shown as far as it can be."""
+    """Output redirected in a Windows code page: the marks the code page lacks are never written (a
+    UnicodeEncodeError would end the run with a traceback), nor escape sequences."""
     env = environment("windows", {"PATH": "/usr/bin:/bin", "PYTHONIOENCODING": encoding})
-    done = subprocess.run(grade_command("windows", "ch07", "ch06", "-v", "--submission", str(submissions["hostile"])),
+    done = subprocess.run(grade_command("windows", "ch07", "-v", "--submission", str(submissions["hostile"])),
                           cwd=REPO, capture_output=True, env=env, timeout=300)
     out = done.stdout.decode(encoding)
     assert done.returncode == 1, done.stderr.decode(encoding, "replace")[-3000:]
     assert "Traceback" not in done.stderr.decode(encoding, "replace")
-    assert "ch07 total" in out and "ch06 total" in out
+    assert "ch07 total" in out
     assert "\x1b" not in out
-    assert "✓" not in out
 
 
 @pytest.mark.slow
@@ -261,25 +263,36 @@ def test_percent_grade_twice_through_the_notebook_grading_process(route, submiss
     assert scores == [expected, expected], done.stdout[-2000:] + done.stderr[-3000:]
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("route", ROUTES)
-def test_batch_with_two_workers_gives_linuxs_gradebook(route, submissions, tmp_path):
-    """grade batch grades without bubblewrap only when told to (--no-sandbox), then exactly as on Linux."""
-    folder = tmp_path / "submissions"
+def _batch(where: str, folder: Path, out: Path, names) -> tuple[list[str], dict]:
+    """grade batch FOLDER with two workers and no sandbox on `where`: (the gradebook's rows without the grader's
+    version, each learner's per-check verdicts)."""
+    done = _run(where, "batch", str(folder), "--out", str(out), "--jobs", "2", "--no-sandbox", "--no-html")
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-3000:]
+    rows = (out / "gradebook.csv").read_text(encoding="utf-8").splitlines()
+    return ([",".join(r.split(",")[:-3]) for r in rows],
+            {n: _checks(json.loads((out / n / "report.json").read_text(encoding="utf-8"))) for n in names})
+
+
+@pytest.fixture(scope="module")
+def batch_folder(submissions, tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("batch") / "submissions"
     for name, root in submissions.items():
         shutil.copytree(root, folder / name)
-    refused = _run(route, "batch", str(folder), "--out", str(tmp_path / "refused"), "--jobs", "2")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def linux_batch(batch_folder, submissions, tmp_path_factory) -> tuple[list[str], dict]:
+    return _batch("linux", batch_folder, tmp_path_factory.mktemp("linux-batch") / "out", submissions)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("route", ROUTES)
+def test_batch_with_two_workers_gives_linuxs_gradebook(route, submissions, batch_folder, linux_batch, tmp_path):
+    """grade batch grades without bubblewrap only when told to (--no-sandbox), then exactly as on Linux."""
+    refused = _run(route, "batch", str(batch_folder), "--out", str(tmp_path / "refused"), "--jobs", "2")
     assert refused.returncode == 2 and "--no-sandbox" in refused.stderr, refused.stderr[-2000:]
-    outputs = {}
-    for where in (route, "linux"):
-        out = tmp_path / f"out-{where}"
-        done = _run(where, "batch", str(folder), "--out", str(out), "--jobs", "2", "--no-sandbox", "--no-html")
-        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-3000:]
-        rows = (out / "gradebook.csv").read_text(encoding="utf-8").splitlines()
-        outputs[where] = ([",".join(r.split(",")[:-3]) for r in rows],  # the grader's version aside
-                          {n: _checks(json.loads((out / n / "report.json").read_text(encoding="utf-8")))
-                           for n in submissions})
-    assert outputs[route] == outputs["linux"]
+    assert _batch(route, batch_folder, tmp_path / "out", submissions) == linux_batch
 
 
 def test_gradescope_says_who_learner_code_runs_as_without_uids(tmp_path):
