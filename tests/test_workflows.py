@@ -76,5 +76,5 @@ def test_ci_runs_the_readmes_test_command_on_three_systems_and_two_pythons():
     assert oldest in pythons and len(pythons) == 2
     script = job["steps"][-1]["run"]
     readme = (REPO / "README.md").read_text(encoding="utf-8")
-    for piece in ('pip install -e ".[test]"', "python -m pytest"):
+    for piece in ('pip install -e ".[test]"', "python -m pytest -n 2 --dist loadfile"):
         assert piece in script and piece in readme
