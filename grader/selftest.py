@@ -187,6 +187,17 @@ def check_quiz(chapters: list[str], seeds: list[int], watch: Watch, quiz_dir: Pa
     return drawn
 
 
+
+def _value_of(mistake, shape: tuple) -> np.ndarray | None:
+    """A mistake's value as a float array of `shape`; None where it has none, is not numbers or has another shape."""
+    if mistake.value is None:
+        return None
+    try:
+        value = np.asarray(mistake.value, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    return value if value.shape == shape else None
+
 def _draw_problems(chapter: str, question, key, values: dict[str, float], seed: int, watch: Watch,
                    item: str) -> list[str]:
     """What is wrong with one learner's draw of one question; every mistake weighed into `watch`."""
@@ -215,13 +226,8 @@ def _draw_problems(chapter: str, question, key, values: dict[str, float], seed: 
     for origin, candidates in (("known", known_mistakes(key, want, values)),
                                ("generic", generic(want, entries(question)))):
         for mistake in candidates:
-            if mistake.value is None:
-                continue
-            try:
-                value = np.asarray(mistake.value, dtype=float)
-            except (TypeError, ValueError):
-                continue
-            if value.shape != want.shape or not np.all(np.isfinite(value)):
+            value = _value_of(mistake, want.shape)
+            if value is None or not np.all(np.isfinite(value)):
                 continue
             watch.mistake(item, _identity(mistake), mistake.name, origin, seed,
                           apart=bool(np.any(np.abs(value - want) > limit)))
@@ -403,13 +409,8 @@ def _weighed(comparison, generated: bool = False) -> list[tuple[str, str, str, b
         candidates += [("generated", m) for m in slips(comparison.source)]
     out = []
     for origin, mistake in candidates:
-        if mistake.value is None:
-            continue
-        try:
-            value = np.asarray(mistake.value, dtype=float)
-        except (TypeError, ValueError):
-            continue
-        if value.shape != expected.shape:
+        value = _value_of(mistake, expected.shape)
+        if value is None:
             continue
         apart = not np.all(np.isfinite(value)) or bool(np.any(~(np.abs(value - expected) <= limit)))
         out.append((_identity(mistake), mistake.name, getattr(mistake, "origin", origin) or origin, apart))
