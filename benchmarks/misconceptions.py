@@ -28,7 +28,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.conftest import build_submission, replace_function  # noqa: E402
+from tests.support import build_submission, replace_function  # noqa: E402
 
 # (module, function, wrong source, the mistake name it should get)
 CODE = {

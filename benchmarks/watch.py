@@ -21,7 +21,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.conftest import build_submission  # noqa: E402
+from tests.support import build_submission  # noqa: E402
 
 RIGHT_H = "    return np.array([[x / r, y / r], [-y / r2, x / r2]])"
 WRONG_H = "    return np.array([[x / r, y / r], [y / r2, x / r2]])"

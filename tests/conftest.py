@@ -18,19 +18,7 @@ if str(REPO) not in sys.path:
 # would be reused by the next, and tests never touch the tester's own cache. Its tests turn it on.
 os.environ["GRADER_CACHE_DIR"] = ""
 
-from tests.support import (  # noqa: E402,F401  (re-exported: tests/test_platforms.py imports them from here)
-    BEYOND_THE_WORKED_EXAMPLES,
-    HAVE_JAX,
-    Quiz,
-    build_submission,
-    checks_by_id,
-    code_points,
-    needs_jax,
-    processes_with,
-    replace_function,
-    replace_functions,
-    run_on_terminal,
-)
+from tests.support import Quiz, build_submission  # noqa: E402
 
 
 @pytest.fixture(scope="session")

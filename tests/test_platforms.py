@@ -15,15 +15,18 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import (
+from tests.platforms import environment, grade_command, python_code, surface
+from tests.support import (
     REPO,
+    RIGHT_H,
+    WRONG_H,
+    Watching,
     build_submission,
     code_points,
     replace_function,
     replace_functions,
+    save,
 )
-from tests.platforms import environment, grade_command, python_code, surface
-from tests.support import RIGHT_H, WRONG_H, Watching, save
 
 ROUTES = ["windows", "macos"]
 CHAPTERS = ["ch03", "ch05", "ch06", "ch07", "ch09"]
