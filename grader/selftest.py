@@ -187,7 +187,6 @@ def check_quiz(chapters: list[str], seeds: list[int], watch: Watch, quiz_dir: Pa
     return drawn
 
 
-
 def _value_of(mistake, shape: tuple) -> np.ndarray | None:
     """A mistake's value as a float array of `shape`; None where it has none, is not numbers or has another shape."""
     if mistake.value is None:
@@ -197,6 +196,7 @@ def _value_of(mistake, shape: tuple) -> np.ndarray | None:
     except (TypeError, ValueError):
         return None
     return value if value.shape == shape else None
+
 
 def _draw_problems(chapter: str, question, key, values: dict[str, float], seed: int, watch: Watch,
                    item: str) -> list[str]:
