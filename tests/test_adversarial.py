@@ -136,8 +136,11 @@ def test_specific_messages(batch):
     assert "did not return in time" in message("loop_in_function")
     assert "could not be imported" in message("loop_at_import")
     assert "ended abruptly" in message("os_exit_in_function")
-    assert "ran out of memory: all its processes together may use at most" in message("memory_bomb") or (
-        not BWRAP and "MemoryError" in message("memory_bomb"))  # without the sandbox: the address-space limit
+    # stopped at the memory cap; or, where a busy machine writes the bomb's pages more slowly than its call may
+    # take, at its time limit (the cap itself, alone on its own limits: test_containment); never graded on
+    bomb = message("memory_bomb")
+    assert "ran out of memory: all its processes together may use at most" in bomb or (
+        not BWRAP and "MemoryError" in bomb) or "did not return in time: stopped after" in bomb, bomb
     assert "ndarray subclass" in message("always_equal_subclass")
     assert "returned str" in message("returns_string")
     assert "not finite" in message("returns_nan")
