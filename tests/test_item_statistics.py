@@ -263,3 +263,19 @@ def test_a_batch_of_4_has_no_statistics(tmp_path):
     data, page = _summary_of_a_batch(tmp_path / "out", SimulatedClass(4).reports())
     _validate_summary(data)
     assert data["statistics"] is None and "Item statistics" not in page
+
+
+def test_the_figure_places_every_item_and_names_the_flagged_ones():
+    """The chapter's figure (drawn here, without a batch): an SVG with each item by its number, a flagged item by
+    its name too, and a text alternative that says the same in numbers."""
+    from grader.render import item_plots
+
+    rules = {"facility_low": 0.2, "facility_high": 0.95, "discrimination_low": 0.1}
+    items = [{"id": "ch06/H_worked_example", "chapter": "ch06", "facility": 0.6, "discrimination": 0.4, "flags": []},
+             {"id": "ch06/quiz_bad", "chapter": "ch06", "facility": 0.5, "discrimination": -0.3,
+              "flags": ["does not tell strong learners from weak ones"]}]
+    drawn = item_plots.figures({"chapters": [{"chapter": "ch06"}], "items": items, "rules": rules, "learners": 40})
+    figure = drawn["ch06"]
+    svg = base64.b64decode(figure.uri.split(",", 1)[1]).decode("utf-8")
+    assert "quiz_bad" in svg and "H_worked_example" not in svg  # flagged by name, the others by number
+    assert "flagged: quiz_bad" in figure.alt
