@@ -96,6 +96,7 @@ def test_the_workflow_installs_the_handout_grades_and_hands_the_results_to_the_r
     assert reporter["env"]["GRADER_RESULTS"] == "${{ steps.grader.outputs.result }}"
 
 
+@pytest.mark.slow
 def test_the_grade_step_gives_each_check_its_points_as_the_reporter_reads_them(workflow, tmp_path):
     root = build_submission(tmp_path / "learner-repo", {"ch06_measurement": replace_function(
         "ch06_measurement", "H_jacobian", WRONG_H)})

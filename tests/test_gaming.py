@@ -188,6 +188,7 @@ def _manifest(packed: str) -> str:
 
 
 @pytest.mark.parametrize("manifest_time", ["ignore", "accept"])
+@pytest.mark.slow
 def test_a_time_from_the_learners_own_manifest_decides_nothing_unless_the_course_accepts_it(tmp_path, manifest_time):
     root = build_submission(tmp_path / "subs" / "zed")
     (root / "exercises" / "submission-manifest.json").write_text(_manifest("2026-05-01T10:00:00+00:00"),
@@ -210,6 +211,7 @@ def test_a_time_from_the_learners_own_manifest_decides_nothing_unless_the_course
     assert "no trusted submission time for 2 of 2 graded" in done.stderr
 
 
+@pytest.mark.slow
 def test_an_unparsable_roster_time_is_named_and_listed(tmp_path):
     build_submission(tmp_path / "subs" / "zed")
     roster = tmp_path / "roster.csv"
@@ -319,6 +321,7 @@ def test_results_json_holds_no_seed(tmp_path):
 
 # ------------------------------------------------------------------------------ 7. overrides.csv numbers
 
+@pytest.mark.slow
 def test_override_numbers_must_be_finite_and_in_range(tmp_path):
     build_submission(tmp_path / "subs" / "ann")
     overrides = tmp_path / "overrides.csv"

@@ -79,6 +79,7 @@ def _shown(learner: str) -> str:
     return "'" + learner if learner in FORMULAS else learner
 
 
+@pytest.mark.slow
 def test_the_gradebook_round_trips_every_id_through_csv_and_pandas(graded):
     out, done = graded
     assert done.returncode == 1, done.stderr[-3000:]  # dave's zip cannot be read

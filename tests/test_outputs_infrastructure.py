@@ -43,6 +43,7 @@ def submissions(tmp_path):
     return folder
 
 
+@pytest.mark.slow
 def test_a_sandbox_that_does_not_start_stops_the_batch_before_any_learner(submissions, tmp_path):
     fake = FakeBwrap(tmp_path / "fake", failing=range(1, 100))
     out = tmp_path / "out"

@@ -100,6 +100,7 @@ def test_simplify_decides_where_points_cannot():
     assert equivalent("sqrt(-1 - x^2)*2", "2*sqrt(-1 - x^2)", ("x",))
 
 
+@pytest.mark.slow
 def test_simplify_time_limit(monkeypatch):
     """sympy runs in a process of its own that is killed at the time limit (a thread could not be
     stopped: sympy works on this one for many seconds)."""

@@ -27,6 +27,7 @@ def _range_bearing(root, **options) -> dict:
             if c.function == "range_bearing"}
 
 
+@pytest.mark.slow
 def test_a_slow_first_call_without_a_compiling_library_is_stopped_and_told_it_may_be_slow(tmp_path):
     root = build_submission(tmp_path, {"ch06_measurement": replace_function("ch06_measurement", "range_bearing",
                                                                            SLOW_FIRST)})
@@ -37,6 +38,7 @@ def test_a_slow_first_call_without_a_compiling_library_is_stopped_and_told_it_ma
     assert "stopped after 1 s" in message and "or be too slow" in message and "endless loop?" not in message
 
 
+@pytest.mark.slow
 def test_the_first_call_after_a_compiling_library_loaded_gets_the_imports_time(tmp_path):
     """The grader reads which of jax and torch the module loaded (here a stand-in in sys.modules, so that the
     test does not pay jax's import): the first call of each function may then take as long as an import."""
@@ -58,6 +60,7 @@ def test_a_jitted_function_gets_its_compile_time_with_jax_itself(tmp_path):
     assert all(c.status.value == "pass" for c in checks.values()), {k: c.message for k, c in checks.items()}
 
 
+@pytest.mark.slow
 def test_a_call_that_hangs_where_the_others_came_back_at_once_is_called_a_likely_endless_loop(tmp_path):
     hangs_at_origin_side = replace_function("ch06_measurement", "range_bearing", """def range_bearing(x, y):
     while x < 0:
