@@ -403,7 +403,8 @@ class GradescopeLayout:
 
     def __init__(self, course: str, *options: str) -> None:
         if shutil.which("python3", path=SYSTEM_PATH) is None or shutil.which("setpriv", path=SYSTEM_PATH) is None:
-            pytest.skip("no system python3 or setpriv (.ci/run installs them)")
+            why = "no system python3 or setpriv, as Gradescope's image has (.ci/run installs them)"
+            pytest.fail(why) if os.environ.get("CI") else pytest.skip(why)
         import tempfile
 
         self.base = Path(tempfile.mkdtemp(prefix="gradescope-"))
