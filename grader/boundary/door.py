@@ -172,9 +172,7 @@ def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -
 
     setpriv = dropped.possible()
     if setpriv is None:
-        lacking = ("this system has no user ids to run learner code as another user" if not hasattr(os, "geteuid")
-                   else "the grader does not run as root (with setpriv) to run learner code as an unprivileged user")
-        return Boundary(launch, None, probe_failure=f"{without.why_not}; and {lacking}")
+        return Boundary(launch, None, probe_failure=f"{without.why_not}; and {dropped.why_impossible()}")
     user = dropped.DroppedUser(setpriv)
     reason = try_one(user, secrets=secrets)
     if reason is not None:

@@ -62,6 +62,15 @@ def possible() -> str | None:
     return shutil.which("setpriv")
 
 
+def why_impossible() -> str:
+    """Why possible() found no way to drop privileges here."""
+    if not hasattr(os, "geteuid"):
+        return "this system has no user ids to run learner code as another user"
+    if os.geteuid() != 0:
+        return "the grader does not run as root (with setpriv) to run learner code as an unprivileged user"
+    return "setpriv (util-linux) is not installed, to run learner code as an unprivileged user"
+
+
 def root_only(paths: list[Path]) -> None:
     """Make `paths` (files, or folders with all they hold) readable by root only (this process is root)."""
     for path in paths:
