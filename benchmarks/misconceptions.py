@@ -652,7 +652,8 @@ def grade_mutant(folder: Path, chapter: str, function: str, mutant) -> list:
 def planned_calls(chapter: str) -> dict[str, list]:
     """The learner calls every check of `chapter` makes at the public seed, by function."""
     from grader import checks
-    from grader.grading import DEFAULT_SEED, ChapterPlan
+    from grader.grading import DEFAULT_SEED
+    from grader.planning import ChapterPlan
 
     out: dict[str, list] = {}
     for call in ChapterPlan(checks.load(chapter), DEFAULT_SEED).calls:

@@ -16,6 +16,7 @@ import sys
 import click
 
 from grader import prestart
+from grader.system import trace
 from grader.chapters import CHAPTERS, ChapterInfo, resolve
 from grader.render import plural
 from grader.submission import Submission, SubmissionNotFound, locate
@@ -213,12 +214,11 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
         drawing = drawer.start()
     # the child may already run (grader.launch); else start it now, to overlap our imports below
-    sandbox = "off" if no_sandbox else "auto"
-    session = prestart.take(submission, sandbox)
-    if session is None:
-        from grader import boundary
+    from grader import boundary
 
-        session = boundary.open_session(submission, sandbox=sandbox)
+    sandbox = "off" if no_sandbox else "auto"
+    door = boundary.choose(sandbox, remember=True)
+    session = door.open_session(submission, started=prestart.take(sandbox, door))
     # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
     # matplotlib is imported in a thread, which makes progress while grading waits on the child.
     if html_path is not None and not drawing:
@@ -227,14 +227,17 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         from grader.render.figures import preload
 
         threading.Thread(target=preload, daemon=True).start()
+    from grader import memo
     from grader.pipeline import Request, build_report
 
     session.meanwhile.append(lambda: _renderer(output_format))  # its imports, while the child runs the calls
     try:
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
-                                               plots=html_path is not None, functions=functions))
+                                               plots=html_path is not None, functions=functions),
+                              memo=memo.default(session.walled))
     finally:
         session.close()
+    trace("judged")
     if html_path is not None:
         from grader.render import figure_cache, html
 
@@ -253,7 +256,7 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
     from grader.pipeline import Request
     from grader.render import text
 
-    prestart.take(None, "")  # stops a child grader.launch started: the watch's come from its own boundary
+    prestart.take("", None)  # stops a child grader.launch started: the watch's come from its own boundary
     door = boundary.choose("off" if no_sandbox else "auto", resident=True)
     watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz,
                                                           functions=functions), door)

@@ -1,200 +1,23 @@
-"""Grade chapters: plan every check's calls, run them in one child session, judge in this process."""
+"""Grade chapters: plan every check's calls (grader.planning), run them in one child session, judge in this
+process; with a memo (grader.memo), a chapter whose child answered exactly as in a kept run is not planned or
+judged again, and neither the checks nor numpy are imported for it."""
 
 from __future__ import annotations
 
-import re
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Generator
+from typing import TYPE_CHECKING
 
-from grader import checks as check_registry
-from grader import diagnose, expected
 from grader.boundary import ChapterRequest, ChapterRun, Session
-from grader.boundary.wire import NOT_IMPLEMENTED, Call, Returned
-from grader.checks.base import ChapterChecks, Check, Context, Skip
-from grader.compare import Verdict
+from grader.chapters import BY_ID
 from grader.course import PUBLIC_SEED
-from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.model import ChapterResult, Report, Status
 from grader.notebook import KERNEL, relocate
 
+if TYPE_CHECKING:
+    from grader.memo import Memo
+    from grader.planning import ChapterPlan
+
 DEFAULT_SEED = PUBLIC_SEED
-
-
-@dataclass
-class _Pending:
-    """A started check generator waiting for the values of the calls it yielded."""
-
-    name: str
-    generator: Generator | None
-    wanted: object  # the yielded structure of Calls
-    slots: list[int]  # indices into the chapter's call list, in flattening order
-    setup_error: str = ""  # a grader bug while planning (its trace)
-    unavailable: str = ""  # the expected values cannot be had here (e.g. a handout asked for another seed)
-    ctx: Context | None = None
-    own: dict[int, Call] | None = None  # the calls of the check's own function, by their number in the check
-
-
-def _trace() -> str:
-    """The current exception's last frames (for a grader bug: where in the grader it broke)."""
-    import traceback
-
-    return traceback.format_exc(limit=-3)
-
-
-def _flatten(structure: object, out: list[Call]) -> None:
-    if isinstance(structure, Call):
-        out.append(structure)
-    elif isinstance(structure, (list, tuple)):
-        for item in structure:
-            _flatten(item, out)
-    elif isinstance(structure, dict):
-        for item in structure.values():
-            _flatten(item, out)
-    else:
-        raise TypeError(f"a check yielded {type(structure).__name__}, not calls")
-
-
-def _rebuild(structure: object, values: list[Returned]) -> object:
-    """The yielded structure with every Call replaced by its Returned (consumes `values`)."""
-    if isinstance(structure, Call):
-        return values.pop(0)
-    if isinstance(structure, list):
-        return [_rebuild(s, values) for s in structure]
-    if isinstance(structure, tuple):
-        return tuple(_rebuild(s, values) for s in structure)
-    return {k: _rebuild(s, values) for k, s in structure.items()}
-
-
-def _start(name: str, body, ctx: Context, calls: list[Call], function: str = "") -> _Pending:
-    """Plan one check: run it up to its yield (it asks the reference for its expected values now, and its
-    calls of its own `function` are told to the backend, which may compute their generated slips)."""
-    generator = body(ctx)
-    try:
-        with expected.planning(ctx.chapter, ctx.check_id, ctx.seed):
-            wanted = next(generator)
-        flat: list[Call] = []
-        _flatten(wanted, flat)
-        own = {i: c for i, c in enumerate(flat) if c.function == function} if function else {}
-        if own:
-            expected.planned(ctx.chapter, ctx.check_id, ctx.seed, list(own.items()))
-    except expected.ReferenceUnavailable as exc:
-        return _Pending(name, None, None, [], unavailable=str(exc))
-    except Exception:
-        return _Pending(name, None, None, [], setup_error=_trace())
-    start = len(calls)
-    calls.extend(flat)
-    return _Pending(name, generator, wanted, list(range(start, start + len(flat))), ctx=ctx, own=own)
-
-
-def _slips_lookup(pending: _Pending, values: list[Returned]):
-    """For grader.diagnose while the check judges: the generated mistakes at the call that returned a value, of
-    the keys asked for (each asked of the backend once, the first time a comparison needs it)."""
-    numbers = {id(v): i for i, v in enumerate(values) if i in (pending.own or {})}
-    found: dict[int, dict[str, diagnose.Mistake | None]] = {}  # per call: key -> its mistake (None: says nothing)
-    complete: set[int] = set()
-
-    def lookup(returned: object, keys: set[str] | None = None) -> list[diagnose.Mistake]:
-        index = numbers.get(id(returned))
-        if index is None or pending.ctx is None:
-            return []
-        known = found.setdefault(index, {})
-        missing = None if keys is None else {k for k in keys if k not in known}
-        if index not in complete and (missing is None or missing):
-            ctx = pending.ctx
-            for s in expected.slips(ctx.chapter, ctx.check_id, ctx.seed, index, pending.own[index], missing):
-                known[s["key"]] = diagnose.Mistake(s["name"], s["help"], s["value"], "generated", s["key"])
-            for key in missing or ():
-                known.setdefault(key, None)
-            if missing is None:
-                complete.add(index)
-        return [m for k, m in known.items() if m is not None and (keys is None or k in keys)]
-    return lookup
-
-
-def _finish(pending: _Pending, run: ChapterRun) -> object:
-    """Send the returned values into the check; its return value (Verdict or dict) or an exception."""
-    values = [run.results[i] for i in pending.slots]
-    with diagnose.judging(_slips_lookup(pending, values)):
-        try:
-            pending.generator.send(_rebuild(pending.wanted, values))
-        except StopIteration as stop:
-            if isinstance(stop.value, Verdict):
-                stop.value.explain()  # a lone comparison's mistake, named while the slips can still be asked
-            return stop.value
-    raise RuntimeError(f"check {pending.name} yielded twice; a check may yield only once")
-
-
-class ChapterPlan:
-    """Every check of one chapter started, with the calls they need collected into one request."""
-
-    def __init__(self, chapter: ChapterChecks, seed: int, plots: list | None = None,
-                 exclude: frozenset[str] = frozenset()) -> None:
-        self.chapter = chapter
-        self.calls: list[Call] = []
-        info = chapter.info
-        self.checks = [c for c in chapter.checks if f"{info.id}/{c.id}" not in exclude]
-        self.pending = [(check, _start(check.id, check.body, Context(seed, info.id, check.id), self.calls,
-                                       check.function)) for check in self.checks]
-        self.plot_pending = [(name, _start(name, body, Context(seed, info.id, f"plot/{name}"), self.calls))
-                             for name, body in (plots or [])]
-
-    def request(self) -> ChapterRequest:
-        return ChapterRequest(self.chapter.info.id, self.chapter.info.module, self.calls)
-
-    def judge(self, run: ChapterRun, module_file: str) -> ChapterResult:
-        info = self.chapter.info
-        result = ChapterResult(info.id, info.title)
-        if run.import_error is not None:
-            message = import_problem(run.import_error, module_file)
-            result.problems.append(message)
-            short = f"not graded: {module_file} could not be imported (see the chapter's message)"
-            result.checks = [_result(check, Status.ERROR, 0.0, short) for check in self.checks]
-            return result
-        for check, pending in self.pending:
-            result.checks.append(_judge_one(check, pending, run))
-        for name, pending in self.plot_pending:
-            if pending.generator is None:
-                continue
-            try:
-                data = _finish(pending, run)
-            except Exception:  # a plot never breaks grading
-                continue
-            if isinstance(data, dict):
-                result.plots[name] = data
-        return result
-
-
-def _result(check: Check, status: Status, points: float, message: str, verdict: Verdict | None = None) -> CheckResult:
-    return CheckResult(
-        id=check.id, function=check.function, description=check.description, status=status,
-        points=points, max_points=check.points, message=message,
-        expected=None if verdict is None else verdict.expected,
-        got=None if verdict is None else verdict.got,
-        details={} if verdict is None else verdict.details,
-        mistake="" if verdict is None or verdict.mistake is None else verdict.mistake.name,
-        help="" if verdict is None or verdict.passed else verdict.help,
-    )
-
-
-def _judge_one(check: Check, pending: _Pending, run: ChapterRun) -> CheckResult:
-    if pending.generator is None:
-        return _result(check, Status.ERROR, 0.0, f"not graded here: {pending.unavailable}" if pending.unavailable
-                       else f"grader error while preparing this check:\n{pending.setup_error}")
-    try:
-        verdict = _finish(pending, run)
-    except Skip as skip:
-        return _result(check, Status.SKIP, check.points if skip.costs_nothing else 0.0, str(skip))
-    except Exception:
-        return _result(check, Status.ERROR, 0.0,
-                       f"grader error while judging this check:\n{_trace()}")
-    if not isinstance(verdict, Verdict):
-        return _result(check, Status.ERROR, 0.0, f"grader error: check returned {type(verdict).__name__}")
-    status = Status.PASS if verdict.passed else Status.FAIL
-    result = _result(check, status, check.points if verdict.passed else 0.0, verdict.message, verdict)
-    mine = [run.results[i] for i in pending.slots if run.results[i] is not None and run.results[i].function == check.function]
-    if not verdict.passed and mine and all(r.kind == NOT_IMPLEMENTED for r in mine):
-        result.details["not_implemented"] = True  # the renderer folds such checks into one line per function
-    return result
 
 
 def _relocate(run: ChapterRun, sources: dict) -> None:
@@ -207,58 +30,13 @@ def _relocate(run: ChapterRun, sources: dict) -> None:
             relocate(returned.error, sources)
 
 
-IMPORT_FORMS = ("an earlier chapter's file is imported in one of three forms, all graded alike: "
-                "`from .ch03_jacobian import polar_to_cartesian` (relative), "
-                "`from exercises.ch03_jacobian import polar_to_cartesian` or "
-                "`from ch03_jacobian import polar_to_cartesian` (which also works when the file runs as a script); "
-                "the module is the chapter's file name without .py or .ipynb (`grade list` names them), and the file "
-                "must be in the same folder")
-
-
-def import_hint(error: dict) -> str:
-    """The accepted import forms, for an ImportError that an import of an earlier chapter may have caused."""
-    if error.get("exception") not in ("ModuleNotFoundError", "ImportError"):
-        return ""
-    message = error.get("message", "")
-    if re.search(r"relative import|No module named '(exercises|ch\d|solutions\.ch)|cannot import name", message) or \
-            re.search(r"'ch\d\d?_?\w*'", message):
-        return f"\nHow to import: {IMPORT_FORMS}."
-    return ""
-
-
-def import_problem(error: dict, module_file: str) -> str:
-    """The learner-facing message for a chapter file that could not be imported."""
-    if error.get("grader"):
-        return f"{module_file} could not be graded: {error.get('message')}"
-    exception = error.get("exception", "")
-    if exception == "NotebookError":
-        return error.get("message", "")
-    line = f", line {error['line']}" if error.get("line") else ""
-    if error.get("file") and Path(error["file"]) != Path(module_file):  # in an earlier chapter's file it imports
-        module_file = f"{Path(error['file'])} (imported by {module_file})"
-    if error.get("where"):  # a notebook: "exercises/ch06_measurement.ipynb, cell 4, line 2"
-        module_file, line = error["where"], ""
-    if exception == "SyntaxError" or exception == "IndentationError":
-        head = f"{module_file}{line}: {exception}: {error.get('message')}"
-    elif exception == "ModuleNotFoundError" and "No module named" in error.get("message", "") and not error.get("traceback", "").count("File"):
-        return f"{module_file} was not found ({error.get('message')})"
-    elif exception in ("TimeoutError", "ProcessExit"):
-        head = f"{module_file} could not be imported: {error.get('message')}"
-    elif exception == "SystemExit":
-        head = f"{module_file}{line} called sys.exit() while being imported; remove it (or put it under if __name__ == '__main__':)"
-    else:
-        head = f"{module_file}{line} raised {exception} while being imported: {error.get('message')}"
-    trace = error.get("traceback", "")
-    return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "") + \
-        import_hint(error)
-
-
-def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
+def point_upstream(report: Report, builds_on: dict[str, dict]) -> None:
     """Blame once: a failing check of a function usually written with the learner's own helpers (of this
-    chapter or an earlier one graded in the same report) says first that a helper fails its checks."""
+    chapter or an earlier one graded in the same report) says first that a helper fails its checks. `builds_on`:
+    per chapter, each function's helpers (grader.checks.base.ChapterChecks.builds_on)."""
     failing = {c.function for ch in report.chapters for c in ch.checks if c.kind == "code" and c.status == Status.FAIL}
     for chapter in report.chapters:
-        uses = chapters[chapter.chapter].builds_on if chapter.chapter in chapters else {}
+        uses = builds_on.get(chapter.chapter, {})
         for check in chapter.checks:
             helpers = [h for h in uses.get(check.function, ()) if h in failing and h != check.function]
             if check.status == Status.FAIL and helpers:
@@ -269,39 +47,88 @@ def point_upstream(report: Report, chapters: dict[str, ChapterChecks]) -> None:
                                  f"{'it' if len(helpers) == 1 else 'them'} first.\n{check.message}")
 
 
-def _plots(chapter_id: str) -> list:
-    """The plot-data gatherers of a chapter (grader/checks/plots.py), for the HTML report."""
-    from grader.checks.plots import PLOTS
+def _plan(chapter_id: str, seed: int, with_plots: bool, exclude: frozenset[str]) -> ChapterPlan:
+    from grader import checks as check_registry
+    from grader.planning import ChapterPlan, plots_of
 
-    return PLOTS.get(chapter_id, [])
+    return ChapterPlan(check_registry.load(chapter_id), seed, plots_of(chapter_id) if with_plots else None, exclude)
+
+
+def _answered(run: ChapterRun) -> list:
+    """Everything the child answered for one chapter, as plain data (a memo key's part)."""
+    return [run.import_error, [None if r is None else [r.kind, r.function, r.encoded, r.error, r.note]
+                               for r in run.results]]
+
+
+def _settled(chapter: ChapterResult, run: ChapterRun) -> bool:
+    """Whether a verdict may be kept: no failure of the grader's own (it is judged again next time)."""
+    if run.import_error is not None and (run.import_error.get("grader") or run.import_error.get("infrastructure")):
+        return False
+    return not any(c.status == Status.ERROR and c.message.startswith(("grader error", "not graded here"))
+                   for c in chapter.checks)
 
 
 def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
           with_plots: bool = False, submission_label: str | None = None,
-          exclude: frozenset[str] = frozenset()) -> Report:
+          exclude: frozenset[str] = frozenset(), memo: Memo | None = None) -> Report:
     """Grade `chapter_ids` of the session's submission, but the checks in `exclude` ("chNN/check_id");
-    learner code runs only in the session's child."""
-    plans = [ChapterPlan(check_registry.load(cid), seed, _plots(cid) if with_plots else None, exclude)
-             for cid in chapter_ids]
-    runs = session.run([plan.request() for plan in plans])
+    learner code runs only in the session's child. With `memo` (not with plots), kept plans and verdicts are
+    reused where they were made from exactly this."""
+    from grader.memo import key_of
+
+    memo = None if with_plots else memo
+    plans: dict[str, ChapterPlan] = {}
+    plan_keys: dict[str, str | None] = {}
+    requests = []
+    for cid in chapter_ids:
+        plan_keys[cid] = key_of(cid, seed, sorted(e for e in exclude if e.startswith(f"{cid}/")))
+        calls = memo.calls(cid, plan_keys[cid]) if memo is not None and plan_keys[cid] else None
+        if calls is None:
+            plans[cid] = _plan(cid, seed, with_plots, exclude)
+            calls = plans[cid].calls
+            if memo is not None and plan_keys[cid]:
+                memo.keep_calls(cid, plan_keys[cid], calls)
+        requests.append(ChapterRequest(cid, BY_ID[cid].module, calls))
+    runs = session.run(requests)
     submission = session.submission
     prepared = session.prepared
     report = Report(submission_label or str(submission.root), seed=seed)
-    for plan in plans:
-        module = plan.chapter.info.module
+    builds_on: dict[str, dict] = {}
+    for request in requests:
+        cid, module = request.chapter, request.module
         graded = prepared.graded.get(module)  # a notebook, or the cells a kernel ran
         module_file = str(Path(graded) if graded and graded.endswith(".ipynb") else graded or
                           Path(submission.package) / f"{module}.py")  # as the system writes it
-        run = runs[plan.chapter.info.id]
+        run = runs[cid]
         if module in prepared.problems:  # a notebook that could not be read: the child had no module
             run.import_error = {"exception": "NotebookError", "message": prepared.problems[module], "traceback": "",
                                 "line": None}
         _relocate(run, prepared.sources)
-        chapter = plan.judge(run, module_file)
+        key = key_of(plan_keys[cid], module_file, repr(session.limits), _answered(run)) if memo is not None else None
+        kept = memo.verdict(cid, key) if memo is not None else None
+        try:
+            chapter = ChapterResult.from_dict(kept["chapter"]) if kept is not None else None
+            uses = {str(f): tuple(map(str, h)) for f, h in dict(kept["builds_on"]).items()} if kept else {}
+        except (KeyError, TypeError, ValueError):
+            chapter = None
+        if chapter is None:
+            plan = plans.get(cid)
+            if plan is None:  # its calls came from the memo: planned now, at the same seed, to judge
+                plan = plans[cid] = _plan(cid, seed, with_plots, exclude)
+                if [c.to_json(i) for i, c in enumerate(plan.calls)] != \
+                        [c.to_json(i) for i, c in enumerate(request.calls)]:  # never, unless the memo is wrong
+                    run = session.run([plan.request()])[cid]
+                    _relocate(run, prepared.sources)
+                    key = None
+            chapter = plan.judge(run, module_file)
+            uses = plan.chapter.builds_on
+            if memo is not None and _settled(chapter, run):
+                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses})
+        builds_on[cid] = uses
         chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
         chapter.notes.extend(prepared.notes.get(module, []))
         report.chapters.append(chapter)
-    point_upstream(report, {plan.chapter.info.id: plan.chapter for plan in plans})
+    point_upstream(report, builds_on)
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()
               if run.import_error and run.import_error.get("infrastructure")]

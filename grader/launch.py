@@ -10,32 +10,30 @@ from __future__ import annotations
 import os
 import sys
 
-from grader.system import SINGLE_THREADED_BLAS
+from grader.system import SINGLE_THREADED_BLAS, trace, traced
 
 _OTHER_COMMANDS = {"list", "quiz", "batch", "worker", "release", "gradescope", "classroom", "submit", "--help", "-h",
                    "--version"}
 
 
 def _prestart(args: list[str]) -> None:
-    """Start the learner's child for the submission the command line names, held in grader.prestart."""
+    """Start the learner's child for a command that grades, held in grader.prestart: behind the sandbox the door
+    chose for the last such command (grader.boundary.kept), with nothing else imported, else as it decides now."""
     if not args or args[0] in _OTHER_COMMANDS or any(a in ("--help", "-h") for a in args):
         return
-    if args[0] == "run":
-        args = args[1:]
-    from grader import boundary, prestart
-    from grader.submission import SubmissionNotFound, locate
+    mode = "off" if "--no-sandbox" in args else "auto"
+    from grader import prestart
+    from grader.boundary import kept
 
-    directory = None
-    for i, arg in enumerate(args):
-        if arg == "--submission" and i + 1 < len(args):
-            directory = args[i + 1]
-        elif arg.startswith("--submission="):
-            directory = arg.split("=", 1)[1]
     try:
-        submission = locate(directory, "--solutions" in args)
-        mode = "off" if "--no-sandbox" in args else "auto"
-        prestart.hold(submission, mode, boundary.open_session(submission, sandbox=mode))
-    except (SubmissionNotFound, OSError):
+        started = kept.start(mode)
+        if started is None:
+            from grader import boundary
+
+            started = boundary.first_child(mode)
+        prestart.hold(mode, *started)
+        trace("child started")
+    except OSError:
         pass
 
 
@@ -49,12 +47,15 @@ def _draws_figures(args: list[str]) -> bool:
 def main() -> None:
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
+    trace("launcher")
     if _draws_figures(sys.argv[1:]):  # matplotlib's import, the report's longest step, starts first
         from grader.render import drawer
 
         drawer.start()
     _prestart(sys.argv[1:])
     from grader.cli import main as cli_main
+
+    trace("click and the command line's module imported")
 
     code: int | str | None = 0
     try:
@@ -64,7 +65,7 @@ def main() -> None:
     finally:
         from grader import prestart
 
-        prestart.take(None, "")  # stops a prestarted child nobody took
+        prestart.take("", None)  # stops a prestarted child nobody took
         if "grader.render.drawer" in sys.modules:  # and a drawing process nobody used (no atexit after os._exit)
             sys.modules["grader.render.drawer"].stop_unused()
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):
@@ -72,6 +73,9 @@ def main() -> None:
     if isinstance(code, str):
         print(code, file=sys.stderr)
         code = 1
+    trace("done")
+    for what, at in traced():
+        print(f"trace {at:8.1f} ms  {what}", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code or 0)

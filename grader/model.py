@@ -182,6 +182,29 @@ class ChapterResult:
             "checks": [c.to_dict(self.chapter) for c in self.checks],
         }
 
+    @classmethod
+    def from_dict(cls, ch: dict) -> ChapterResult:
+        """The chapter a to_dict() made; each check's `details` where the dict has them (to_dict leaves them out),
+        plots not."""
+        checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
+                              status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
+                              message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
+                              kind=c.get("kind", "code"), mistake=c.get("mistake") or "", help=c.get("help") or "",
+                              practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []),
+                              answer=dict(c.get("answer") or {}), details=dict(c.get("details") or {}))
+                  for c in ch.get("checks", [])]
+        return cls(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
+                   hidden_checks=int(ch.get("hidden_checks", 0)), hidden_points=float(ch.get("hidden_points", 0.0)),
+                   source=ch.get("source") or "", notes=list(ch.get("notes") or []))
+
+    def to_kept(self) -> dict:
+        """to_dict() with each check's details: what from_dict() makes this chapter again from (grader.memo)."""
+        data = self.to_dict()
+        for check, kept in zip(self.checks, data["checks"]):
+            if check.details:
+                kept["details"] = jsonable(check.details)
+        return data
+
 
 @dataclass
 class Report:
@@ -236,20 +259,7 @@ class Report:
     @classmethod
     def from_dict(cls, data: dict) -> Report:
         """The report a to_dict() made (for resumed batches); details and plots are not kept."""
-        chapters = []
-        for ch in data.get("chapters", []):
-            checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
-                                  status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
-                                  message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
-                                  kind=c.get("kind", "code"), mistake=c.get("mistake") or "",
-                                  help=c.get("help") or "",
-                                  practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []),
-                                  answer=dict(c.get("answer") or {}))
-                      for c in ch.get("checks", [])]
-            chapters.append(ChapterResult(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
-                                          hidden_checks=int(ch.get("hidden_checks", 0)),
-                                          hidden_points=float(ch.get("hidden_points", 0.0)),
-                                          source=ch.get("source") or "", notes=list(ch.get("notes") or [])))
+        chapters = [ChapterResult.from_dict(ch) for ch in data.get("chapters", [])]
         made = data.get("provenance") or {}
         report = cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
                      infrastructure=data.get("infrastructure") or "", grader=made.get("grader") or "",

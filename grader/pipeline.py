@@ -19,6 +19,7 @@ from grader.model import Report
 
 if TYPE_CHECKING:
     from grader.boundary import Session
+    from grader.memo import Memo
 
 
 @dataclass(frozen=True)
@@ -93,9 +94,11 @@ def other_functions(request: Request) -> tuple[frozenset[str], dict[str, str]]:
     return frozenset(left), notes
 
 
-def build_report(session: Session, request: Request, course: courses.Course | None = None) -> Report:
+def build_report(session: Session, request: Request, course: courses.Course | None = None,
+                 memo: Memo | None = None) -> Report:
     """Grade `request.chapters` of the session's submission into one Report (closes the session), as `course`
-    has it (default: a handout's own course; on the instructor's side every check runs)."""
+    has it (default: a handout's own course; on the instructor's side every check runs). With `memo`
+    (grader.memo: `grade` on one submission, walled off), verdicts made from exactly the same answers are reused."""
     from grader.grading import grade
 
     course = course or courses.here()
@@ -107,15 +110,16 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     if request.quiz:  # judged while the child runs the code's calls (no learner code: YAML only)
         def quiz_meanwhile() -> None:
             try:
-                quizzes.append(quiz_report(session, request, course, list(request.chapters)))
+                quizzes.append(kept_quiz_report(session, request, course, memo))
             except Exception:  # noqa: BLE001  judged again below, where what it raises is the report's to meet
                 pass
 
         session.meanwhile.append(quiz_meanwhile)
-    session.meanwhile.append(_version_ready)
+    version: list[str] = []
+    session.meanwhile.append(lambda: _version_ready(memo, version))
     report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
                    submission_label=request.label,
-                   exclude=hidden | switched_off(course, request.chapters) | others)
+                   exclude=hidden | switched_off(course, request.chapters) | others, memo=memo)
     for chapter in report.chapters:
         chapter.hidden_checks, chapter.hidden_points = course.hidden_in(chapter.chapter)
         if chapter.chapter in notes:  # one function: only its hidden checks are left for the submission
@@ -127,7 +131,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
             chapter.notes.append(notes[chapter.chapter])
     learner_id = request.learner
     if request.quiz:
-        quiz = quizzes.pop() if quizzes else quiz_report(session, request, course, list(request.chapters))
+        quiz = quizzes.pop() if quizzes else kept_quiz_report(session, request, course, memo)
         learner_id = quiz.learner_id
         report.learner, report.learner_unset = quiz.learner, quiz.learner_unset
         report.flags += quiz.flags
@@ -138,19 +142,66 @@ def build_report(session: Session, request: Request, course: courses.Course | No
             chapter.notes.extend(judged[chapter.chapter].notes)
     from grader import provenance
 
-    provenance.stamp(report, course, learner_id)
+    provenance.stamp(report, course, learner_id, version=version[0] if version else None)
     return report
 
 
-def _version_ready() -> None:
-    """Work out the grader's version for the report's stamp now (it is kept): on the instructor's side a hash
-    of the grader's files."""
+def _version_ready(memo: Memo | None, version: list[str]) -> None:
+    """Work out the grader's version for the report's stamp now, into `version` (from the memo where it holds
+    one): on the instructor's side a hash of the grader's files."""
     from grader import provenance
 
     try:
-        provenance.grader_version()
+        version.append(memo.version() if memo is not None else provenance.grader_version())
     except Exception:  # noqa: BLE001  worked out again when the report is stamped, which meets what it raises
         pass
+
+
+def _answers(folder) -> list | None:
+    """Every file of a learner's answers folder, by name, with its bytes' hash (None where it cannot be read)."""
+    import hashlib
+    import os
+
+    found = []
+    try:
+        for where, folders, files in os.walk(folder):
+            folders.sort()
+            for name in sorted(files):
+                path = os.path.join(where, name)
+                with open(path, "rb") as handle:
+                    found.append([os.path.relpath(path, folder), hashlib.sha256(handle.read()).hexdigest()])
+    except OSError:
+        return None
+    return found
+
+
+def kept_quiz_report(session: Session, request: Request, course: courses.Course, memo: Memo | None) -> Report:
+    """quiz_report, or with `memo` the quiz judged from exactly the same answer files before."""
+    if memo is None:
+        return quiz_report(session, request, course, list(request.chapters))
+    from grader.memo import key_of
+
+    submission = session.submission
+    answers = _answers(submission.root / submission.package / "answers")
+    key = None if answers is None else key_of(list(request.chapters), request.learner, list(request.other_ids),
+                                              request.label, str(submission.root), submission.package, answers)
+    kept = memo.verdict("quiz", key)
+    if kept is not None:
+        try:
+            report = Report.from_dict(kept["report"])
+            report.flags, report.learner_unset = [str(f) for f in kept["flags"]], bool(kept["learner_unset"])
+            return report
+        except (KeyError, TypeError, ValueError):
+            pass
+    report = quiz_report(session, request, course, list(request.chapters))
+    from grader.quiz import OUT_OF_TIME
+    from grader.quiz.judge import UNDECIDED
+
+    if not any(c.message.startswith(OUT_OF_TIME) or UNDECIDED in c.message for ch in report.chapters
+               for c in ch.checks):  # what time decided is judged again
+        kept = dict(report.to_dict(), chapters=[c.to_kept() for c in report.chapters])
+        memo.keep_verdict("quiz", key, {"report": kept, "flags": report.flags, "learner_unset": report.learner_unset})
+    return report
 
 
 def quiz_report(session: Session, request: Request, course: courses.Course, chapters: list[str]) -> Report:

@@ -1,32 +1,33 @@
-"""The learner's child that `grade` starts before its heavy imports (grader.launch), held until the command
-that graded with it takes it (grader.cli), or stopped."""
+"""The learner's child that `grade` starts first (grader.launch), held until the command that grades with it takes
+it (grader.cli), or stopped."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from grader.boundary import Session
-    from grader.submission import Submission
+    from grader.boundary import Boundary
+    from grader.boundary.session import ChildHandle
 
-_held: tuple | None = None  # (submission, its sandbox mode, the Session around the started child)
+_held: tuple | None = None  # (the sandbox mode asked, the command prefix it was started with or None, the child)
 
 
-def hold(submission: Submission, sandbox: str, session: Session) -> None:
-    """Keep `session` (its child already starting) for the command about to grade `submission`."""
+def hold(sandbox: str, prefix: list[str] | None, child: ChildHandle) -> None:
+    """Keep `child`, started for sandbox mode `sandbox` behind `prefix` (a sandbox's command line; None: none),
+    for the command about to grade."""
     global _held
-    _held = (submission, sandbox, session)
+    _held = (sandbox, prefix, child)
 
 
-def take(submission: Submission | None, sandbox: str = "auto") -> Session | None:
-    """The held Session if it serves `submission` sandboxed as `sandbox` asks; else None (and the held child,
-    if any, is stopped)."""
+def take(sandbox: str, boundary: Boundary | None) -> ChildHandle | None:
+    """The held child if it was started as `boundary` starts its children for mode `sandbox`; else None (and the
+    held child, if any, is stopped). take("", None) stops it."""
     global _held
     held, _held = _held, None
     if held is None:
         return None
-    submission_held, mode, session = held
-    if submission_held == submission and mode == sandbox:
-        return session
-    session.close()
+    mode, prefix, child = held
+    if boundary is not None and mode == sandbox and prefix == boundary.command_prefix():
+        return child
+    child.stop(0)
     return None

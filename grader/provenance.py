@@ -26,7 +26,7 @@ def base_version() -> str:
     return __version__
 
 
-def _sources() -> list[Path]:
+def verdict_sources() -> list[Path]:
     """The folders whose files decide verdicts: the grader, the references, the question banks and keys."""
     import importlib.util
 
@@ -50,7 +50,7 @@ def code_digest() -> str:
     counts once, by its path in its own source folder: the banks inside an installed grader (grader/quizzes) hash
     as beside it in the project, so the instructor's checkout and its wheel (a cluster's workers) agree."""
     digest = hashlib.sha256()
-    folders = _sources()
+    folders = verdict_sources()
     for folder in folders:
         inner = [other for other in folders if other != folder and other.is_relative_to(folder)]
         for path in sorted(folder.rglob("*")):
@@ -87,9 +87,10 @@ def handout_id(the_course=None) -> str | None:
     return the_course.current_handout
 
 
-def stamp(report, the_course=None, learner_id: str | None = None) -> None:
-    """Fill in `report`'s provenance: grader version, handout id, course id and learner id."""
-    report.grader = grader_version()
+def stamp(report, the_course=None, learner_id: str | None = None, version: str | None = None) -> None:
+    """Fill in `report`'s provenance: grader version (`version`, else worked out here), handout id, course id and
+    learner id."""
+    report.grader = version or grader_version()
     report.handout = handout_id(the_course)
     report.course = the_course.id if the_course is not None else None
     if learner_id is not None:

@@ -55,7 +55,7 @@ def record(course: courses.Course) -> expected.Recording:
     """Plan every public check and plot of every chapter at the public seed with the live references,
     keeping each expected value they ask for (no learner code runs: planning needs none)."""
     from grader import checks as check_registry
-    from grader.grading import ChapterPlan, _plots
+    from grader.planning import ChapterPlan, plots_of
     from grader.pipeline import switched_off
 
     recording = expected.Recording(seed=course.public_seed)
@@ -64,7 +64,7 @@ def record(course: courses.Course) -> expected.Recording:
         for info in CHAPTERS:
             chapter = check_registry.load(info.id)
             exclude = frozenset(f"{info.id}/{i}" for i in _hidden_ids(course, info.id)) | switched_off(course, (info.id,))
-            plan = ChapterPlan(chapter, course.public_seed, _plots(info.id), exclude)
+            plan = ChapterPlan(chapter, course.public_seed, plots_of(info.id), exclude)
             broken += [f"{info.id} {name}: {p.unavailable or p.setup_error}"
                        for name, p in [(c.id, p) for c, p in plan.pending] + plan.plot_pending if p.generator is None]
     if broken:

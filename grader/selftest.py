@@ -322,7 +322,7 @@ def check_code(chapters: list[str], seeds: list[int], watch: Watch, course: Cour
     """The reference solutions graded at every seed, every check's comparisons watched (see the module's
     docstring; `generated`: also the slips grader.mutants generates, about four times the time); returns what was
     counted."""
-    from grader import boundary, grading
+    from grader import boundary, planning
     from grader import checks as check_registry
     from grader.boundary import Limits
     from grader.model import Status
@@ -337,7 +337,7 @@ def check_code(chapters: list[str], seeds: list[int], watch: Watch, course: Cour
     counted = {"checks judged": 0, "comparisons weighed": 0}
     try:
         for done, seed in enumerate(seeds, 1):
-            plans = [grading.ChapterPlan(check_registry.load(c), seed, exclude=off) for c in chapters]
+            plans = [planning.ChapterPlan(check_registry.load(c), seed, exclude=off) for c in chapters]
             session = door.open_session(submission, limits)
             try:
                 runs = session.run([plan.request() for plan in plans])

@@ -126,3 +126,42 @@ class StreamReader:
             return self.chunks.get(timeout=timeout) if timeout > 0 else self.chunks.get_nowait()
         except queue.Empty:
             raise TimeoutError from None
+
+
+CACHE_ENVIRONMENT = "GRADER_CACHE_DIR"  # the folder for the grader's caches; empty: keep nothing
+
+
+def cache_folder(kind: str) -> str | None:
+    """The folder of one of the grader's caches ("figures", "results"): below GRADER_CACHE_DIR (None if it is
+    empty), else below the user's cache folder of the platform, in jacobians-grader/; None where there is none."""
+    given = os.environ.get(CACHE_ENVIRONMENT)
+    if given is not None:
+        return os.path.join(given, kind) if given.strip() else None
+    home = os.path.expanduser("~")
+    if home == "~":  # no home folder known
+        return None
+    if sys.platform == "win32":
+        base = os.environ.get("LOCALAPPDATA") or os.path.join(home, "AppData", "Local")
+    elif sys.platform == "darwin":
+        base = os.path.join(home, "Library", "Caches")
+    else:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(home, ".cache")
+    return os.path.join(base, "jacobians-grader", kind)
+
+
+_TRACE_START = os.environ.get("GRADER_TRACE")  # the wall-clock time (time.time()) a benchmark started the command
+_traced: list[tuple[str, float]] = []
+
+
+def trace(what: str) -> None:
+    """Note when `what` happened, in milliseconds since GRADER_TRACE (benchmarks/latency.py --trace); nothing
+    without it."""
+    if _TRACE_START:
+        import time
+
+        _traced.append((what, (time.time() - float(_TRACE_START)) * 1000))
+
+
+def traced() -> list[tuple[str, float]]:
+    """What trace() noted, in order."""
+    return list(_traced)

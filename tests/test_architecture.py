@@ -94,12 +94,16 @@ def _launch_decisions(path: Path) -> list[str]:
 
 
 def test_the_launch_decision_is_made_in_one_module():
-    """Sandbox or none, fork server, spawn or the portable child: only grader/boundary/door.py chooses."""
+    """Sandbox or none, fork server, spawn or the portable child: only grader/boundary/door.py chooses. The one-off
+    `grade` replays the door's kept decision (grader/boundary/kept.py): it starts a child behind the kept command
+    prefix and decides nothing itself (no sandbox, launcher or environment override)."""
     deciding = {}
     for path in sorted((REPO / "grader").rglob("*.py")):
         found = _launch_decisions(path)
         if found:
             deciding[path.relative_to(REPO).as_posix()] = found
+    replay = deciding.pop("grader/boundary/kept.py", [])
+    assert [r.split("(")[0] for r in replay] == ["start_child"], replay
     assert list(deciding) == ["grader/boundary/door.py"], deciding
 
 

@@ -17,7 +17,8 @@ from grader import checks as check_registry
 from grader import expected
 from grader.boundary.wire import Array
 from grader.chapters import BY_ID
-from grader.grading import DEFAULT_SEED, ChapterPlan
+from grader.grading import DEFAULT_SEED
+from grader.planning import ChapterPlan
 from grader.model import Status
 from tests.support import (
     BEYOND_THE_WORKED_EXAMPLES,

@@ -16,7 +16,8 @@ from grader import expected, mutants
 from grader.chapters import CHAPTERS
 from grader.checks import load
 from grader.diagnose import Evidence, Mistake, explain, weigh
-from grader.grading import DEFAULT_SEED, ChapterPlan
+from grader.grading import DEFAULT_SEED
+from grader.planning import ChapterPlan
 from grader.model import CheckResult, Report, Status
 from grader.render.html import render as render_html
 from grader.render.text import render_check

@@ -19,11 +19,19 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from grader.boundary.door import SANDBOX_MODES, Boundary, BoundaryUnavailable, Launch, choose, open_session
+    from grader.boundary.door import (
+        SANDBOX_MODES,
+        Boundary,
+        BoundaryUnavailable,
+        Launch,
+        choose,
+        first_child,
+        open_session,
+    )
     from grader.boundary.session import ChapterRequest, ChapterRun, Limits, Session
 
 __all__ = ["SANDBOX_MODES", "Boundary", "BoundaryUnavailable", "ChapterRequest", "ChapterRun", "Launch", "Limits",
-           "Session", "choose", "open_session"]
+           "Session", "choose", "first_child", "open_session"]
 _IN_SESSION = ("ChapterRequest", "ChapterRun", "Limits", "Session")  # the others are in door
 
 

@@ -53,6 +53,11 @@ class Boundary:
         self.probe_failure = probe_failure  # why bubblewrap, installed, did not start here ("" when it did)
         self._server = None
 
+    def command_prefix(self) -> list[str] | None:
+        """What a child's command line is wrapped in (bubblewrap and its allow-list), None when it is not."""
+        prefix = getattr(self.sandbox, "command_prefix", None)
+        return None if prefix is None else prefix()
+
     @property
     def sandboxed(self) -> bool:
         return self.sandbox is not None
@@ -102,7 +107,8 @@ class Boundary:
 
     def open_session(self, submission, limits: Limits = Limits(), started: ChildHandle | None = None) -> Session:
         """A session for `submission`: its first child starts now (or `started`, one this boundary started)."""
-        return Session(submission, self.start_child, limits, started=started, isolation=self.isolation)
+        return Session(submission, self.start_child, limits, started=started, isolation=self.isolation,
+                       walled=self.sandboxed)
 
     def close(self) -> None:
         if self._server is not None:
@@ -121,14 +127,15 @@ def _no_bubblewrap(portable: bool) -> str:
 
 
 def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
-           turned_off: str = "with --no-sandbox", secrets: tuple[str, ...] = ()) -> Boundary:
+           turned_off: str = "with --no-sandbox", secrets: tuple[str, ...] = (), remember: bool = False) -> Boundary:
     """How learner code runs here. `sandbox`: "required" (BoundaryUnavailable where bubblewrap cannot run
     learner code), "barrier" (bubblewrap, else, as root, learner code as an unprivileged user that cannot read
     `secrets`; BoundaryUnavailable where neither holds), "auto" (bubblewrap where it starts, else none, and
     the isolation line says why) or "off"; `resident`: the caller keeps the Boundary for many sessions (a fork
     server where forking is safe); `probe`: start one interpreter the way sessions will before saying yes
     (BoundaryUnavailable if none starts at all; for "barrier" it must also fail to read every path of
-    `secrets`); `turned_off`: how "off" was asked, for the isolation line."""
+    `secrets`); `turned_off`: how "off" was asked, for the isolation line; `remember`: the one-off `grade` keeps the
+    sandbox's command line for the next command's launcher, and uses the one kept (grader.boundary.kept)."""
     if sandbox not in SANDBOX_MODES:
         raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
     forced = os.environ.get("GRADER_LAUNCHER", "")
@@ -148,7 +155,8 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
     else:
         from grader.boundary.sandbox import Sandbox
 
-        chosen = Boundary(launch, Sandbox(bwrap, shutil.which("setpriv")))
+        chosen = Boundary(launch, Sandbox(bwrap, shutil.which("setpriv"),
+                                          remember=sandbox if remember and not resident and not probe else None))
     if probe or sandbox == "barrier":  # a barrier is proved, by every process that relies on it
         from grader.boundary.sandbox import probe as try_one
 
@@ -179,6 +187,13 @@ def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -
         return Boundary(launch, None, probe_failure=f"{without.why_not}; and as the unprivileged user {user.name}: "
                                                     f"{' '.join(reason.split())[:300]}")
     return Boundary(launch, user)
+
+
+def first_child(sandbox: str) -> tuple:
+    """The one-off `grade`'s child, started as `choose` decides now for mode `sandbox` (and keeps for the next
+    command: grader.boundary.kept): (the command prefix it was started behind or None, the child)."""
+    door = choose(sandbox, remember=True)
+    return door.command_prefix(), door.start_child()
 
 
 def open_session(submission, limits: Limits = Limits(), sandbox: str = "auto") -> Session:

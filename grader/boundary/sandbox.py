@@ -194,10 +194,14 @@ class Sandbox:
 
     available = True  # a wrapped child has a /tmp of its own
 
-    def __init__(self, bwrap: str, setpriv: str | None = None) -> None:
+    def __init__(self, bwrap: str, setpriv: str | None = None, remember: str | None = None) -> None:
+        """`remember`: the sandbox mode the one-off `grade` asked, whose command line is kept between commands
+        (grader.boundary.kept); None: built here, kept nowhere."""
         self.bwrap = bwrap
         self.setpriv = setpriv
         self.drops_to_nobody = hasattr(os, "geteuid") and os.geteuid() == 0 and self.setpriv is not None
+        self.remember = remember
+        self._prefix: list[str] | None = None
 
     def describe(self) -> str:
         """The isolation line: what holds for learner code in here, per learner as well."""
@@ -219,7 +223,31 @@ class Sandbox:
 
     def __call__(self, command: list[str]) -> list[str]:
         """`command` inside the sandbox."""
-        return [self.bwrap, *self.arguments(), "--", *self._drop(), *command]
+        return [*self.command_prefix(), *command]
+
+    def command_prefix(self) -> list[str]:
+        """bubblewrap with its arguments, up to the command it runs (the one kept, where it still holds)."""
+        if self._prefix is None:
+            from grader.boundary import kept
+
+            prefix = kept.wrapper(self.remember) if self.remember else None
+            if prefix is None:
+                tree = kept.prepare_tree(_child_modules(), GRADER_DIR, SYSTEM_FILES) if self.remember else None
+                prefix = [self.bwrap, *self.arguments(tree), "--", *self._drop()]
+                if self.remember:
+                    kept.keep(self.remember, prefix, self.watched(), tree)
+            self._prefix = prefix
+        return self._prefix
+
+    def watched(self) -> list[str]:
+        """The paths whose change may change the allow-list: bubblewrap and setpriv, the interpreter, the folders
+        packages are installed in or found through, the places of the bound packages, the standard library, the
+        grader's child modules (and their compiled files' folders) and the system's files."""
+        child = [os.path.dirname(p) for p in _child_modules()]
+        places = [os.path.dirname(p) for p in learner_packages()]
+        paths = [self.bwrap, self.setpriv or "", sys.executable, *child_path(), *_site_dirs(), *places,
+                 *_stdlib_dirs(), *child, *_child_modules(), *SYSTEM_LIBRARIES, *SYSTEM_FILES]
+        return sorted({p for p in paths if p})
 
     def _drop(self) -> list[str]:
         if not self.drops_to_nobody:
@@ -227,8 +255,10 @@ class Sandbox:
         return [self.setpriv, f"--reuid={NOBODY}", f"--regid={NOBODY}", "--clear-groups",
                 "--inh-caps=-all", "--bounding-set=-all"]
 
-    def arguments(self) -> list[str]:
-        """bwrap's arguments: the allow-list of read-only binds, then the private, writable /tmp."""
+    def arguments(self, tree: str | None = None) -> list[str]:
+        """bwrap's arguments: the allow-list of read-only binds, then the private, writable /tmp. `tree`: a folder
+        holding copies of the child's grader modules (tree/grader) and of the system's files (tree/etc), bound as
+        two folders instead of one bind each (grader.boundary.kept.prepare_tree)."""
         # /tmp first: the interpreter or its packages may live under it (a venv in /tmp) and are bound in below
         args: list[str] = ["--dev", "/dev", "--proc", "/proc", "--perms", "01777", "--size", str(TMP_SIZE),
                            "--tmpfs", "/tmp"]
@@ -264,9 +294,12 @@ class Sandbox:
             args.extend(["--ro-bind", path, path])
             bound.append(path)
 
-        for path in SYSTEM_LIBRARIES + SYSTEM_FILES:
+        for path in SYSTEM_LIBRARIES + (() if tree else SYSTEM_FILES):
             if _exists(path):
                 bind(path)
+        if tree:
+            args.extend(["--ro-bind", os.path.join(tree, "etc"), "/etc"])
+            made.add("/etc")
         if self.setpriv and self.drops_to_nobody:
             bind(self.setpriv)
         for path in _python_files():
@@ -277,9 +310,10 @@ class Sandbox:
             args.extend(["--perms", "0755", "--tmpfs", folder])
             masks.append(folder)
             made.add(folder)
-        for path in learner_packages() + _child_modules():
-            parents(path)
-            args.extend(["--ro-bind", path, path])
+        for path in learner_packages() + ((os.path.join(tree, "grader"),) if tree else _child_modules()):
+            inside = GRADER_DIR if tree and path == os.path.join(tree, "grader") else path
+            parents(inside)
+            args.extend(["--ro-bind", path, inside])
         for folder in masked:
             args.extend(["--remount-ro", folder])
         args.extend(["--remount-ro", "/",

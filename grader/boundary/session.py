@@ -34,6 +34,7 @@ from grader.boundary.wire import (
     from_event,
 )
 from grader.submission import Prepared, Submission
+from grader.system import trace
 
 
 class ChildHandle(Protocol):
@@ -283,14 +284,16 @@ class Session:
     """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
 
     def __init__(self, submission: Submission, launcher: Launcher, limits: Limits = Limits(),
-                 started: ChildHandle | None = None, isolation: str = "") -> None:
+                 started: ChildHandle | None = None, isolation: str = "", walled: bool = False) -> None:
         """Start the first child now (or adopt `started`, one the launcher already started); fresh children come
         from `launcher`. Made by grader.boundary.door.Boundary.open_session, which chose the launcher and says
-        what isolates learner code (`isolation`, the line `-v` and the batch print)."""
+        what isolates learner code (`isolation`, the line `-v` and the batch print) and whether learner code is
+        walled off from this user's files (`walled`: bubblewrap or a dropped uid)."""
         self.submission = submission
         self.limits = limits
         self.launcher = launcher
         self.isolation = isolation
+        self.walled = walled
         self.output = ""
         self._prepared: Prepared | None = None
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
@@ -364,8 +367,11 @@ class Session:
                 job()
         progress = Progress.of(pending, runs, self.limits)
         ending = Ending.PIPE_CLOSED
+        trace("the grader's own work done; waiting for the child's lines")
         try:
             for event in child.events(lambda: min(progress.deadline, progress.chapter_end, self.learner_end)):
+                if progress.stage is Stage.STARTUP:
+                    trace("the child's first line")
                 ending = progress.take(event, time.monotonic(), runs)
                 if ending is not None:
                     break
@@ -375,6 +381,7 @@ class Session:
             ending = Ending.TIMED_OUT
         if ending is Ending.PIPE_CLOSED:  # let the process finish dying
             child.handle.wait(2)
+        trace("the child's last line")
         self.output += child.stop()
         self._child = None
         if sender is not None:

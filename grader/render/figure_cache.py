@@ -15,32 +15,20 @@ import hashlib
 import json
 import os
 import re
-import sys
 from pathlib import Path
 
-ENVIRONMENT = "GRADER_CACHE_DIR"  # the folder for the grader's caches; empty: keep nothing
+from grader.system import cache_folder
+
 _FIELDS = {"uri": str, "alt": str, "caption": str, "width": int, "height": int, "gave": str}
 _SVG_URI = re.compile(r"data:image/svg\+xml;base64,[A-Za-z0-9+/]*={0,2}")
 _CHAPTER_ID = re.compile(r"[a-z0-9_]{1,40}")
 
 
 def default_folder() -> Path | None:
-    """GRADER_CACHE_DIR (None if it is empty), else the user's cache folder of the platform, each with
-    'jacobians-grader/figures' below it."""
-    given = os.environ.get(ENVIRONMENT)
-    if given is not None:
-        return Path(given) / "figures" if given.strip() else None
-    try:
-        home = Path.home()
-    except RuntimeError:  # no home folder known
-        return None
-    if sys.platform == "win32":
-        base = Path(os.environ.get("LOCALAPPDATA") or home / "AppData" / "Local")
-    elif sys.platform == "darwin":
-        base = home / "Library" / "Caches"
-    else:
-        base = Path(os.environ.get("XDG_CACHE_HOME") or home / ".cache")
-    return base / "jacobians-grader" / "figures"
+    """GRADER_CACHE_DIR/figures (None if it is empty), else jacobians-grader/figures in the user's cache folder of
+    the platform (grader.system.cache_folder)."""
+    folder = cache_folder("figures")
+    return None if folder is None else Path(folder)
 
 
 def default() -> FigureCache | None:

@@ -1,0 +1,185 @@
+"""Verdicts kept from a learner's last runs of `grade`, reused when their code returned exactly what it returned
+then (and the quiz answers are exactly those judged then).
+
+A learner runs `grade ch06` again and again while most of the chapter's functions return what they returned
+before. What a check decides is a function of the grader, the seed, the calls it planned and what came back
+(values, errors, their tracebacks, timeouts: every byte of the child's answer, as the parent recorded it), so a
+chapter whose child answered exactly as before is judged as before without planning or judging again: the
+parent then imports neither numpy nor the checks. The child still runs every call every time; only the judging
+is kept.
+
+Only `grade` on one submission uses it, and only where learner code cannot write this user's files (the sandbox
+or a dropped uid: grader.boundary's `walled`): an entry is the grader's own word, kept where only the grader writes.
+Batch, Gradescope and every instructor's command judge afresh. An entry's key covers the grader's files (their
+paths, sizes and modification times), the interpreter and numpy, so an edited check, reference or key is a miss.
+Anything missing, unreadable or malformed is a miss too: the memo never breaks a grade.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import os
+import sys
+from pathlib import Path
+
+from grader.boundary.wire import Call
+
+ENTRIES = 8  # verdicts kept per chapter (the last runs'), and quiz verdicts
+_NAMES = frozenset(f"ch{n:02d}" for n in range(100)) | {"quiz", "version"}  # the memo's files
+
+
+class PlannedCall(Call):
+    """A call as a plan made it, kept encoded: sent again as it was, without planning (or numpy)."""
+
+    def __init__(self, encoded: dict) -> None:
+        object.__setattr__(self, "function", str(encoded["function"]))
+        object.__setattr__(self, "args", ())
+        object.__setattr__(self, "kwargs", ())
+        object.__setattr__(self, "encoded", encoded)
+
+    def to_json(self, index: int) -> dict:
+        return dict(self.encoded, index=index)
+
+
+def _stamp_of(folders: list[Path]) -> list:
+    """Each file that decides a verdict, by path, size and modification time (not read: a stamp, not a hash)."""
+    stamp = []
+    for folder in folders:
+        for root, dirs, files in os.walk(folder):
+            dirs[:] = sorted(d for d in dirs if d != "__pycache__")
+            for name in sorted(files):
+                if name.endswith((".py", ".yaml", ".json")):
+                    path = os.path.join(root, name)
+                    with contextlib.suppress(OSError):
+                        info = os.stat(path)
+                        stamp.append((path, info.st_size, info.st_mtime_ns))
+    return stamp
+
+
+def grader_stamp() -> str:
+    """What the grader's verdicts depend on here, as a hash: its files, the references and keys where they are
+    installed (the course file with them), a handout's own file, the interpreter and numpy (found, not imported)."""
+    import importlib.util
+
+    from grader import course, provenance
+
+    folders = provenance.verdict_sources()
+    extra = [course.HANDOUT_FILE] if course.in_handout() else []  # the course file is among the references
+    numpy = importlib.util.find_spec("numpy")
+    if numpy is not None and numpy.origin:
+        extra.append(Path(numpy.origin).with_name("version.py"))
+    stamp = _stamp_of(folders)
+    for path in extra:
+        with contextlib.suppress(OSError):
+            info = os.stat(path)
+            stamp.append((str(path), info.st_size, info.st_mtime_ns))
+    text = json.dumps([sys.executable, sys.version, stamp])
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def key_of(*parts: object) -> str | None:
+    """A hash of plain data (None where it is not plain data: then nothing is kept or reused)."""
+    try:
+        text = json.dumps(parts, sort_keys=True, allow_nan=True)
+    except (TypeError, ValueError):
+        return None
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class Memo:
+    """The kept plans and verdicts of this grader, in `folder` as one JSON file per chapter (quiz.json, version.json)."""
+
+    def __init__(self, folder: Path, grader: str) -> None:
+        self.folder = folder
+        self.grader = grader
+        self._files: dict[str, dict] = {}
+
+    def _read(self, name: str) -> dict:
+        if name not in self._files:
+            entry: object = None
+            with contextlib.suppress(OSError, ValueError):
+                entry = json.loads((self.folder / f"{name}.json").read_text(encoding="utf-8"))
+            valid = isinstance(entry, dict) and entry.get("grader") == self.grader
+            self._files[name] = entry if valid else {"grader": self.grader}  # type: ignore[assignment]
+        return self._files[name]
+
+    def _write(self, name: str) -> None:
+        """Write one file atomically; failing to write is not an error (the next run judges again)."""
+        path = self.folder / f"{name}.json"
+        temporary = path.with_name(f".{name}.{os.getpid()}.tmp")
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            temporary.write_text(json.dumps(self._files[name]), encoding="utf-8")
+            os.replace(temporary, path)
+        except (OSError, TypeError, ValueError):
+            with contextlib.suppress(OSError):
+                temporary.unlink(missing_ok=True)
+
+    def calls(self, chapter: str, plan_key: str) -> list[PlannedCall] | None:
+        """The calls a plan of `chapter` made under `plan_key`, or None."""
+        if chapter not in _NAMES:
+            return None
+        plan = self._read(chapter).get("plan")
+        if not isinstance(plan, dict) or plan.get("key") != plan_key or not isinstance(plan.get("calls"), list):
+            return None
+        calls = plan["calls"]
+        if not all(isinstance(c, dict) and isinstance(c.get("function"), str) for c in calls):
+            return None
+        return [PlannedCall(c) for c in calls]
+
+    def keep_calls(self, chapter: str, plan_key: str, calls: list[Call]) -> None:
+        if chapter not in _NAMES:
+            return
+        encoded = [c.to_json(i) for i, c in enumerate(calls)]
+        self._read(chapter)["plan"] = {"key": plan_key, "calls": encoded}
+        self._write(chapter)
+
+    def verdict(self, name: str, key: str | None) -> dict | None:
+        """The verdict kept under `key` in `name`'s file (a chapter, or "quiz"), or None."""
+        if key is None or name not in _NAMES:
+            return None
+        entries = self._read(name).get("verdicts")
+        if not isinstance(entries, list):
+            return None
+        found = next((e for e in entries if isinstance(e, dict) and e.get("key") == key), None)
+        return found.get("value") if found is not None and isinstance(found.get("value"), dict) else None
+
+    def keep_verdict(self, name: str, key: str | None, value: dict) -> None:
+        """Keep `value` under `key` (the last ENTRIES per file)."""
+        if key is None or name not in _NAMES:
+            return
+        data = self._read(name)
+        entries = [e for e in data.get("verdicts") or [] if isinstance(e, dict) and e.get("key") != key]
+        data["verdicts"] = [*entries[-(ENTRIES - 1):], {"key": key, "value": value}]
+        self._write(name)
+
+
+    def version(self) -> str:
+        """The grader's version (grader.provenance.grader_version), kept while the grader's files are unchanged: on
+        the instructor's side it is a hash of them all."""
+        data = self._read("version")
+        if isinstance(data.get("version"), str):
+            return data["version"]
+        from grader import provenance
+
+        data["version"] = provenance.grader_version()
+        self._write("version")
+        return data["version"]
+
+
+def default(walled: bool) -> Memo | None:
+    """The memo in the user's cache folder, where learner code cannot write it (`walled`); else None (and with
+    GRADER_CACHE_DIR empty)."""
+    if not walled:
+        return None
+    from grader.system import cache_folder
+
+    folder = cache_folder("results")
+    if folder is None:
+        return None
+    try:
+        return Memo(Path(folder), grader_stamp())
+    except (OSError, ValueError):
+        return None

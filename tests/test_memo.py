@@ -1,0 +1,185 @@
+"""What `grade` keeps between runs (grader.memo, grader.boundary.kept): the same answers get the same report as
+when judged afresh, a changed function is judged again, nothing is reused without a wall around learner code,
+and the kept sandbox is the sandbox the door builds, with the same walls."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from grader.boundary import kept
+from grader.boundary.spawn import INTERPRETER
+from grader.memo import Memo, _stamp_of
+from tests.support import BWRAP, REPO, build_submission, replace_function, run_grade
+
+needs_bwrap = pytest.mark.skipif(BWRAP is None, reason="the memo is used only where bubblewrap walls learner code off")
+
+WRONG_BEARING = """def range_bearing(x, y):
+    return np.array([np.hypot(x, y), np.arctan(y / x)])
+"""
+
+
+def _env(cache: Path | str) -> dict:
+    return {**os.environ, "GRADER_CACHE_DIR": str(cache)}
+
+
+def _report(root: Path, cache: Path | str, *args: str, flags=()) -> dict:
+    done = run_grade("ch06", "ch07", "--submission", root, "--format", "json", *args, env=_env(cache), flags=flags)
+    assert done.returncode in (0, 1), done.stderr[-3000:]
+    return json.loads(done.stdout)
+
+
+@needs_bwrap
+@pytest.mark.parametrize("kind", ["right", "one bug", "stubs"])
+def test_a_kept_verdict_is_the_verdict_judged_afresh(tmp_path, kind):
+    if kind == "stubs":
+        root = REPO  # the handout's own stubs, in exercises/
+    else:
+        replacements = {"ch06_measurement": replace_function("ch06_measurement", "range_bearing", WRONG_BEARING)}
+        root = build_submission(tmp_path / "sub", replacements if kind == "one bug" else None)
+    afresh = _report(root, "")
+    cache = tmp_path / "cache"
+    first, again = _report(root, cache), _report(root, cache)
+    assert (cache / "results" / "ch06.json").is_file()  # kept: the second run judged nothing
+    assert first == afresh and again == afresh
+
+
+@needs_bwrap
+def test_the_parent_imports_neither_numpy_nor_the_checks_when_the_answers_are_the_same(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    imported = []
+    for _ in range(2):
+        done = run_grade("ch06", "--submission", root, env=_env(cache), flags=("-X", "importtime"))
+        assert done.returncode in (0, 1) and "ch06 total" in done.stdout, done.stderr[-3000:]
+        imported.append({line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if "|" in line})
+    assert {"numpy", "grader.checks", "yaml"} & imported[0] == {"numpy", "grader.checks", "yaml"}
+    assert not {"numpy", "grader.checks", "grader.planning", "grader.quiz"} & imported[1]
+
+
+@needs_bwrap
+def test_a_changed_function_is_judged_again(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    assert _report(root, cache)["score"] == _report(root, cache)["score"]
+    module = root / "exercises" / "ch06_measurement.py"
+    module.write_text(replace_function("ch06_measurement", "range_bearing", WRONG_BEARING).replace(
+        "solutions.", "exercises."), encoding="utf-8")
+    changed = _report(root, cache)
+    assert changed == _report(root, "")
+    failing = [c["id"] for ch in changed["chapters"] for c in ch["checks"] if c["status"] == "fail"]
+    assert any("range_bearing" in name for name in failing)
+
+
+@needs_bwrap
+def test_changed_quiz_answers_are_judged_again(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    (root / "exercises" / "answers").mkdir()
+    cache = tmp_path / "cache"
+    unanswered = _report(root, cache)
+    (root / "exercises" / "answers" / "ch06.yaml").write_text("bearing_near_dish: c\n", encoding="utf-8")
+    answered = _report(root, cache)
+    assert answered == _report(root, "") and answered != unanswered
+
+
+def test_nothing_is_kept_or_reused_where_learner_code_could_write_the_memo(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    _report(root, cache, "--no-sandbox")
+    assert not (cache / "results").exists()
+
+
+@needs_bwrap
+def test_a_forged_or_broken_memo_is_a_miss_never_a_grade(tmp_path):
+    root = build_submission(tmp_path / "sub", {"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", WRONG_BEARING)})
+    cache = tmp_path / "cache"
+    right = _report(root, cache)
+    kept_file = cache / "results" / "ch06.json"
+    data = json.loads(kept_file.read_text(encoding="utf-8"))
+    data["grader"] = "another grader"  # made by another grader (or its files since edited): not this one's word
+    for entry in data["verdicts"]:
+        for check in entry["value"]["chapter"]["checks"]:
+            check["status"], check["points"] = "pass", check["max_points"]
+    kept_file.write_text(json.dumps(data), encoding="utf-8")
+    assert _report(root, cache) == right
+    kept_file.write_text("{not json", encoding="utf-8")
+    assert _report(root, cache) == right
+
+
+def test_the_grader_stamp_changes_with_any_file_that_decides_a_verdict(tmp_path):
+    (tmp_path / "checks").mkdir()
+    check = tmp_path / "checks" / "ch06.py"
+    check.write_text("A = 1\n", encoding="utf-8")
+    before = _stamp_of([tmp_path])
+    check.write_text("A = 22\n", encoding="utf-8")
+    assert _stamp_of([tmp_path]) != before
+    memo = Memo(tmp_path / "memo", "stamp")
+    memo.keep_verdict("ch06", "key", {"chapter": {}})
+    assert Memo(tmp_path / "memo", "stamp").verdict("ch06", "key") == {"chapter": {}}
+    assert Memo(tmp_path / "memo", "another stamp").verdict("ch06", "key") is None
+    memo.keep_verdict("../../elsewhere", "key", {"x": 1})  # only the memo's own file names
+    assert not (tmp_path / "elsewhere.json").exists()
+
+
+# ------------------------------------------------------------------------------------------- the kept sandbox
+
+@needs_bwrap
+def test_the_kept_sandbox_is_the_doors_and_holds_only_while_what_made_it_holds(tmp_path, monkeypatch):
+    from grader.boundary.door import choose
+
+    monkeypatch.setenv("GRADER_CACHE_DIR", str(tmp_path))
+    built = choose("auto").command_prefix()
+    remembered = choose("auto", remember=True).command_prefix()
+    assert kept.wrapper("auto") == remembered
+    assert kept.wrapper("off") is None
+    monkeypatch.setenv("GRADER_SANDBOX", "off")  # what the door reads has changed: decided afresh
+    assert kept.wrapper("auto") is None
+    monkeypatch.delenv("GRADER_SANDBOX")
+    assert kept.wrapper("auto") == remembered
+    # the binds are the same but for the two prepared folders, which hold copies of what was bound one by one
+    assert len(remembered) < len(built)
+    assert {a for a in remembered if a.startswith("--unshare")} == {a for a in built if a.startswith("--unshare")}
+    decision = json.loads((tmp_path / "launch" / "decision.json").read_text(encoding="utf-8"))
+    watched = decision["watched"][0]
+    os.utime(watched, ns=(0, 12345))
+    try:
+        assert kept.wrapper("auto") is None  # a watched path changed
+    finally:
+        os.utime(watched, ns=(os.stat(watched).st_atime_ns, decision["stamp"][0][1]))
+
+
+@needs_bwrap
+def test_the_kept_sandbox_walls_off_what_the_door_walls_off(tmp_path, monkeypatch):
+    from grader.boundary.door import choose
+    from grader.system import child_path
+
+    monkeypatch.setenv("GRADER_CACHE_DIR", str(tmp_path))
+    choose("auto", remember=True).command_prefix()
+    prefix = kept.wrapper("auto")
+    grader = REPO / "grader"
+    look = (f"import sys, os; sys.path[:] = {child_path()!r}; import numpy, grader.boundary.child\n"
+            f"print(sorted(os.listdir({str(grader)!r})))\n"
+            f"print([p for p in {[str(REPO / 'solutions'), str(grader / 'checks'), str(tmp_path / 'launch')]!r}"
+            " if os.path.exists(p) and os.listdir(p)])\n")
+    done = subprocess.run([*prefix, sys.executable, *INTERPRETER, "-c", look], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    listed, readable = done.stdout.splitlines()
+    assert set(eval(listed)) <= {"__init__.py", "catalogue.py", "system.py", "boundary", "__pycache__"}
+    assert eval(readable) == []
+
+
+@needs_bwrap
+def test_grade_starts_its_child_behind_the_kept_sandbox_and_grades_alike(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    reports = [_report(root, cache, "--no-quiz") for _ in range(2)]
+    assert (cache / "launch" / "decision.json").is_file()
+    assert len(list((cache / "launch").glob("tree-*"))) == 1
+    assert reports[0] == reports[1] == _report(root, "", "--no-quiz")
