@@ -1,16 +1,23 @@
-"""Latency of `grade ch06` on the reference solutions against `python -c "import numpy"`.
+"""Latency of `grade ch06` against `python -c "import numpy"`, and the floors it sits on, timed in the same run.
 
-Both are timed in the same run, interleaved, with several repetitions; medians are compared.
-Target: grade ch06 at most 1.5x the numpy import. For scale (quoted, not measured here):
-otter-grader's `otter run` takes about 3.4 s for one submission with five H/J checks on this kind
-of machine, nbgrader about 3.9 s.
+Every command is timed as a whole process, the commands interleaved round after round (paired runs), each
+printed as its median and spread over the rounds and as a ratio to the numpy import's median of the same run.
+Target: `grade ch06` (a right submission and the stubs, quiz included, sandbox on) at most 1.5x the numpy import.
 
-Beside them it times the floor of the grader's own process: a bare interpreter importing exactly the
-modules `grade ch06 --solutions` has imported when it ends (recorded from one run) and ending as the
-command does, so the figure can be read against what importing numpy, click, pyyaml and the grader
-alone costs.
+What is timed (the grader's caches in a private folder, warmed by one run first, as on a learner's machine
+after their first `grade`):
+- `grade ch06 --solutions` and `grade ch06` on the stubs, run again with the answers unchanged: the kept
+  sandbox starts the child first, and the kept verdicts are reused (grader.memo);
+- the same with a function changed before every run (a new constant each time): that chapter is planned while
+  the child runs and judged afresh, numpy and the checks imported;
+- the first run of all, with nothing kept (a fresh cache folder each time): the door decides, the sandbox's
+  folders are prepared, every chapter is planned and judged;
+- without the sandbox (so nothing is reused either: learner code could write the memo);
+- the floors: bubblewrap with the grader's allow-list starting a bare interpreter, and the child's path alone
+  (bubblewrap, the child's interpreter, numpy, the chapter and its calls, from a launcher that starts it with a
+  ready request and reads its lines to the end).
 
-    python benchmarks/latency.py [--repeat 15]
+    python benchmarks/latency.py [--repeat 15] [--trace]
 """
 
 from __future__ import annotations
@@ -19,88 +26,160 @@ import argparse
 import compileall
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from grader.system import SINGLE_THREADED_BLAS  # noqa: E402
 
+from tests.support import build_submission, replace_function  # noqa: E402
 
-def timed(command: list[str]) -> float:
-    started = time.perf_counter()
-    subprocess.run(command, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
-    return time.perf_counter() - started
+# Starts the sandboxed child behind the kept sandbox with a ready request (argv[1], JSON) and reads its lines to
+# the end: the child's path, with nothing of the grader's own work beside it.
+_CHILD_PATH = """import json, os, sys
+from grader.boundary import kept
+from grader.system import read_chunk
+with open(sys.argv[1], encoding="utf-8") as handle:
+    request = json.load(handle)
+prefix, child = kept.start("auto")
+child.send(request)
+buffer = b""
+while b'"done"' not in buffer:
+    chunk = read_chunk(child.read_fd, 30)
+    if not chunk:
+        break
+    buffer += chunk
+child.stop(0)
+os._exit(0 if b'"done"' in buffer else 1)
+"""
 
-
-# Runs `grade ch06 --solutions` in this interpreter and writes the names of the modules it imported, as it ends.
-_RECORD_MODULES = """import json, os, sys
-leave, where = os._exit, sys.argv[1]
-def record(code):
-    with open(where, "w", encoding="utf-8") as out:
-        json.dump(sorted(sys.modules), out)
-    leave(code)
-os._exit = record
-sys.argv = ["grade", "ch06", "--solutions"]
-from grader.launch import main
-main()
+_CHANGED = """def range_bearing(x, y):
+    return np.array([np.hypot(x, y) * {scale!r}, np.arctan2(y, x)])
 """
 
 
-def imports_of_grade() -> list[str]:
-    """A command importing what `grade ch06 --solutions` imports (its own grading process), and nothing else."""
-    with tempfile.TemporaryDirectory() as scratch:
-        names = os.path.join(scratch, "modules.json")
-        subprocess.run([sys.executable, "-c", _RECORD_MODULES, names], cwd=ROOT, stdout=subprocess.DEVNULL,
-                       check=True)
-        with open(names, encoding="utf-8") as handle:
-            modules = [m for m in json.load(handle) if m != "__main__"]
-    # as grader.launch does: BLAS told to run single-threaded before numpy's import, and no teardown at the end;
-    # Cython's own entries in sys.modules (cython_runtime, _cython_3_x) are not modules one can import
-    body = (f"import importlib, os\nos.environ.update({SINGLE_THREADED_BLAS!r})\nfor name in {modules!r}:\n"
-            "    try:\n        importlib.import_module(name)\n    except ModuleNotFoundError:\n        pass\n"
-            "os._exit(0)\n")
-    return [sys.executable, "-c", body]
+def timed(command: list[str], env: dict) -> float:
+    started = time.perf_counter()
+    subprocess.run(command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    return time.perf_counter() - started
+
+
+def ready_request(root: Path, cache: Path, env: dict) -> Path:
+    """The ch06 request `grade` sends (the memo's kept calls, the submission's files), as the child's path gets it."""
+    from grader.boundary.session import Limits
+    from grader.submission import Submission
+
+    subprocess.run([sys.executable, "-m", "grader", "ch06", "--no-quiz", "--submission", str(root)], cwd=ROOT,
+                   env=env, stdout=subprocess.DEVNULL, check=True)
+    kept = json.loads((cache / "results" / "ch06.json").read_text(encoding="utf-8"))
+    request = {"package": "exercises", "files": Submission(root).prepare().files, "limits": Limits().rlimits(),
+               "chapters": [{"chapter": "ch06", "module": "ch06_measurement", "calls": kept["plan"]["calls"]}]}
+    path = cache / "request.json"
+    path.write_text(json.dumps(request), encoding="utf-8")
+    return path
+
+
+def trace(root: Path, env: dict, runs: int = 5) -> None:
+    """Where the time of `grade ch06` goes: the command's own trace points (GRADER_TRACE), median per point."""
+    points: dict[str, list[float]] = {}
+    for _ in range(runs):
+        done = subprocess.run([sys.executable, "-m", "grader", "ch06", "--submission", str(root)], cwd=ROOT,
+                              env=dict(env, GRADER_TRACE=repr(time.time())), capture_output=True, text=True,
+                              check=False)
+        for line in done.stderr.splitlines():
+            if line.startswith("trace "):
+                at, what = line[6:].split(" ms  ", 1)
+                points.setdefault(what, []).append(float(at))
+    for what, values in points.items():
+        print(f"  {statistics.median(values):6.1f} ms  {what}")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=15)
+    parser.add_argument("--trace", action="store_true", help="also print where a re-run's time goes")
     args = parser.parse_args()
     for folder in ("grader", "solutions", "exercises"):  # the steady state a learner sees
         compileall.compile_dir(str(ROOT / folder), quiet=1)
-    commands = {
-        "python -c 'import numpy'": [sys.executable, "-c", "import numpy"],
-        "grade ch06 --solutions": [sys.executable, "-m", "grader", "ch06", "--solutions"],
-        "  code only (--no-quiz)": [sys.executable, "-m", "grader", "ch06", "--solutions", "--no-quiz"],
-        "  code only, no sandbox": [sys.executable, "-m", "grader", "ch06", "--solutions", "--no-quiz",
-                                    "--no-sandbox"],
-        "grade ch06 (stubs)": [sys.executable, "-m", "grader", "ch06"],
-        "grade all --solutions": [sys.executable, "-m", "grader", "all", "--solutions"],
-        "its imports alone": imports_of_grade(),
+    scratch = Path(tempfile.mkdtemp(prefix="latency-"))
+    try:
+        run(scratch, args)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def run(scratch: Path, args) -> None:
+    cache = scratch / "cache"
+    env = dict(os.environ, GRADER_CACHE_DIR=str(cache))
+    right = build_submission(scratch / "right")
+    changing = build_submission(scratch / "changing")
+    fresh = [0]
+
+    def change_a_function() -> None:  # a new constant each time: the chapter's answers differ from every kept run
+        fresh[0] += 1
+        source = replace_function("ch06_measurement", "range_bearing", _CHANGED.format(scale=1 + fresh[0] * 1e-9))
+        (changing / "exercises" / "ch06_measurement.py").write_text(source.replace("solutions.", "exercises."),
+                                                                  encoding="utf-8")
+
+    def empty_cache() -> None:
+        shutil.rmtree(scratch / "first", ignore_errors=True)
+
+    grade = [sys.executable, "-m", "grader"]
+    request = ready_request(right, cache, env)
+    prefix = subprocess.run([sys.executable, "-c", "from grader.boundary import kept; print(*kept.wrapper('auto'), "
+                             "sep=chr(0))"], cwd=ROOT, env=env, capture_output=True, text=True,
+                            check=True).stdout.rstrip("\n").split("\0")  # as `grade` sees it (its sys.path)
+    commands: dict[str, tuple[list[str], dict, Callable[[], None] | None]] = {
+        "python -c 'import numpy'": ([sys.executable, "-c", "import numpy"], env, None),
+        "grade ch06 --solutions": ([*grade, "ch06", "--solutions"], env, None),
+        "grade ch06 (stubs)": ([*grade, "ch06"], env, None),
+        "  a right submission": ([*grade, "ch06", "--submission", str(right)], env, None),
+        "  a function changed": ([*grade, "ch06", "--submission", str(changing)], env, change_a_function),
+        "  first run, nothing kept": ([*grade, "ch06", "--solutions"], dict(env, GRADER_CACHE_DIR=str(scratch / "first")),
+                                      empty_cache),
+        "  without the sandbox": ([*grade, "ch06", "--solutions", "--no-sandbox"], env, None),
+        "grade all --solutions": ([*grade, "all", "--solutions"], env, None),
+        "floor: bubblewrap alone": ([*prefix, sys.executable, "-I", "-S", "-c", ""], env, None),
+        "floor: the child's path": ([sys.executable, "-c", _CHILD_PATH, str(request)], env, None),
     }
-    for command in commands.values():  # warm the page cache
-        timed(command)
+    for command, environment, before in commands.values():  # warm the page cache and the grader's caches
+        for _ in range(2):
+            if before:
+                before()
+            timed(command, environment)
     samples: dict[str, list[float]] = {name: [] for name in commands}
     for _ in range(args.repeat):
-        for name, command in commands.items():
-            samples[name].append(timed(command))
+        for name, (command, environment, before) in commands.items():
+            if before:
+                before()
+            samples[name].append(timed(command, environment))
     baseline = statistics.median(samples["python -c 'import numpy'"])
-    print(f"{'command':<28} {'median s':>9} {'min s':>7} {'x numpy':>8}")
+    print(f"{args.repeat} paired runs; each command's median, its spread (lowest to highest) and its median / the "
+          "numpy import's")
+    print(f"{'command':<30} {'median s':>9} {'spread s':>15} {'x numpy':>8}")
     for name, values in samples.items():
         median = statistics.median(values)
-        print(f"{name:<28} {median:9.3f} {min(values):7.3f} {median / baseline:8.2f}")
-    ratio = statistics.median(samples["grade ch06 --solutions"]) / baseline
-    code = statistics.median(samples["  code only (--no-quiz)"]) / baseline
-    floor = statistics.median(samples["its imports alone"]) / baseline
-    print(f"\ngrade ch06 / import numpy = {ratio:.2f}x with the quiz, {code:.2f}x code only (target <= 1.5x); "
-          f"otter-grader's quoted 3.4 s would be {3.4 / baseline:.0f}x")
-    print(f"importing what grade ch06 imports, and nothing else, is {floor:.2f}x: the rest of the command "
-          f"(starting the child, planning, the quiz, judging, output) adds {ratio - floor:.2f}x")
+        print(f"{name:<30} {median:9.3f} {min(values):7.3f}-{max(values):.3f} {median / baseline:8.2f}")
+
+    def ratio(name: str) -> float:
+        return statistics.median(samples[name]) / baseline
+
+    print(f"\ngrade ch06 / import numpy = {ratio('grade ch06 --solutions'):.2f}x (--solutions), "
+          f"{ratio('grade ch06 (stubs)'):.2f}x (stubs), {ratio('  a right submission'):.2f}x (a right submission) "
+          f"(target <= 1.5x); with a function changed {ratio('  a function changed'):.2f}x, the first run "
+          f"{ratio('  first run, nothing kept'):.2f}x")
+    print(f"floors: bubblewrap alone {ratio('floor: bubblewrap alone'):.2f}x, the child's path "
+          f"{ratio('floor: the child' + chr(39) + 's path'):.2f}x; otter-grader's quoted 3.4 s for one notebook "
+          f"would be {3.4 / baseline:.0f}x")
+    if args.trace:
+        print("\nwhere the time of a re-run of `grade ch06` on a right submission goes (medians):")
+        trace(right, env)
 
 
 if __name__ == "__main__":

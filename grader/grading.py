@@ -89,6 +89,14 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
             if memo is not None and plan_keys[cid]:
                 memo.keep_calls(cid, plan_keys[cid], calls)
         requests.append(ChapterRequest(cid, BY_ID[cid].module, calls))
+    files = key_of(session.prepared.files) if memo is not None else None
+    unseen = [cid for cid in chapter_ids if cid not in plans and memo is not None and not memo.seen(cid, files)]
+    if unseen:  # files no kept verdict was made from: most likely judged afresh, so planned while the child runs
+        def plan_meanwhile() -> None:
+            for cid in unseen:
+                plans[cid] = _plan(cid, seed, with_plots, exclude)
+
+        session.meanwhile.append(plan_meanwhile)
     runs = session.run(requests)
     submission = session.submission
     prepared = session.prepared
@@ -123,7 +131,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
             chapter = plan.judge(run, module_file)
             uses = plan.chapter.builds_on
             if memo is not None and _settled(chapter, run):
-                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses})
+                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses}, files)
         builds_on[cid] = uses
         chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
         chapter.notes.extend(prepared.notes.get(module, []))

@@ -146,14 +146,21 @@ class Memo:
         found = next((e for e in entries if isinstance(e, dict) and e.get("key") == key), None)
         return found.get("value") if found is not None and isinstance(found.get("value"), dict) else None
 
-    def keep_verdict(self, name: str, key: str | None, value: dict) -> None:
-        """Keep `value` under `key` (the last ENTRIES per file)."""
+    def keep_verdict(self, name: str, key: str | None, value: dict, files: str | None = None) -> None:
+        """Keep `value` under `key` (the last ENTRIES per file), made from the learner's files hashed as `files`."""
         if key is None or name not in _NAMES:
             return
         data = self._read(name)
         entries = [e for e in data.get("verdicts") or [] if isinstance(e, dict) and e.get("key") != key]
-        data["verdicts"] = [*entries[-(ENTRIES - 1):], {"key": key, "value": value}]
+        data["verdicts"] = [*entries[-(ENTRIES - 1):], {"key": key, "value": value, "files": files}]
         self._write(name)
+
+    def seen(self, name: str, files: str | None) -> bool:
+        """Whether a verdict of `name` was kept from learner files hashed as `files` (then this run's answers are
+        most likely the same, and judging is most likely not needed)."""
+        entries = self._read(name).get("verdicts") if name in _NAMES else None
+        return files is not None and isinstance(entries, list) and any(
+            isinstance(e, dict) and e.get("files") == files for e in entries)
 
 
     def version(self) -> str:

@@ -145,13 +145,14 @@ def test_the_kept_sandbox_is_the_doors_and_holds_only_while_what_made_it_holds(t
     # the binds are the same but for the two prepared folders, which hold copies of what was bound one by one
     assert len(remembered) < len(built)
     assert {a for a in remembered if a.startswith("--unshare")} == {a for a in built if a.startswith("--unshare")}
-    decision = json.loads((tmp_path / "launch" / "decision.json").read_text(encoding="utf-8"))
-    watched = decision["watched"][0]
-    os.utime(watched, ns=(0, 12345))
+    fields = (tmp_path / "launch" / "decision").read_text(encoding="utf-8").split("\0")
+    watched, stamp = fields[2], int(fields[3])  # the first watched path, and its modification time then
+    os.utime(watched, ns=(os.stat(watched).st_atime_ns, 12345))
     try:
         assert kept.wrapper("auto") is None  # a watched path changed
     finally:
-        os.utime(watched, ns=(os.stat(watched).st_atime_ns, decision["stamp"][0][1]))
+        os.utime(watched, ns=(os.stat(watched).st_atime_ns, stamp))
+    assert kept.wrapper("auto") == remembered
 
 
 @needs_bwrap
@@ -180,6 +181,6 @@ def test_grade_starts_its_child_behind_the_kept_sandbox_and_grades_alike(tmp_pat
     root = build_submission(tmp_path / "sub")
     cache = tmp_path / "cache"
     reports = [_report(root, cache, "--no-quiz") for _ in range(2)]
-    assert (cache / "launch" / "decision.json").is_file()
+    assert (cache / "launch" / "decision").is_file()
     assert len(list((cache / "launch").glob("tree-*"))) == 1
     assert reports[0] == reports[1] == _report(root, "", "--no-quiz")

@@ -5,10 +5,10 @@ allow-list from what is installed (the interpreter, its standard library, numpy,
 with what it requires, the child's own modules): some 50 read-only binds, found by asking the import system
 and reading package metadata. That is the same command after command, so the one-off `grade` keeps the
 decision, with the allow-list, in the user's cache folder; the next command's launcher (grader.launch) reads it
-with os and json alone and starts the child before anything else is imported.
+with os alone and starts the child before anything else is imported.
 
 A kept decision holds only while what made it holds: the mode asked, the environment the door reads (the
-grader's own settings, GRADER_*, and PATH), the user, the interpreter and its path, and the
+grader's own settings, GRADER_*, and PATH), the user, the interpreter and the path a child gets, and the
 modification times of every folder the allow-list was read from (an install or removal changes them) and of
 bubblewrap itself. Anything else is a miss, and the door decides afresh. It is read and written by the one-off
 command only (`remember`), never by batch, Gradescope or a resident boundary; like the grader's own files, it
@@ -18,36 +18,35 @@ user, when it could as well have rewritten the grader).
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 
-from grader.system import cache_folder
+from grader.system import cache_folder, child_path
 
 _NOT_READ_BY_THE_DOOR = ("GRADER_TRACE", "GRADER_CACHE_DIR")
 
 
 def _file() -> str | None:
     folder = cache_folder("launch")
-    return None if folder is None else os.path.join(folder, "decision.json")
+    return None if folder is None else os.path.join(folder, "decision")
 
 
-def _condition(mode: str) -> list:
-    """What the decision depends on besides the watched paths."""
+def _condition(mode: str) -> str:
+    """What the decision depends on besides the watched paths, as text."""
     euid = os.geteuid() if hasattr(os, "geteuid") else None
-    settings = sorted([k, v] for k, v in os.environ.items() if k.startswith("GRADER_") and k not in _NOT_READ_BY_THE_DOOR)
-    return [mode, settings, os.environ.get("PATH"), euid, sys.executable, sys.version, sys.path]
+    settings = sorted((k, v) for k, v in os.environ.items() if k.startswith("GRADER_") and k not in _NOT_READ_BY_THE_DOOR)
+    return repr([mode, settings, os.environ.get("PATH"), euid, sys.executable, sys.version, child_path()])
 
 
-def _stamp(paths: list[str]) -> list:
-    stamp = []
-    for path in paths:
-        try:
-            stamp.append([path, os.stat(path).st_mtime_ns])
-        except OSError:
-            stamp.append([path, None])
-    return stamp
+def _stamp(path: str) -> str:
+    try:
+        return str(os.stat(path).st_mtime_ns)
+    except OSError:
+        return "missing"
 
+
+# The file: fields separated by NUL, which no path or argument holds (read without json: 4 ms of the launcher's
+# path): the condition, the number of watched paths, each watched path and its stamp, then the command prefix.
 
 def wrapper(mode: str) -> list[str] | None:
     """The kept command prefix (bubblewrap, its arguments, the drop of privileges) for sandbox mode `mode`, if
@@ -57,34 +56,32 @@ def wrapper(mode: str) -> list[str] | None:
         return None
     try:
         with open(path, encoding="utf-8") as handle:
-            kept = json.load(handle)
-    except (OSError, ValueError):
+            fields = handle.read().split("\0")
+        watched = int(fields[1])
+    except (OSError, ValueError, IndexError):
         return None
-    if not isinstance(kept, dict) or kept.get("condition") != json.loads(json.dumps(_condition(mode))):
+    if fields[0] != _condition(mode) or watched < 0 or len(fields) <= 2 + 2 * watched:
         return None
-    watched, prefix = kept.get("watched"), kept.get("prefix")
-    if not (isinstance(watched, list) and all(isinstance(p, str) for p in watched) and isinstance(prefix, list)
-            and prefix and all(isinstance(a, str) for a in prefix)):
-        return None
-    if kept.get("stamp") != _stamp(watched):
-        return None
-    return prefix
+    for i in range(2, 2 + 2 * watched, 2):
+        if _stamp(fields[i]) != fields[i + 1]:
+            return None
+    return fields[2 + 2 * watched:]
 
 
 def keep(mode: str, prefix: list[str], watched: list[str], tree: str | None = None) -> None:
     """Keep the door's decision for `mode`: the command prefix, the paths whose change undoes it and the prepared
     tree it binds (the trees of earlier decisions are removed). Failing to write is not an error."""
     path = _file()
-    if path is None:
+    if path is None or any("\0" in text for text in [*prefix, *watched]):
         return
+    fields = [_condition(mode), str(len(watched)), *(x for p in watched for x in (p, _stamp(p))), *prefix]
     temporary = f"{path}.{os.getpid()}.tmp"
     try:
         os.makedirs(os.path.dirname(path), exist_ok=True)
         with open(temporary, "w", encoding="utf-8") as handle:
-            json.dump({"condition": _condition(mode), "watched": watched, "stamp": _stamp(watched),
-                       "prefix": prefix}, handle)
+            handle.write("\0".join(fields))
         os.replace(temporary, path)
-    except (OSError, TypeError, ValueError):
+    except (OSError, ValueError):
         try:
             os.unlink(temporary)
         except OSError:
@@ -129,8 +126,8 @@ def prepare_tree(child_modules: tuple[str, ...], grader_dir: str, system_files: 
 
 
 def start(mode: str) -> tuple | None:
-    """The one-off `grade`'s child for sandbox mode `mode`, started at once behind the kept sandbox (only os, json
-    and subprocess imported): (the command prefix, the child); None where no kept decision holds (then
+    """The one-off `grade`'s child for sandbox mode `mode`, started at once behind the kept sandbox (with os, and
+    os.posix_spawn where there is one): (the command prefix, the child); None where no kept decision holds (then
     grader.boundary.first_child asks the door)."""
     prefix = wrapper(mode)
     if prefix is None:

@@ -8,15 +8,16 @@ Two kinds behind one call, `start_child`; grader.boundary.door.choose says which
   results come back on its stdout (the child moves learner output to a capture file it is given by name),
   and a timeout kills the process tree through a Windows job object where there is one, else the process.
 (grader.boundary.forkserver is the third: a resident interpreter that forks a child per session.)
-Only os, sys and subprocess here: grader.launch starts the child before the heavy imports (click, numpy).
+Only os and sys at import (subprocess where a child needs it): grader.launch starts the child before the heavy
+imports (click, numpy); a sandboxed child is started with os.posix_spawn where the system has it, without
+subprocess (its import alone is 9 ms of the launcher's path).
 """
 
 from __future__ import annotations
 
 import os
-import subprocess
 import sys
-from typing import Callable
+from collections.abc import Callable
 
 from grader.system import (
     StreamReader,
@@ -34,6 +35,10 @@ from grader.system import (
 # the grader's own path.
 INTERPRETER = ("-I", "-S", "-X", "utf8")
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.child import main; main()"
+
+TYPE_CHECKING = False  # not typing's: its import costs the launcher 5 ms before the child starts
+if TYPE_CHECKING:
+    import subprocess
 
 # A hook that wraps the child's command line, e.g. in a bubblewrap sandbox (grader.boundary.sandbox.Sandbox).
 CommandWrapper = Callable[[list], list]
@@ -126,9 +131,14 @@ def _send(stream, request: dict) -> None:
 class _Started:
     """What both kinds of child share: the started process's wait and exit status."""
 
-    process: subprocess.Popen
+    process: subprocess.Popen | _Spawned
 
     def wait(self, timeout: float) -> None:
+        if isinstance(self.process, _Spawned):
+            self.process.wait(timeout)
+            return
+        import subprocess
+
         try:
             self.process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
@@ -144,7 +154,7 @@ class SpawnedChild(_Started):
     """A child interpreter started by start_child: its process (group), result pipe, output file, and
     the folder it writes the learner's files to (`root`; removed at stop when it is on the host)."""
 
-    def __init__(self, process: subprocess.Popen, read_fd: int, capture_fd: int, root: str,
+    def __init__(self, process: subprocess.Popen | _Spawned, read_fd: int, capture_fd: int, root: str,
                  host_root: bool) -> None:
         self.process = process
         self.read_fd = read_fd
@@ -154,6 +164,7 @@ class SpawnedChild(_Started):
 
     def send(self, request: dict) -> None:
         """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
+        become_subreaper()  # before learner code can start a process that leaves the group (not before: ctypes)
         _send(self.process.stdin, dict(request, root=self.root, confine=not self.host_root))
 
     def read(self, timeout: float) -> bytes:
@@ -267,11 +278,80 @@ def _end_job(job: object) -> bool:
     return done
 
 
+class _Spawned:
+    """A sandboxed child started with os.posix_spawn: what SpawnedChild uses of a subprocess.Popen (pid, stdin,
+    poll, wait), without importing subprocess."""
+
+    def __init__(self, pid: int, stdin) -> None:
+        self.pid = pid
+        self.stdin = stdin
+        self.returncode: int | None = None
+
+    def poll(self) -> int | None:
+        """The exit status (negative: killed by that signal), or None while it runs."""
+        if self.returncode is None:
+            try:
+                pid, status = os.waitpid(self.pid, os.WNOHANG)
+            except ChildProcessError:  # reaped already (grader.boundary.spawn.kill_orphans)
+                self.returncode = 0
+                return self.returncode
+            if pid:
+                self.returncode = os.waitstatus_to_exitcode(status)
+        return self.returncode
+
+    def wait(self, timeout: float | None = None) -> int | None:
+        """Wait for the exit (at most `timeout` seconds; None: however long it takes); its status, or None."""
+        if timeout is None:
+            while self.returncode is None:
+                try:
+                    self.returncode = os.waitstatus_to_exitcode(os.waitpid(self.pid, 0)[1])
+                except ChildProcessError:
+                    self.returncode = 0
+            return self.returncode
+        import time
+
+        end, pause = time.monotonic() + timeout, 0.0005
+        while self.poll() is None and time.monotonic() < end:
+            time.sleep(min(pause, max(0.0, end - time.monotonic())))
+            pause = min(pause * 2, 0.05)
+        return self.returncode
+
+
+def _posix_spawn(command: list[str], read_fd: int, write_fd: int, capture_fd: int):
+    """Start `command` (its last two arguments the child's ends of the result pipe and capture file, to be
+    numbered here) in a session of its own, with a pipe for the request on its stdin and stdout and stderr on
+    /dev/null; (a _Spawned, the request pipe's read end, to close) or None where os.posix_spawn cannot (then
+    subprocess does). The child's descriptors are duplicated to numbers above every one named here, so no other
+    descriptor of this process reaches it."""
+    spawn = getattr(os, "posix_spawn", None)
+    if spawn is None or not os.path.isabs(command[0]):
+        return None
+    import signal
+
+    request_read, request_write = os.pipe()
+    high = max(request_read, request_write, read_fd, write_fd, capture_fd) + 1
+    actions = [(os.POSIX_SPAWN_DUP2, request_read, 0), (os.POSIX_SPAWN_OPEN, 1, os.devnull, os.O_WRONLY, 0),
+               (os.POSIX_SPAWN_DUP2, 1, 2), (os.POSIX_SPAWN_DUP2, write_fd, high),
+               (os.POSIX_SPAWN_DUP2, capture_fd, high + 1)]
+    command = [*command[:-2], str(high), str(high + 1)]
+    try:
+        pid = spawn(command[0], command, child_environment(), file_actions=actions, setsid=True,
+                    setsigdef=(signal.SIGPIPE, signal.SIGXFSZ))
+    except (NotImplementedError, OSError):  # no setsid for posix_spawn here
+        os.close(request_read)
+        os.close(request_write)
+        return None
+    os.close(request_read)
+    return _Spawned(pid, os.fdopen(request_write, "wb"))
+
+
 def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memory_bytes: int | None = 1 << 30):
     """Start a fresh child interpreter, wrapped (e.g. sandboxed) by `wrap`; `portable`: without process groups
     or passed descriptors (Windows). The submission's files reach it in the request (grader.boundary.wire),
     written under a folder of its own."""
     if portable:  # no bubblewrap where this runs (Windows): the child on the host
+        import subprocess
+
         scratch, root = _scratch(False)
         capture = os.path.join(scratch, "printed.txt")
         command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), "--portable", capture]
@@ -288,12 +368,16 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
     command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), str(write_fd), str(capture_fd)]
     if wrap is not None:
         command = wrap(command)
-    process = subprocess.Popen(
-        command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        pass_fds=(write_fd, capture_fd), start_new_session=True, env=child_environment(),
-        cwd=temp_dir() if sandboxed else scratch,
-    )
+    # a sandboxed child has its own working folder (bubblewrap's --chdir): os.posix_spawn, which sets none, serves
+    process = _posix_spawn(command, read_fd, write_fd, capture_fd) if sandboxed else None
+    if process is None:
+        import subprocess
+
+        process = subprocess.Popen(
+            command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            pass_fds=(write_fd, capture_fd), start_new_session=True, env=child_environment(),
+            cwd=temp_dir() if sandboxed else scratch,
+        )
     os.close(write_fd)
     keep(process.pid)
-    become_subreaper()  # after the start: the child imports numpy long before learner code runs
     return SpawnedChild(process, read_fd, capture_fd, root, host_root=not sandboxed)
