@@ -166,13 +166,23 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
                 raise
         else:
             report = build_report(session, Request(tuple(chapters), seed, learner=learner, plots=plots,
-                                                   label=learner, other_ids=other_ids), course)
+                                                   label=learner, other_ids=other_ids), course, _worker_memo())
             if not report.infrastructure:
                 break
         _drop_boundary()
         if attempt == 1:
             time.sleep(RETRY_PAUSE)
     return report
+
+
+def _worker_memo():
+    """This worker's verdicts, kept across the learners it grades (grader.memo.Memo without a folder): a chapter
+    answered exactly as another learner's is judged once."""
+    if "memo" not in _worker_state:
+        from grader.memo import Memo
+
+        _worker_state["memo"] = Memo(None, "this worker")
+    return _worker_state["memo"]
 
 
 def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[str]:

@@ -26,7 +26,8 @@ from pathlib import Path
 
 from grader.boundary.wire import Call
 
-ENTRIES = 8  # verdicts kept per chapter (the last runs'), and quiz verdicts
+ENTRIES = 8  # verdicts kept per chapter (the last runs'), and quiz verdicts, of one learner
+WORKER_ENTRIES = 32  # verdicts a batch worker keeps per chapter (the last used), some 20 KB each
 _NAMES = frozenset(f"ch{n:02d}" for n in range(100)) | {"quiz", "version"}  # the memo's files
 
 
@@ -89,14 +90,21 @@ def key_of(*parts: object) -> str | None:
 
 
 class Memo:
-    """The kept plans and verdicts of this grader, in `folder` as one JSON file per chapter (quiz.json, version.json)."""
+    """The kept plans and verdicts of this grader, in `folder` as one JSON file per chapter (quiz.json, version.json):
+    one learner's runs (`one_learner`: a chapter whose files are new is planned while the child runs, and the quiz
+    is kept too). With `folder` None, kept in this process only: a batch worker's, across the learners it grades
+    (every learner whose code answers a chapter exactly as another's gets that verdict without planning or judging
+    again; the quiz, with each learner's own numbers, is judged for each)."""
 
-    def __init__(self, folder: Path, grader: str) -> None:
+    def __init__(self, folder: Path | None, grader: str) -> None:
         self.folder = folder
         self.grader = grader
+        self.one_learner = folder is not None
         self._files: dict[str, dict] = {}
 
     def _read(self, name: str) -> dict:
+        if name not in self._files and self.folder is None:
+            self._files[name] = {"grader": self.grader}
         if name not in self._files:
             entry: object = None
             with contextlib.suppress(OSError, ValueError):
@@ -107,6 +115,8 @@ class Memo:
 
     def _write(self, name: str) -> None:
         """Write one file atomically; failing to write is not an error (the next run judges again)."""
+        if self.folder is None:
+            return
         path = self.folder / f"{name}.json"
         temporary = path.with_name(f".{name}.{os.getpid()}.tmp")
         try:
@@ -144,6 +154,9 @@ class Memo:
         if not isinstance(entries, list):
             return None
         found = next((e for e in entries if isinstance(e, dict) and e.get("key") == key), None)
+        if found is not None and self.folder is None:  # kept in memory: the last used is the last let go
+            entries.remove(found)
+            entries.append(found)
         return found.get("value") if found is not None and isinstance(found.get("value"), dict) else None
 
     def keep_verdict(self, name: str, key: str | None, value: dict, files: str | None = None) -> None:
@@ -152,7 +165,8 @@ class Memo:
             return
         data = self._read(name)
         entries = [e for e in data.get("verdicts") or [] if isinstance(e, dict) and e.get("key") != key]
-        data["verdicts"] = [*entries[-(ENTRIES - 1):], {"key": key, "value": value, "files": files}]
+        kept = ENTRIES if self.one_learner else WORKER_ENTRIES
+        data["verdicts"] = [*entries[-(kept - 1):], {"key": key, "value": value, "files": files}]
         self._write(name)
 
     def seen(self, name: str, files: str | None) -> bool:

@@ -176,8 +176,8 @@ def _answers(folder) -> list | None:
 
 
 def kept_quiz_report(session: Session, request: Request, course: courses.Course, memo: Memo | None) -> Report:
-    """quiz_report, or with `memo` the quiz judged from exactly the same answer files before."""
-    if memo is None:
+    """quiz_report, or with one learner's `memo` the quiz judged from exactly the same answer files before."""
+    if memo is None or not memo.one_learner:
         return quiz_report(session, request, course, list(request.chapters))
     from grader.memo import key_of
 

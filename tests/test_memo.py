@@ -184,3 +184,55 @@ def test_grade_starts_its_child_behind_the_kept_sandbox_and_grades_alike(tmp_pat
     assert (cache / "launch" / "decision").is_file()
     assert len(list((cache / "launch").glob("tree-*"))) == 1
     assert reports[0] == reports[1] == _report(root, "", "--no-quiz")
+
+
+# ------------------------------------------------------------------------------------------- a batch worker's memo
+
+def test_a_worker_memo_judges_a_chapter_answered_alike_once(tmp_path, monkeypatch):
+    from grader import grading
+    from tests.support import open_session
+
+    planned = []
+    plan = grading._plan
+    monkeypatch.setattr(grading, "_plan", lambda cid, *rest: planned.append(cid) or plan(cid, *rest))
+    memo = Memo(None, "this worker")
+    right = [build_submission(tmp_path / name) for name in ("ann", "bo")]
+    buggy = build_submission(tmp_path / "cy", {"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", WRONG_BEARING)})
+    reports = [grading.grade(open_session(root), ["ch03", "ch06"], memo=memo) for root in (*right, buggy)]
+    assert planned == ["ch03", "ch06", "ch06"]  # ann's chapters; bo's answers are ann's; cy's ch03 is theirs too
+    alone = [grading.grade(open_session(root), ["ch03", "ch06"]) for root in (right[1], buggy)]
+    assert [c.to_dict() for c in reports[1].chapters] == [c.to_dict() for c in alone[0].chapters]
+    assert [c.to_dict() for c in reports[2].chapters] == [c.to_dict() for c in alone[1].chapters]
+    assert reports[2].chapters[1].score < reports[1].chapters[1].score
+
+
+@pytest.mark.slow
+def test_every_learner_of_a_batch_gets_the_report_they_get_alone(tmp_path):
+    everyone = tmp_path / "everyone"
+    for name, bug in (("ann", False), ("bo", True), ("cy", False), ("dee", True)):
+        build_submission(everyone / name, {"ch06_measurement": replace_function(
+            "ch06_measurement", "range_bearing", WRONG_BEARING)} if bug else None)
+
+    def reports(submissions: Path, out: Path) -> dict:
+        done = run_grade("batch", submissions, "--out", out, "--chapters", "ch03,ch06", "--jobs", "1", "--no-html")
+        assert done.returncode in (0, 1), done.stderr[-3000:]
+        found = {}
+        for learner in ("ann", "bo", "cy", "dee"):
+            path = out / learner / "report.json"
+            if path.exists():
+                found[learner] = json.loads(path.read_text(encoding="utf-8"))["chapters"]
+        return found
+
+    together = reports(everyone, tmp_path / "out")
+    for learner in ("cy", "dee"):  # graded after ann and bo answered alike, and alone
+        alone = tmp_path / f"{learner}-alone"
+        alone.mkdir()
+        (everyone / learner).rename(alone / learner)
+        assert reports(alone, tmp_path / f"out-{learner}")[learner] == together[learner]
+
+
+    def code(chapters: list) -> list:
+        return [[c for c in chapter["checks"] if c["kind"] == "code"] for chapter in chapters]
+
+    assert code(together["cy"]) == code(together["ann"]) and code(together["dee"]) == code(together["bo"])
