@@ -81,9 +81,10 @@ def grader_stamp() -> str:
 
 
 def key_of(*parts: object) -> str | None:
-    """A hash of plain data (None where it is not plain data: then nothing is kept or reused)."""
+    """A hash of plain data (None where it is not plain data: then nothing is kept or reused). Dicts count in
+    their order (a child's lines give theirs): the same data in another order is a miss, never a wrong hit."""
     try:
-        text = json.dumps(parts, sort_keys=True, allow_nan=True)
+        text = json.dumps(parts, allow_nan=True)
     except (TypeError, ValueError):
         return None
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

@@ -123,21 +123,30 @@ _PLAIN = frozenset({int, float, bool, type(None)})
 
 def clean_value(value: object, clean: Callable[[str], str]) -> object:
     """`value` with `clean` applied to every string inside it: dict keys and values, list and tuple
-    items and the fields of dataclasses (copied, never changed in place). Enums, numbers and arrays
-    are left as they are."""
+    items and the fields of dataclasses. What changes is copied, never changed in place; what needs no
+    cleaning (almost everything) is the same object, shared: the renderers that call this only read it.
+    Enums, numbers and arrays are left as they are."""
     kind = type(value)
     if kind in _PLAIN or isinstance(value, Enum):
         return value
     if isinstance(value, str):
-        return clean(value)
+        cleaned = clean(value)
+        return value if cleaned == value else cleaned
     if isinstance(value, dict):
-        return {clean_value(k, clean): clean_value(v, clean) for k, v in value.items()}
+        items = [(clean_value(k, clean), clean_value(v, clean)) for k, v in value.items()]
+        if all(k is old_k and v is old_v for (k, v), (old_k, old_v) in zip(items, value.items())):
+            return value
+        return dict(items)
     if kind in (list, tuple):
         if all(type(v) in _PLAIN for v in value):  # numbers (a matrix row, a plot's curve): nothing to clean
             return value
-        return kind(clean_value(v, clean) for v in value)
+        items = [clean_value(v, clean) for v in value]
+        return value if all(new is old for new, old in zip(items, value)) else kind(items)
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        changes = {f.name: clean_value(getattr(value, f.name), clean) for f in dataclasses.fields(value) if f.init}
+        fields = [f.name for f in dataclasses.fields(value) if f.init]
+        changes = {name: clean_value(getattr(value, name), clean) for name in fields}
+        if all(changes[name] is getattr(value, name) for name in fields):
+            return value
         return dataclasses.replace(value, **changes)
     return value
 
