@@ -60,7 +60,7 @@ def main() -> None:
                 before()
             samples[name].append(timed(command, cache))
     for name, values in samples.items():
-        print(f"{name:<32} median {statistics.median(values):6.3f} s  min {min(values):6.3f} s")
+        print(f"{name:<32} median {statistics.median(values):6.3f} s  spread {min(values):6.3f} to {max(values):6.3f} s")
     print()
     base = samples["grade all --solutions"]
     for name, values in list(samples.items())[1:]:
