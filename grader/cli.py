@@ -231,12 +231,22 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     from grader.pipeline import Request, build_report
 
     session.meanwhile.append(lambda: _renderer(output_format))  # its imports, while the child runs the calls
+    request = Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
+                      plots=html_path is not None, functions=functions)
     try:
-        report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
-                                               plots=html_path is not None, functions=functions),
-                              memo=memo.default(session.walled))
+        report = build_report(session, request, memo=memo.default(session.walled))
     finally:
         session.close()
+    if report.infrastructure and door.sandboxed:  # the child did not start: never behind a kept sandbox again
+        from grader.boundary import kept
+
+        kept.forget()
+        door = boundary.choose(sandbox)  # decided afresh, once, and kept nowhere
+        session = door.open_session(submission)
+        try:
+            report = build_report(session, request)
+        finally:
+            session.close()
     trace("judged")
     if html_path is not None:
         from grader.render import figure_cache, html

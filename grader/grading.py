@@ -80,10 +80,13 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
     plans: dict[str, ChapterPlan] = {}
     plan_keys: dict[str, str | None] = {}
     requests = []
+    kept_calls: set[str] = set()  # the chapters whose calls came from the memo, not from a plan made here
     for cid in chapter_ids:
         plan_keys[cid] = key_of(cid, seed, sorted(e for e in exclude if e.startswith(f"{cid}/")))
         calls = memo.calls(cid, plan_keys[cid]) if memo is not None and plan_keys[cid] else None
-        if calls is None:
+        if calls is not None:
+            kept_calls.add(cid)
+        else:
             plans[cid] = _plan(cid, seed, with_plots, exclude)
             calls = plans[cid].calls
             if memo is not None and plan_keys[cid]:
@@ -95,7 +98,10 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
     if unseen:  # files no kept verdict was made from: most likely judged afresh, so planned while the child runs
         def plan_meanwhile() -> None:
             for cid in unseen:
-                plans[cid] = _plan(cid, seed, with_plots, exclude)
+                try:
+                    plans[cid] = _plan(cid, seed, with_plots, exclude)
+                except Exception:  # noqa: BLE001  planned again below, where what it raises is the report's to meet
+                    return
 
         session.meanwhile.append(plan_meanwhile)
     runs = session.run(requests)
@@ -121,14 +127,12 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
         except (KeyError, TypeError, ValueError):
             chapter = None
         if chapter is None:
-            plan = plans.get(cid)
-            if plan is None:  # its calls came from the memo: planned now, at the same seed, to judge
-                plan = plans[cid] = _plan(cid, seed, with_plots, exclude)
-                if [c.to_json(i) for i, c in enumerate(plan.calls)] != \
-                        [c.to_json(i) for i, c in enumerate(request.calls)]:  # never, unless the memo is wrong
-                    run = session.run([plan.request()])[cid]
-                    _relocate(run, prepared.sources)
-                    key = None
+            plan = plans.get(cid) or _plan(cid, seed, with_plots, exclude)  # at the same seed: the same calls
+            if cid in kept_calls and [c.to_json(i) for i, c in enumerate(plan.calls)] != \
+                    [c.to_json(i) for i, c in enumerate(request.calls)]:  # never, unless the memo is wrong
+                run = session.run([plan.request()])[cid]
+                _relocate(run, prepared.sources)
+                key = None
             chapter = plan.judge(run, module_file)
             uses = plan.chapter.builds_on
             if memo is not None and _settled(chapter, run):

@@ -5,6 +5,7 @@ and the kept sandbox is the sandbox the door builds, with the same walls."""
 from __future__ import annotations
 
 import json
+import shutil
 import os
 import subprocess
 import sys
@@ -236,3 +237,21 @@ def test_every_learner_of_a_batch_gets_the_report_they_get_alone(tmp_path):
         return [[c for c in chapter["checks"] if c["kind"] == "code"] for chapter in chapters]
 
     assert code(together["cy"]) == code(together["ann"]) and code(together["dee"]) == code(together["bo"])
+
+
+@needs_bwrap
+def test_a_kept_sandbox_that_no_longer_starts_is_dropped_and_the_command_still_grades(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    right = _report(root, "", "--no-quiz")
+    _report(root, cache, "--no-quiz")
+    decision = cache / "launch" / "decision"
+    fields = decision.read_text(encoding="utf-8").split("\0")
+    tree = next(p for p in fields if p.startswith(str(cache / "launch" / "tree-")))
+    shutil.rmtree(tree)  # a cache cleaner took the prepared folders: the decision, which watches them, is made again
+    assert _report(root, cache, "--no-quiz") == right
+    fields = decision.read_text(encoding="utf-8").split("\0")
+    broken = [f.replace("/usr/lib", "/nonexistent/lib") if f == "/usr/lib" else f for f in fields[2 + 2 * int(fields[1]):]]
+    decision.write_text("\0".join(fields[:2 + 2 * int(fields[1])] + broken), encoding="utf-8")
+    assert _report(root, cache, "--no-quiz") == right  # the kept command failed to start: dropped, graded afresh
+    assert not decision.exists() or "/nonexistent/lib" not in decision.read_text(encoding="utf-8")

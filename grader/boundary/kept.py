@@ -95,6 +95,16 @@ def keep(mode: str, prefix: list[str], watched: list[str], tree: str | None = No
             shutil.rmtree(os.path.join(folder, name), ignore_errors=True)
 
 
+def forget() -> None:
+    """Drop the kept decision (a child it started did not start): the next command's door decides afresh."""
+    path = _file()
+    if path is not None:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
+
+
 def prepare_tree(child_modules: tuple[str, ...], grader_dir: str, system_files: tuple[str, ...]) -> str | None:
     """A fresh folder in the cache holding copies of the child's grader modules (grader/..., their times kept, so
     their compiled files stay valid) and of the system's files (etc/...), for the sandbox to bind as two folders;

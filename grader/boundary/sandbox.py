@@ -234,8 +234,8 @@ class Sandbox:
             if prefix is None:
                 tree = kept.prepare_tree(_child_modules(), GRADER_DIR, SYSTEM_FILES) if self.remember else None
                 prefix = [self.bwrap, *self.arguments(tree), "--", *self._drop()]
-                if self.remember:
-                    kept.keep(self.remember, prefix, self.watched(), tree)
+                if self.remember:  # the prepared folders are watched too: removed, the decision is made again
+                    kept.keep(self.remember, prefix, self.watched() + ([tree] if tree else []), tree)
             self._prefix = prefix
         return self._prefix
 
