@@ -5,8 +5,8 @@ and the kept sandbox is the sandbox the door builds, with the same walls."""
 from __future__ import annotations
 
 import json
-import shutil
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
