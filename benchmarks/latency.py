@@ -79,7 +79,7 @@ def ready_request(root: Path, cache: Path, env: dict) -> Path:
                    env=env, stdout=subprocess.DEVNULL, check=True)
     kept = json.loads((cache / "results" / "ch06.json").read_text(encoding="utf-8"))
     request = {"package": "exercises", "files": Submission(root).prepare().files, "limits": Limits().rlimits(),
-               "chapters": [{"chapter": "ch06", "module": "ch06_measurement", "calls": kept["plan"]["calls"]}]}
+               "chapters": [{"chapter": "ch06", "module": "ch06_measurement", "calls": next(iter(kept["plans"].values()))}]}
     path = cache / "request.json"
     path.write_text(json.dumps(request), encoding="utf-8")
     return path

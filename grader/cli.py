@@ -16,10 +16,10 @@ import sys
 import click
 
 from grader import prestart
-from grader.system import trace
 from grader.chapters import CHAPTERS, ChapterInfo, resolve
 from grader.render import plural
 from grader.submission import Submission, SubmissionNotFound, locate
+from grader.system import trace
 
 EXIT_ALL_PASSED, EXIT_NOT_ALL_PASSED, EXIT_USAGE = 0, 1, 2
 
@@ -209,32 +209,33 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     if watch:
         _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose, functions)
         return
-    if html_path is not None:  # before any thread (grader.launch may have started it already)
-        from grader.render import drawer
-
-        drawing = drawer.start()
     # the child may already run (grader.launch); else start it now, to overlap our imports below
-    from grader import boundary
+    from grader import boundary, memo
 
     sandbox = "off" if no_sandbox else "auto"
     door = boundary.choose(sandbox, remember=True)
     session = door.open_session(submission, started=prestart.take(sandbox, door))
-    # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
-    # matplotlib is imported in a thread, which makes progress while grading waits on the child.
-    if html_path is not None and not drawing:
-        import threading
+    kept = memo.default(session.walled)
+    drawing = False
+    if html_path is not None and _figures_likely_drawn(session, [c.id for c in picked], kept):
+        from grader.render import drawer
 
-        from grader.render.figures import preload
+        drawing = drawer.start()  # before any thread (grader.launch may have started it already)
+        # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
+        # matplotlib is imported in a thread, which makes progress while grading waits on the child.
+        if not drawing:
+            import threading
 
-        threading.Thread(target=preload, daemon=True).start()
-    from grader import memo
+            from grader.render.figures import preload
+
+            threading.Thread(target=preload, daemon=True).start()
     from grader.pipeline import Request, build_report
 
     session.meanwhile.append(lambda: _renderer(output_format))  # its imports, while the child runs the calls
     request = Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
                       plots=html_path is not None, functions=functions)
     try:
-        report = build_report(session, request, memo=memo.default(session.walled))
+        report = build_report(session, request, memo=kept)
     finally:
         session.close()
     if report.infrastructure and door.sandboxed:  # the child did not start: never behind a kept sandbox again
@@ -254,6 +255,21 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         write_atomically(html_path, html.render(report, figure_cache.default()))
         click.echo(f"Wrote the HTML report: {os.path.abspath(html_path)}", err=True)
     _emit(report, output_format, verbose, session.isolation)
+
+
+def _figures_likely_drawn(session, chapters: list[str], kept) -> bool:
+    """Whether the HTML report will most likely draw a figure: unless every chapter's files are those a kept verdict
+    was made from (so its plot data are too) and the figure cache holds a figure of each (then matplotlib is not
+    imported, nor a drawing process started; a figure that has to be drawn after all is drawn when due)."""
+    from grader.render import figure_cache
+
+    folder = figure_cache.default_folder()
+    if kept is None or folder is None:
+        return True
+    from grader.memo import key_of
+
+    files = key_of(session.prepared.files)
+    return not all(kept.seen(c, files) and (folder / f"{c}.json").is_file() for c in chapters)
 
 
 def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,

@@ -72,17 +72,16 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
           with_plots: bool = False, submission_label: str | None = None,
           exclude: frozenset[str] = frozenset(), memo: Memo | None = None) -> Report:
     """Grade `chapter_ids` of the session's submission, but the checks in `exclude` ("chNN/check_id");
-    learner code runs only in the session's child. With `memo` (not with plots), kept plans and verdicts are
-    reused where they were made from exactly this."""
+    learner code runs only in the session's child. With `memo`, kept plans and verdicts (with their plot data)
+    are reused where they were made from exactly this."""
     from grader.memo import key_of
 
-    memo = None if with_plots else memo
     plans: dict[str, ChapterPlan] = {}
     plan_keys: dict[str, str | None] = {}
     requests = []
     kept_calls: set[str] = set()  # the chapters whose calls came from the memo, not from a plan made here
     for cid in chapter_ids:
-        plan_keys[cid] = key_of(cid, seed, sorted(e for e in exclude if e.startswith(f"{cid}/")))
+        plan_keys[cid] = key_of(cid, seed, sorted(e for e in exclude if e.startswith(f"{cid}/")), with_plots)
         calls = memo.calls(cid, plan_keys[cid]) if memo is not None and plan_keys[cid] else None
         if calls is not None:
             kept_calls.add(cid)

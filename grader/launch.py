@@ -44,11 +44,31 @@ def _draws_figures(args: list[str]) -> bool:
     return any(a == "--html" or a.startswith("--html=") for a in args)
 
 
+def _figures_kept(args: list[str]) -> bool:
+    """Whether the HTML report's figure cache (grader.render.figure_cache) holds a figure of every chapter the
+    command line names ("all", "ch06", "6"; False where it names none it can tell)."""
+    from grader.system import cache_folder
+
+    chapters = set()
+    for arg in args[1:] if args and args[0] == "run" else args:
+        if arg.startswith("-"):
+            break
+        if arg == "all":
+            chapters |= {f"ch{n:02d}" for n in range(10)}
+        elif arg.removeprefix("ch").isdigit() and len(arg.removeprefix("ch")) <= 2:
+            chapters.add(f"ch{int(arg.removeprefix('ch')):02d}")
+    folder = cache_folder("figures")
+    return bool(chapters) and folder is not None and all(
+        os.path.isfile(os.path.join(folder, f"{chapter}.json")) for chapter in chapters)
+
+
 def main() -> None:
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
     trace("launcher")
-    if _draws_figures(sys.argv[1:]):  # matplotlib's import, the report's longest step, starts first
+    # matplotlib's import, the report's longest step, starts first on a first run; where figures are kept, the
+    # command decides once it knows whether any has to be drawn (grader.cli)
+    if _draws_figures(sys.argv[1:]) and not _figures_kept(sys.argv[1:]):
         from grader.render import drawer
 
         drawer.start()

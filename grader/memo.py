@@ -27,6 +27,7 @@ from pathlib import Path
 from grader.boundary.wire import Call
 
 ENTRIES = 8  # verdicts kept per chapter (the last runs'), and quiz verdicts, of one learner
+PLANS = 4  # plans kept per chapter (with and without the report's plots; a course's hidden checks)
 WORKER_ENTRIES = 32  # verdicts a batch worker keeps per chapter (the last used), some 20 KB each
 _NAMES = frozenset(f"ch{n:02d}" for n in range(100)) | {"quiz", "version"}  # the memo's files
 
@@ -132,10 +133,10 @@ class Memo:
         """The calls a plan of `chapter` made under `plan_key`, or None."""
         if chapter not in _NAMES:
             return None
-        plan = self._read(chapter).get("plan")
-        if not isinstance(plan, dict) or plan.get("key") != plan_key or not isinstance(plan.get("calls"), list):
+        plans = self._read(chapter).get("plans")
+        calls = plans.get(plan_key) if isinstance(plans, dict) else None
+        if not isinstance(calls, list):
             return None
-        calls = plan["calls"]
         if not all(isinstance(c, dict) and isinstance(c.get("function"), str) for c in calls):
             return None
         return [PlannedCall(c) for c in calls]
@@ -143,8 +144,10 @@ class Memo:
     def keep_calls(self, chapter: str, plan_key: str, calls: list[Call]) -> None:
         if chapter not in _NAMES:
             return
-        encoded = [c.to_json(i) for i, c in enumerate(calls)]
-        self._read(chapter)["plan"] = {"key": plan_key, "calls": encoded}
+        data = self._read(chapter)
+        plans = data.get("plans") if isinstance(data.get("plans"), dict) else {}
+        plans = {k: v for k, v in plans.items() if k != plan_key}
+        data["plans"] = dict([*list(plans.items())[-(PLANS - 1):], (plan_key, [c.to_json(i) for i, c in enumerate(calls)])])
         self._write(chapter)
 
     def verdict(self, name: str, key: str | None) -> dict | None:

@@ -184,8 +184,8 @@ class ChapterResult:
 
     @classmethod
     def from_dict(cls, ch: dict) -> ChapterResult:
-        """The chapter a to_dict() made; each check's `details` where the dict has them (to_dict leaves them out),
-        plots not."""
+        """The chapter a to_dict() or to_kept() made; each check's `details` and the plot data where the dict has
+        them (to_kept's, not to_dict's)."""
         checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
                               status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                               message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
@@ -194,15 +194,19 @@ class ChapterResult:
                               answer=dict(c.get("answer") or {}), details=dict(c.get("details") or {}))
                   for c in ch.get("checks", [])]
         return cls(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
-                   hidden_checks=int(ch.get("hidden_checks", 0)), hidden_points=float(ch.get("hidden_points", 0.0)),
-                   source=ch.get("source") or "", notes=list(ch.get("notes") or []))
+                   plots=dict(ch.get("plots") or {}), hidden_checks=int(ch.get("hidden_checks", 0)),
+                   hidden_points=float(ch.get("hidden_points", 0.0)), source=ch.get("source") or "",
+                   notes=list(ch.get("notes") or []))
 
     def to_kept(self) -> dict:
-        """to_dict() with each check's details: what from_dict() makes this chapter again from (grader.memo)."""
+        """to_dict() with each check's details and the plot data: what from_dict() makes this chapter again from
+        (grader.memo)."""
         data = self.to_dict()
         for check, kept in zip(self.checks, data["checks"]):
             if check.details:
                 kept["details"] = jsonable(check.details)
+        if self.plots:
+            data["plots"] = plain(self.plots)
         return data
 
 
@@ -306,6 +310,18 @@ def rounded_points(value: float) -> float:
 def points_text(value: float | None) -> str:
     """Points as a gradebook cell writes them: the rounded value, every decimal it has ("" for none)."""
     return "" if value is None else f"{rounded_points(value):.{POINTS_DECIMALS + 8}g}"
+
+
+def plain(value: object) -> object:
+    """Plain data of plot data: numpy arrays and scalars as lists and numbers, tuples as lists; a non-finite float
+    stays a float (JSON's NaN and Infinity, which Python's json reads back)."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, dict):
+        return {str(k): plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    return value
 
 
 def jsonable(value: object) -> object:

@@ -255,3 +255,22 @@ def test_a_kept_sandbox_that_no_longer_starts_is_dropped_and_the_command_still_g
     decision.write_text("\0".join(fields[:2 + 2 * int(fields[1])] + broken), encoding="utf-8")
     assert _report(root, cache, "--no-quiz") == right  # the kept command failed to start: dropped, graded afresh
     assert not decision.exists() or "/nonexistent/lib" not in decision.read_text(encoding="utf-8")
+
+
+@needs_bwrap
+@pytest.mark.slow
+def test_the_html_report_is_the_same_from_kept_verdicts_and_their_plot_data(tmp_path):
+    root = build_submission(tmp_path / "sub", {"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", WRONG_BEARING)})
+    cache = tmp_path / "cache"
+    pages = []
+    for name, kept_in, before in (("afresh", "", None), ("first", cache, None), ("kept", cache, None),
+                                  ("drawn from kept data", cache, lambda: shutil.rmtree(cache / "figures"))):
+        if before:
+            before()
+        page = tmp_path / f"{name}.html"
+        done = run_grade("ch06", "ch07", "--submission", root, "--html", page, env=_env(kept_in))
+        assert done.returncode == 1, done.stderr[-3000:]
+        pages.append(page.read_bytes())
+    assert (cache / "results" / "ch06.json").is_file() and (cache / "figures" / "ch06.json").is_file()
+    assert pages[1:] == [pages[0]] * 3
