@@ -119,7 +119,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
                                 "line": None}
         _relocate(run, prepared.sources)
         key = key_of(plan_keys[cid], module_file, repr(session.limits), _answered(run)) if memo is not None else None
-        kept = memo.verdict(cid, key) if memo is not None else None
+        kept = memo.verdict(cid, key, files) if memo is not None else None
         try:
             chapter = ChapterResult.from_dict(kept["chapter"]) if kept is not None else None
             uses = {str(f): tuple(map(str, h)) for f, h in dict(kept["builds_on"]).items()} if kept else {}

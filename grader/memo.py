@@ -150,8 +150,9 @@ class Memo:
         data["plans"] = dict([*list(plans.items())[-(PLANS - 1):], (plan_key, [c.to_json(i) for i, c in enumerate(calls)])])
         self._write(chapter)
 
-    def verdict(self, name: str, key: str | None) -> dict | None:
-        """The verdict kept under `key` in `name`'s file (a chapter, or "quiz"), or None."""
+    def verdict(self, name: str, key: str | None, files: str | None = None) -> dict | None:
+        """The verdict kept under `key` in `name`'s file (a chapter, or "quiz"), or None; found, it is marked as
+        made from the learner's files hashed as `files` too (see seen)."""
         if key is None or name not in _NAMES:
             return None
         entries = self._read(name).get("verdicts")
@@ -161,6 +162,9 @@ class Memo:
         if found is not None and self.folder is None:  # kept in memory: the last used is the last let go
             entries.remove(found)
             entries.append(found)
+        if found is not None and files is not None and found.get("files") != files:
+            found["files"] = files  # these files answer alike: the next run with them plans nothing ahead
+            self._write(name)
         return found.get("value") if found is not None and isinstance(found.get("value"), dict) else None
 
     def keep_verdict(self, name: str, key: str | None, value: dict, files: str | None = None) -> None:
