@@ -215,9 +215,9 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     sandbox = "off" if no_sandbox else "auto"
     door = boundary.choose(sandbox, remember=True)
     session = door.open_session(submission, started=prestart.take(sandbox, door))
-    kept = memo.default(session.walled)
+    verdicts = memo.default(session.walled)
     drawing = False
-    if html_path is not None and _figures_likely_drawn(session, [c.id for c in picked], kept):
+    if html_path is not None and _figures_likely_drawn(session, [c.id for c in picked], verdicts):
         from grader.render import drawer
 
         drawing = drawer.start()  # before any thread (grader.launch may have started it already)
@@ -235,7 +235,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     request = Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
                       plots=html_path is not None, functions=functions)
     try:
-        report = build_report(session, request, memo=kept)
+        report = build_report(session, request, memo=verdicts)
     finally:
         session.close()
     if report.infrastructure and door.sandboxed:  # the child did not start: never behind a kept sandbox again
@@ -257,19 +257,19 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     _emit(report, output_format, verbose, session.isolation)
 
 
-def _figures_likely_drawn(session, chapters: list[str], kept) -> bool:
+def _figures_likely_drawn(session, chapters: list[str], verdicts) -> bool:
     """Whether the HTML report will most likely draw a figure: unless every chapter's files are those a kept verdict
     was made from (so its plot data are too) and the figure cache holds a figure of each (then matplotlib is not
     imported, nor a drawing process started; a figure that has to be drawn after all is drawn when due)."""
     from grader.render import figure_cache
 
     folder = figure_cache.default_folder()
-    if kept is None or folder is None:
+    if verdicts is None or folder is None:
         return True
     from grader.memo import key_of
 
     files = key_of(session.prepared.files)
-    return not all(kept.seen(c, files) and (folder / f"{c}.json").is_file() for c in chapters)
+    return not all(verdicts.seen(c, files) and (folder / f"{c}.json").is_file() for c in chapters)
 
 
 def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,

@@ -91,9 +91,9 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
             if memo is not None and plan_keys[cid]:
                 memo.keep_calls(cid, plan_keys[cid], calls)
         requests.append(ChapterRequest(cid, BY_ID[cid].module, calls))
-    files = key_of(session.prepared.files) if memo is not None else None
-    unseen = [cid for cid in chapter_ids if cid not in plans and memo is not None and memo.one_learner
-              and not memo.seen(cid, files)]
+    # one learner's runs: which files a kept verdict was made from says which chapters will most likely be judged
+    files = key_of(session.prepared.files) if memo is not None and memo.one_learner else None
+    unseen = [cid for cid in chapter_ids if cid not in plans and files is not None and not memo.seen(cid, files)]
     if unseen:  # files no kept verdict was made from: most likely judged afresh, so planned while the child runs
         def plan_meanwhile() -> None:
             for cid in unseen:

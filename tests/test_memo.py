@@ -274,3 +274,61 @@ def test_the_html_report_is_the_same_from_kept_verdicts_and_their_plot_data(tmp_
         pages.append(page.read_bytes())
     assert (cache / "results" / "ch06.json").is_file() and (cache / "figures" / "ch06.json").is_file()
     assert pages[1:] == [pages[0]] * 3
+
+
+def test_a_forged_verdict_is_never_read_where_learner_code_could_have_written_it(tmp_path):
+    if BWRAP is None:
+        pytest.skip("the forged entry is made from a walled run's")
+    root = build_submission(tmp_path / "sub", {"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", WRONG_BEARING)})
+    cache = tmp_path / "cache"
+    honest = _report(root, cache, "--no-quiz")
+    kept_file = cache / "results" / "ch06.json"
+    data = json.loads(kept_file.read_text(encoding="utf-8"))  # this grader's stamp: a forgery learner code could write
+    for entry in data["verdicts"]:
+        for check in entry["value"]["chapter"]["checks"]:
+            check["status"], check["points"], check["message"] = "pass", check["max_points"], ""
+    kept_file.write_text(json.dumps(data), encoding="utf-8")
+    unwalled = _report(root, cache, "--no-quiz", "--no-sandbox")
+    assert unwalled["chapters"][0]["score"] == honest["chapters"][0]["score"] < unwalled["chapters"][0]["max_score"]
+
+
+def _traced(root: Path, cache: Path, *args: str) -> list[str]:
+    import time
+
+    done = run_grade("ch06", "--submission", root, *args, env={**_env(cache), "GRADER_TRACE": repr(time.time())},
+                     flags=("-X", "importtime"))
+    assert done.returncode in (0, 1) and "ch06" in done.stdout + done.stderr, done.stderr[-3000:]
+    return done.stderr.splitlines()
+
+
+@needs_bwrap
+def test_files_found_to_answer_alike_plan_nothing_ahead_from_then_on(tmp_path):
+    cache = tmp_path / "cache"
+    first = build_submission(tmp_path / "first")
+    _traced(first, cache)
+    other = build_submission(tmp_path / "other")
+    (other / "exercises" / "notes.py").write_text("# the learner's own notes\n", encoding="utf-8")  # other files
+
+    def numpy_imported(lines: list[str]) -> bool:
+        return any(line.startswith("import time:") and line.rsplit("|", 1)[-1].strip() == "numpy" for line in lines)
+
+    assert numpy_imported(_traced(other, cache))  # new files: planned while the child ran, in case
+    assert not numpy_imported(_traced(other, cache))  # known now to answer as kept: nothing planned ahead
+
+
+@needs_bwrap
+@pytest.mark.slow
+def test_the_drawing_process_starts_only_where_a_figure_will_be_drawn(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+
+    def drawing() -> list[str]:
+        lines = _traced(root, cache, "--html", str(tmp_path / "report.html"))
+        return [line for line in lines if line.startswith("trace") and "drawing process" in line]
+
+    assert any("drawing process started" in line for line in drawing())  # a first run: started at once
+    assert drawing() == []  # nothing changed: no drawing process, no matplotlib
+    (cache / "figures" / "ch06.json").unlink()
+    assert any("drawing process" in line for line in drawing())  # a figure missing: drawn
+    assert drawing() == []

@@ -19,7 +19,7 @@ _STARTED: list = []  # the drawing process and our end of its pipe, until they a
 def start() -> bool:
     """Fork the drawing process now. Call it before any thread starts (a fork copies only the calling
     thread). False where forking is not safe or fails."""
-    from grader.system import fork_is_safe, keep
+    from grader.system import fork_is_safe, keep, trace
 
     if _STARTED or not fork_is_safe():
         return bool(_STARTED)
@@ -34,6 +34,7 @@ def start() -> bool:
         return False
     theirs.close()
     keep(process.pid)  # the grader's own process: the boundary's clean-up of orphans leaves it alone
+    trace("drawing process started")
     _STARTED.append((process, ours))
     import atexit
 
@@ -113,6 +114,9 @@ def _two_processes():
 
 
 def _draw_in_two(chapters: list) -> list[list]:
+    from grader.system import trace
+
+    trace("drawing processes forked when the figures were due")
     with _two_processes() as pool:
         return _draw_with(pool, chapters)
 
