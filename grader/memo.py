@@ -24,7 +24,7 @@ import os
 import sys
 from pathlib import Path
 
-from grader.boundary.wire import Call
+from grader.boundary.wire import Call, EncodedCalls
 
 ENTRIES = 8  # verdicts kept per chapter (the last runs'), and quiz verdicts, of one learner
 PLANS = 4  # plans kept per chapter (with and without the report's plots; a course's hidden checks)
@@ -103,6 +103,7 @@ class Memo:
         self.grader = grader
         self.one_learner = folder is not None
         self._files: dict[str, dict] = {}
+        self._calls: dict[tuple[str, str], tuple[list, EncodedCalls]] = {}  # made once from each kept list
 
     def _read(self, name: str) -> dict:
         if name not in self._files and self.folder is None:
@@ -129,17 +130,27 @@ class Memo:
             with contextlib.suppress(OSError):
                 temporary.unlink(missing_ok=True)
 
-    def calls(self, chapter: str, plan_key: str) -> list[PlannedCall] | None:
-        """The calls a plan of `chapter` made under `plan_key`, or None."""
+    def calls(self, chapter: str, plan_key: str) -> EncodedCalls | None:
+        """The calls a plan of `chapter` made under `plan_key`, with their JSON text, or None. The same list each
+        time while what is kept stays: a batch worker encodes them once for all its learners."""
         if chapter not in _NAMES:
             return None
         plans = self._read(chapter).get("plans")
         calls = plans.get(plan_key) if isinstance(plans, dict) else None
         if not isinstance(calls, list):
             return None
+        made = self._calls.get((chapter, plan_key))
+        if made is not None and made[0] is calls:
+            return made[1]
         if not all(isinstance(c, dict) and isinstance(c.get("function"), str) for c in calls):
             return None
-        return [PlannedCall(c) for c in calls]
+        try:
+            text = json.dumps([dict(c, index=i) for i, c in enumerate(calls)], allow_nan=False)
+        except (TypeError, ValueError):
+            return None
+        encoded = EncodedCalls([PlannedCall(c) for c in calls], text)
+        self._calls[(chapter, plan_key)] = (calls, encoded)
+        return encoded
 
     def keep_calls(self, chapter: str, plan_key: str, calls: list[Call]) -> None:
         if chapter not in _NAMES:

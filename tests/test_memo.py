@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -206,6 +207,42 @@ def test_a_worker_memo_judges_a_chapter_answered_alike_once(tmp_path, monkeypatc
     assert [c.to_dict() for c in reports[1].chapters] == [c.to_dict() for c in alone[0].chapters]
     assert [c.to_dict() for c in reports[2].chapters] == [c.to_dict() for c in alone[1].chapters]
     assert reports[2].chapters[1].score < reports[1].chapters[1].score
+
+
+def test_a_worker_encodes_a_chapters_kept_calls_once_and_sends_each_child_what_it_still_owes(tmp_path, monkeypatch):
+    from grader import grading
+    from grader.boundary import session as sessions
+    from grader.boundary.wire import placed
+    from tests.support import open_session
+
+    encoded = []
+    dumps = sessions.json.dumps
+    monkeypatch.setattr(sessions.json, "dumps", lambda value, *a, **k: encoded.append(value) or dumps(value, *a, **k))
+    sent = []
+    run = sessions.Session.run
+    monkeypatch.setattr(sessions.Session, "run", lambda self, requests: sent.append(
+        (self._request(requests, {r.chapter: sessions.ChapterRun(r.chapter, results=[None] * len(r.calls))
+                                  for r in requests}), requests)) or run(self, requests))
+    memo = Memo(None, "this worker")
+    encodings = []
+    for name in ("ann", "bo", "cy"):
+        encoded.clear()
+        grading.grade(open_session(build_submission(tmp_path / name)), ["ch03", "ch06"], memo=memo)
+        encodings.append(sum(isinstance(v, list) and bool(v) and isinstance(v[0], dict) and "index" in v[0]
+                             for v in encoded))
+    assert encodings[1:] == [2, 0]  # ann's calls planned and kept; encoded once for bo, for both chapters; cy: none
+    assert memo.calls("ch06", next(iter(memo._read("ch06")["plans"]))) is sent[2][1][1].calls
+    first, last = (json.loads(placed(text, "/tmp/x", True)) for text, _ in (sent[0], sent[2]))
+    assert first == last and first["root"] == "/tmp/x" and first["confine"] is True
+    assert [c["chapter"] for c in first["chapters"]] == ["ch03", "ch06"]
+    assert first["chapters"][1]["calls"] == [c.to_json(i) for i, c in enumerate(sent[0][1][1].calls)]
+    # a fresh child after a crash gets only the calls still unanswered, whatever was kept encoded
+    request = sent[2][1][1]
+    runs = {"ch06": sessions.ChapterRun("ch06", results=[object()] * 2 + [None] * (len(request.calls) - 2))}
+    unstarted = SimpleNamespace(submission=SimpleNamespace(package="exercises"), prepared=SimpleNamespace(files={}),
+                                limits=sessions.Limits())
+    owed = json.loads(placed(sessions.Session._request(unstarted, [request], runs), "/r", False))
+    assert [c["index"] for c in owed["chapters"][0]["calls"]] == list(range(2, len(request.calls)))
 
 
 @pytest.mark.slow

@@ -31,6 +31,7 @@ from grader.boundary.spawn import (
     kill_orphans,
     read_capture,
 )
+from grader.boundary.wire import placed
 from grader.system import child_environment, child_path, read_chunk, temp_dir
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
@@ -134,12 +135,11 @@ class ForkedChild:
         self.root = root
         self._returncode: int | None = None if sent else -signal.SIGKILL
 
-    def send(self, request: dict) -> None:
+    def send(self, request: str) -> None:
         """The request, with where the child writes the submission's files."""
-        request = dict(request, root=self.root, confine=self.server.sandboxed)
         try:
             with open(self.request_fd, "wb", closefd=True) as pipe:
-                pipe.write(json.dumps(request).encode())
+                pipe.write(placed(request, self.root, self.server.sandboxed))
         except OSError:
             pass
 

@@ -29,6 +29,7 @@ from grader.boundary.wire import (
     RETURNED,
     TIMEOUT,
     Call,
+    EncodedCalls,
     Returned,
     clean_error,
     from_event,
@@ -41,7 +42,7 @@ class ChildHandle(Protocol):
     """A started child process as a Session drives it (grader.boundary.spawn.SpawnedChild and PortableChild,
     grader.boundary.forkserver.ForkedChild)."""
 
-    def send(self, request: dict) -> None: ...
+    def send(self, request: str) -> None: ...
 
     def read(self, timeout: float) -> bytes: ...
 
@@ -117,7 +118,7 @@ class _Child:
         self.handle = handle
         self.buffer = b""
 
-    def send(self, request: dict) -> None:
+    def send(self, request: str) -> None:
         self.handle.send(request)
 
     def events(self, deadline: Callable[[], float]):
@@ -341,13 +342,21 @@ class Session:
                     run.results[i] = Returned(NOT_RUN, function, note="no result came back from the process")
         return runs
 
-    def _request(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> dict:
+    def _request(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> str:
+        """The request for what is still pending, as JSON text (a chapter's calls sent whole from their kept
+        text, grader.boundary.wire.EncodedCalls)."""
         chapters = []
         for req in pending:
-            calls = [c.to_json(i) for i, c in enumerate(req.calls) if runs[req.chapter].results[i] is None]
-            chapters.append({"chapter": req.chapter, "module": req.module, "calls": calls})
-        return {"package": self.submission.package, "files": self.prepared.files,
-                "chapters": chapters, "limits": self.limits.rlimits()}
+            results = runs[req.chapter].results
+            if isinstance(req.calls, EncodedCalls) and all(result is None for result in results):
+                calls = req.calls.text
+            else:
+                calls = json.dumps([c.to_json(i) for i, c in enumerate(req.calls) if results[i] is None])
+            chapters.append(f'{{"chapter": {json.dumps(req.chapter)}, "module": {json.dumps(req.module)}, '
+                            f'"calls": {calls}}}')
+        head = json.dumps({"package": self.submission.package, "files": self.prepared.files,
+                           "limits": self.limits.rlimits()})
+        return f'{head[:-1]}, "chapters": [{", ".join(chapters)}]}}'
 
     def _run_once(self, pending: list[ChapterRequest], runs: dict[str, ChapterRun]) -> list[ChapterRequest]:
         """Run what is pending in one child; return what still needs a fresh child."""

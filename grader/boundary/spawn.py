@@ -118,11 +118,9 @@ def _scratch(sandboxed: bool) -> tuple[str, str]:
     return scratch, os.path.join(scratch, "submission")
 
 
-def _send(stream, request: dict) -> None:
-    import json
-
+def _send(stream, request: bytes) -> None:
     try:
-        stream.write(json.dumps(request).encode("utf-8"))
+        stream.write(request)
         stream.close()
     except (BrokenPipeError, OSError):
         pass
@@ -162,10 +160,13 @@ class SpawnedChild(_Started):
         self.root = root
         self.host_root = host_root
 
-    def send(self, request: dict) -> None:
+    def send(self, request: str) -> None:
         """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
+        # loaded by then (grader.boundary.session), and kept off the launcher's path
+        from grader.boundary.wire import placed
+
         become_subreaper()  # before learner code can start a process that leaves the group (not before: ctypes)
-        _send(self.process.stdin, dict(request, root=self.root, confine=not self.host_root))
+        _send(self.process.stdin, placed(request, self.root, not self.host_root))
 
     def read(self, timeout: float) -> bytes:
         return read_chunk(self.read_fd, timeout)
@@ -200,8 +201,10 @@ class PortableChild(_Started):
         self.job = job
         self.results = StreamReader(process.stdout)
 
-    def send(self, request: dict) -> None:
-        _send(self.process.stdin, dict(request, root=self.root, confine=False))
+    def send(self, request: str) -> None:
+        from grader.boundary.wire import placed
+
+        _send(self.process.stdin, placed(request, self.root, False))
 
     def read(self, timeout: float) -> bytes:
         return self.results.read(timeout)

@@ -138,6 +138,25 @@ def show_argument(arg: object) -> str:
     return repr(arg)
 
 
+class EncodedCalls(list):
+    """A chapter's calls with the JSON text of them all, as a request sends them (grader.boundary.session): a batch
+    worker's kept calls (grader.memo) go to every learner's child alike, encoded once."""
+
+    def __init__(self, calls: list, text: str) -> None:
+        super().__init__(calls)
+        self.text = text
+
+
+def placed(request: str, root: str, confine: bool) -> bytes:
+    """An encoded request (a JSON object's text: grader.boundary.session) as one child reads it, with where that
+    child writes the learner's files and whether it confines itself (grader.boundary.confine)."""
+    import json
+
+    rest = request.strip()[1:]
+    comma = "" if rest.lstrip().startswith("}") else ", "
+    return f'{{"root": {json.dumps(root)}, "confine": {json.dumps(bool(confine))}{comma}{rest}'.encode()
+
+
 @dataclass(frozen=True)
 class Call:
     """One call of a learner function on arguments the grader chose."""
