@@ -149,3 +149,49 @@ def test_figures_due_here_draws_them_in_this_process_alone():
                           timeout=120)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert proc.stdout.split() == ["1", "[1,", "1]", "True"], proc.stdout + proc.stderr[-2000:]
+
+
+FIGURES_OF = textwrap.dedent("""
+    import hashlib, json, sys, warnings
+    warnings.simplefilter("error")  # the 3D toolkit held back during the import says nothing
+    how = sys.argv[2]
+    if how == "as matplotlib imports itself":
+        import matplotlib.figure
+    from grader.model import ChapterResult
+    from grader.render import figures
+    figures.preload()
+    if how == "after the figure nobody sees":
+        figures.warm_up()
+    chapters = [ChapterResult.from_dict(c) for c in json.loads(open(sys.argv[1], encoding="utf-8").read())]
+    digest = hashlib.sha256()
+    for chapter in chapters:
+        for figure in figures.figures(chapter):
+            assert figure.uri, figure.caption
+            digest.update(figure.uri.encode() + figure.alt.encode())
+    from mpl_toolkits.mplot3d import Axes3D  # still there for whoever wants it
+    from matplotlib.lines import Line2D
+    Line2D([0], [0]).set(color="red", linewidth=2)  # set() works the same without its generated docstring
+    print(digest.hexdigest())
+""")
+
+
+def test_the_lighter_import_and_the_figure_nobody_sees_change_no_figure(tmp_path):
+    """preload skips what matplotlib's import builds for help() and its 3D toolkit, and the drawing process draws a
+    figure nobody sees before it forks: every figure is byte for byte what matplotlib imported as is draws."""
+    import json
+
+    from grader.boundary import open_session
+    from grader.grading import grade
+    from grader.submission import Submission
+
+    session = open_session(Submission(REPO, "solutions"), sandbox="off")
+    report = grade(session, [f"ch{n:02d}" for n in range(10)], with_plots=True)
+    chapters = tmp_path / "chapters.json"
+    chapters.write_text(json.dumps([c.to_dict() for c in report.chapters if c.plots]), encoding="utf-8")
+    digests = {}
+    for how in ("as matplotlib imports itself", "lighter", "after the figure nobody sees"):
+        proc = subprocess.run([sys.executable, "-c", FIGURES_OF, str(chapters), how], cwd=REPO, capture_output=True,
+                              text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        digests[how] = proc.stdout.strip()
+    assert len(set(digests.values())) == 1, digests
