@@ -98,15 +98,28 @@ class Limits:
                 "processes": self.processes, "memory_bytes": self.memory_bytes, "tmp_bytes": self.tmp_bytes}
 
 
-MALFORMED = {"event": None}  # a result line that is not one JSON object (see _Child.events)
+MALFORMED = {"event": None}
+_RESULTS = frozenset((RETURNED, RAISED_EVENT, MISSING_EVENT))  # the lines that answer a call  # a result line that is not one JSON object (see _Child.events)
+
+
+_DECODER = json.JSONDecoder()
 
 
 def _parse(line: bytes) -> dict:
+    """One result line as the JSON object it is, else MALFORMED. A line as the child writes them (one object, no
+    space around it) is decoded straight (json.loads would first guess its encoding and skip spaces); any other is
+    read by json.loads, the same as ever."""
     if len(line) > MAX_LINE:
         return MALFORMED
     try:
-        event = json.loads(line)
-    except (ValueError, RecursionError):  # RecursionError: a line of 200,000 '['
+        if line[:1] == b"{" and line[-1:] == b"}":
+            text = line.decode("utf-8")
+            event, end = _DECODER.raw_decode(text)
+            if end != len(text):
+                return MALFORMED  # an object, then more after it
+        else:
+            event = json.loads(line)
+    except (ValueError, RecursionError):  # RecursionError: a line of 200,000 '['; UnicodeDecodeError is a ValueError
         return MALFORMED
     return event if isinstance(event, dict) else MALFORMED
 
@@ -202,6 +215,7 @@ class Progress:
     call_at: int = 0  # position in that chapter's calls
     chapter: str | None = None  # the chapter being imported or called (None before the first)
     index: int | None = None  # the call in flight
+    function: str = ""  # the function of the call in flight
     chapter_end: float = float("inf")
     compiling: tuple[str, ...] = ()  # what the chapter's module loaded that compiles on a first call (jax, torch)
     called: set[str] = field(default_factory=set)  # the chapter's functions called so far
@@ -218,9 +232,10 @@ class Progress:
         request, calls = self.order[self.chapter_at]
         if self.call_at < len(calls):
             self.stage, self.index, self.call_started = Stage.CALL, calls[self.call_at], now
-            function = request.calls[self.index].function
-            self.first_call = bool(self.compiling) and function not in self.called
-            self.called.add(function)
+            self.function = function = request.calls[self.index].function
+            if self.compiling:
+                self.first_call = function not in self.called
+                self.called.add(function)
             self.deadline = now + self.call_budget
         else:  # the chapter is done; the child moves on at once
             self._next_chapter(now)
@@ -252,6 +267,16 @@ class Progress:
     def take(self, event: dict, now: float, runs: dict[str, ChapterRun]) -> Ending | None:
         """Record one line of the child's; FINISHED after DONE, VIOLATED for a line out of order, else None."""
         kind, name = event.get("event"), event.get("chapter")
+        if self.stage is Stage.CALL:  # most lines: the result of the call in flight
+            if kind in _RESULTS and name == self.chapter and event.get("index") == self.index:
+                function = self.function
+                runs[name].results[self.index] = from_event(function, event)
+                if now - self.call_started > self.slowest.get(function, 0.0):
+                    self.slowest[function] = now - self.call_started
+                self.call_at += 1
+                self._next_call(now)
+                return None
+            return Ending.VIOLATED
         if self.stage in (Stage.STARTUP, Stage.BETWEEN):
             if kind == DONE and self.chapter_at == len(self.order):
                 return Ending.FINISHED
@@ -270,14 +295,6 @@ class Progress:
                     isinstance(name, str) for name in said) else ()
                 self._next_call(now)
                 return None
-        elif self.stage is Stage.CALL and kind in (RETURNED, RAISED_EVENT, MISSING_EVENT) and name == self.chapter \
-                and event.get("index") == self.index:
-            function = self.order[self.chapter_at][0].calls[self.index].function
-            runs[name].results[self.index] = from_event(function, event)
-            self.slowest[function] = max(self.slowest.get(function, 0.0), now - self.call_started)
-            self.call_at += 1
-            self._next_call(now)
-            return None
         return Ending.VIOLATED
 
 

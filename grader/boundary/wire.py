@@ -400,6 +400,9 @@ def clean_error(value: object) -> dict:
             "bases": [b for b in bases if isinstance(b, str)][:8] if isinstance(bases, list) else []}
 
 
+_NUMBER_TYPES = frozenset((int, float))  # what JSON numbers decode to (true and false are bools)
+
+
 def _is_number(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
@@ -419,8 +422,9 @@ def valid_value(encoded: object, depth: int = 0) -> bool:
         if not (isinstance(shape, list) and len(shape) <= 8 and all(isinstance(n, int) and 0 <= n for n in shape)):
             return False
         data = encoded.get("data")
+        # every element a number, looked at in C (a result line's values are JSON: a bool is no number)
         return isinstance(encoded.get("f8"), str) if data is None else (
-            isinstance(data, list) and all(_is_number(v) for v in data))
+            isinstance(data, list) and _NUMBER_TYPES.issuperset(map(type, data)))
     return kind in (T_NONE, T_STR, T_OTHER, T_TOO_LARGE, T_NDARRAY_OTHER)
 
 
