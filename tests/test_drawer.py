@@ -140,7 +140,7 @@ def test_figures_due_here_draws_them_in_this_process_alone():
         def must_not_run(*args, **kwargs):
             raise AssertionError("the figures were drawn by processes forked for them")
 
-        drawer._draw_in_two = drawer._two_processes = must_not_run
+        drawer._draw_in_two = drawer.two_processes = must_not_run
         drawn = drawer.figures_due([c for c in report.chapters if c.plots], here=True)()
         print(len(drawer._STARTED), [len(f) for f in drawn],
               all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))

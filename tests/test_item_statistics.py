@@ -279,3 +279,30 @@ def test_the_figure_places_every_item_and_names_the_flagged_ones():
     svg = base64.b64decode(figure.uri.split(",", 1)[1]).decode("utf-8")
     assert "quiz_bad" in svg and "H_worked_example" not in svg  # flagged by name, the others by number
     assert "flagged: quiz_bad" in figure.alt
+
+
+def test_the_figures_drawn_by_two_forked_processes_are_those_drawn_here(monkeypatch):
+    """A batch's end draws its chapters' figures in two forked processes (where forking is safe): each is byte for
+    byte the one drawn in this process, in the chapters' order, and one that fails is a caption, as here."""
+    from grader.render import item_plots
+    from grader.system import fork_is_safe
+
+    rules = {"facility_low": 0.2, "facility_high": 0.95, "discrimination_low": 0.1}
+    items = [{"id": f"ch0{n}/item{k}", "chapter": f"ch0{n}", "facility": 0.1 * k, "discrimination": 0.05 * k - 0.1,
+              "flags": ["too easy"] if k == 9 else []} for n in range(4) for k in range(1, 10)]
+    chapters = [{"chapter": f"ch0{n}"} for n in range(4)] + [{"chapter": "ch09"}]
+    items.append({"id": "ch09/broken", "chapter": "ch09", "facility": "not a number", "discrimination": 0.2,
+                  "flags": []})
+    statistics = {"chapters": chapters, "items": items, "rules": rules, "learners": 40}
+    from grader.render import drawer
+
+    pools = []
+    two = drawer.two_processes
+    monkeypatch.setattr(drawer, "two_processes", lambda: pools.append(two()) or pools[-1])
+    drawn = item_plots.figures(statistics)
+    here = [item_plots._one(job) for job in [(c["chapter"], [i for i in items if i["chapter"] == c["chapter"]], rules,
+                                               40) for c in chapters]]
+    assert list(drawn) == [c["chapter"] for c in chapters]
+    assert [(f.uri, f.alt, f.caption) for f in drawn.values()] == [(f.uri, f.alt, f.caption) for f in here]
+    assert drawn["ch09"].uri == "" and "could not be drawn" in drawn["ch09"].caption
+    assert len(pools) == (1 if fork_is_safe() else 0)  # drawn by the two processes where they can be forked

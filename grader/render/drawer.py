@@ -81,7 +81,7 @@ def _draw_what_comes(connection) -> None:
         # would leave the drawing processes waiting for work forever, while the pipe's end (EOF) ends them
         # and this process in order.
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
-        with _two_processes() as pool:
+        with two_processes() as pool:
             list(pool.map(int, range(2)))  # both drawing processes forked now, not when the figures are due
             chapters = connection.recv()
             connection.send(_draw_with(pool, chapters))
@@ -104,7 +104,7 @@ def _draw_with(pool, chapters: list) -> list[list]:
     return [futures[i].result() for i in range(len(chapters))]
 
 
-def _two_processes():
+def two_processes():
     """Two forked drawing processes (one where there is one core)."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
@@ -117,7 +117,7 @@ def _draw_in_two(chapters: list) -> list[list]:
     from grader.system import trace
 
     trace("drawing processes forked when the figures were due")
-    with _two_processes() as pool:
+    with two_processes() as pool:
         return _draw_with(pool, chapters)
 
 

@@ -9,15 +9,36 @@ from grader.render.figures import GUIDE, LEARNER, REFERENCE, Figure, preload, sv
 
 
 def figures(statistics: dict) -> dict[str, Figure]:
-    """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so)."""
-    out = {}
-    for chapter in statistics["chapters"]:
-        items = [item for item in statistics["items"] if item["chapter"] == chapter["chapter"]]
+    """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so);
+    drawn by two forked processes where forking is safe and nothing else runs in this process (a batch's end:
+    its workers are done), else here."""
+    jobs = [(chapter["chapter"], [item for item in statistics["items"] if item["chapter"] == chapter["chapter"]],
+             statistics["rules"], statistics["learners"]) for chapter in statistics["chapters"]]
+    return dict(zip((job[0] for job in jobs), _drawn(jobs)))
+
+
+def _drawn(jobs: list[tuple]) -> list[Figure]:
+    import threading
+
+    from grader.system import fork_is_safe
+
+    if len(jobs) > 1 and fork_is_safe() and threading.active_count() == 1:  # a fork copies only this thread
+        from grader.render.drawer import two_processes
+
+        preload()  # imported once, here, before the fork
         try:
-            out[chapter["chapter"]] = _figure(chapter["chapter"], items, statistics["rules"], statistics["learners"])
-        except Exception as exc:  # noqa: BLE001  a figure never costs the summary
-            out[chapter["chapter"]] = Figure("", "", f"This figure could not be drawn ({type(exc).__name__}: {exc}).")
-    return out
+            with two_processes() as pool:
+                return list(pool.map(_one, jobs))
+        except Exception:  # noqa: BLE001  no process could be forked, or one died: drawn here instead
+            pass
+    return [_one(job) for job in jobs]
+
+
+def _one(job: tuple) -> Figure:
+    try:
+        return _figure(*job)
+    except Exception as exc:  # noqa: BLE001  a figure never costs the summary
+        return Figure("", "", f"This figure could not be drawn ({type(exc).__name__}: {exc}).")
 
 
 def _short(item: dict) -> str:
