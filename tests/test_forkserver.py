@@ -104,3 +104,93 @@ def test_batch_hides_the_submissions_and_output_folders_wherever_they_are(tmp_pa
         assert "RuntimeError: FileNotFoundError and FileNotFoundError" in check["message"], check["message"]
     finally:
         shutil.rmtree(base, ignore_errors=True)
+
+
+# ------------------------------------------------------------------ the lines in shared memory (grader.boundary.wire)
+
+HANGS_ON_ITS_FOURTH_CALL = """_calls = [0]
+
+
+def range_bearing(x, y):
+    _calls[0] += 1
+    if _calls[0] == 4:
+        sum(range(10 ** 13))  # a loop in C that holds the interpreter: nothing of this process runs meanwhile
+    return np.array([np.hypot(x, y), np.arctan2(y, x)])
+"""
+
+
+def _as_told(report) -> list[tuple]:
+    """Each check's verdict and message, the seconds a timeout note quotes left out (they are measured)."""
+    import re
+
+    return [(ch.chapter, c.id, c.status, re.sub(r"within [0-9.e-]+ s", "within N s", c.message), str(c.got))
+            for ch in report.chapters for c in ch.checks]
+
+
+def test_a_forked_childs_lines_in_shared_memory_tell_what_its_lines_down_a_pipe_tell(server, submission_factory,
+                                                                                      monkeypatch):
+    """A forked child writes its lines into memory it shares with the parent, which a pipe only wakes a chapter at
+    a time: the report is the one a spawned child's lines, one per call down the pipe, give. Also where a call
+    hangs after three returned (the hanging call is the one timed out, the three keep their values, nothing is
+    lost when the child is killed), and where the memory is too small for the lines (the rest go down the pipe)."""
+    from grader.boundary import forkserver
+    from tests.support import grade_code
+
+    forked = server.start_child()
+    try:
+        assert forked.shared is not None  # its lines go into shared memory here (Linux has memfd_create)
+    finally:
+        forked.stop(0)
+    limits = boundary.Limits(import_seconds=3.0, call_seconds=1.0, chapter_seconds=20.0)
+    hangs = submission_factory({"ch06_measurement": replace_function("ch06_measurement", "range_bearing",
+                                                                     HANGS_ON_ITS_FOURTH_CALL)})
+    right = submission_factory()
+    with monkeypatch.context() as env:
+        env.setenv("GRADER_LAUNCHER", "spawn")
+        spawned = boundary.choose("required" if BWRAP else "off")
+    assert spawned.launch is boundary.Launch.SPAWN
+    told = {}
+    for root in (hangs, right):
+        told[root] = _as_told(grade_code(root, ["ch00", "ch06"], seed=3, limits=limits, boundary=spawned))
+        assert _as_told(grade_code(root, ["ch00", "ch06"], seed=3, limits=limits, boundary=server)) == told[root]
+    timed_out = [c for c in told[hangs] if "did not return in time: stopped after 1 s" in c[3]]
+    assert [c[1] for c in timed_out] == ["range_bearing_all_quadrants"], told[hangs]  # its 4th call, as in a pipe
+    assert [c[2] for c in told[hangs] if c[1] == "range_bearing_worked_example"] == [Status.PASS]  # calls 1 to 3
+    # each of its first four calls takes 0.35 s: within the second a call has, but not four of them together
+    slow = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", HANGS_ON_ITS_FOURTH_CALL.replace(
+            "    if _calls[0] == 4:\n        sum(range(10 ** 13))", "    if _calls[0] <= 4:\n        __import__('time').sleep(0.35)"))})
+    with monkeypatch.context() as env:  # the shared memory holds a few lines only: the others come down the pipe
+        env.setattr(forkserver, "SHARED_BYTES", 4096)
+        small = boundary.choose("required" if BWRAP else "off", resident=True)
+        try:
+            for root in (right, slow, hangs):
+                told_small = _as_told(grade_code(root, ["ch00", "ch06"], seed=3, limits=limits, boundary=small))
+                assert told_small == (told.get(root) or _as_told(
+                    grade_code(root, ["ch00", "ch06"], seed=3, limits=limits, boundary=spawned)))
+                if root == slow:  # no call timed out, though the memory's last word on a call start is long past
+                    assert not any("stopped after" in c[3] for c in told_small), told_small
+        finally:
+            small.close()
+
+
+def test_a_learner_who_forges_the_shared_memory_breaks_the_protocol_of_their_own_run_only(server,
+                                                                                         submission_factory):
+    """Learner code can write the memory its lines go into (as it can write the pipe): a line it spoils is a line
+    no child of ours writes, and the run ends there, as for a line forged down the pipe; the next run is whole."""
+    forger = submission_factory({"ch06_measurement": replace_function(
+        "ch06_measurement", "range_bearing", "def range_bearing(x, y):\n    import ctypes\n"
+        "    for line in open('/proc/self/maps'):\n"
+        "        if 'grade-results' in line:  # the shared memory: the last line written, made no JSON\n"
+        "            start = int(line.split('-')[0], 16)\n"
+        "            end = int.from_bytes(ctypes.string_at(start, 8), 'little')\n"
+        "            ctypes.memmove(start + end - 2, b'x', 1)\n"
+        "    return np.array([np.hypot(x, y), np.arctan2(y, x)])\n")})
+    from tests.support import grade_code
+
+    forged = grade_code(forger, ["ch00", "ch06"], seed=3, limits=LIMITS, boundary=server)
+    told = [m for ch in forged.chapters for m in ch.problems + [c.message for c in ch.checks]]
+    assert any("broke the grading protocol" in m for m in told), told
+    assert forged.chapters[0].score == forged.chapters[0].max_score  # ch00, before it, as ever
+    good = grade_checks(submission_factory(), "ch06", seed=3, limits=LIMITS, boundary=server)
+    assert all(c.status == Status.PASS for c in good.values())
