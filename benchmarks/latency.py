@@ -48,7 +48,7 @@ from grader.system import read_chunk
 with open(sys.argv[1], encoding="utf-8") as handle:
     request = json.load(handle)
 prefix, child = kept.start("auto")
-child.send(request)
+child.send(json.dumps(request))
 buffer = b""
 while b'"done"' not in buffer:
     chunk = read_chunk(child.read_fd, 30)
@@ -148,11 +148,14 @@ def run(scratch: Path, args) -> None:
         "floor: bubblewrap alone": ([*prefix, sys.executable, "-I", "-S", "-c", ""], env, None),
         "floor: the child's path": ([sys.executable, "-c", _CHILD_PATH, str(request)], env, None),
     }
-    for command, environment, before in commands.values():  # warm the page cache and the grader's caches
+    for name, (command, environment, before) in commands.items():  # warm the page cache and the grader's caches
         for _ in range(2):
             if before:
                 before()
             timed(command, environment)
+        if name.startswith("floor") and subprocess.run(command, cwd=ROOT, env=environment, stdout=subprocess.DEVNULL,
+                                                      stderr=subprocess.DEVNULL, check=False).returncode != 0:
+            raise SystemExit(f"{name}: {' '.join(command[:6])} ... failed, so it would time nothing")
     samples: dict[str, list[float]] = {name: [] for name in commands}
     for _ in range(args.repeat):
         for name, (command, environment, before) in commands.items():
