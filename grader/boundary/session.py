@@ -101,8 +101,8 @@ class Limits:
                 "processes": self.processes, "memory_bytes": self.memory_bytes, "tmp_bytes": self.tmp_bytes}
 
 
-MALFORMED = {"event": None}
-_RESULTS = frozenset((RETURNED, RAISED_EVENT, MISSING_EVENT))  # the lines that answer a call  # a result line that is not one JSON object (see _Child.events)
+MALFORMED = {"event": None}  # a result line that is not one JSON object (see _Child.events)
+_RESULTS = frozenset((RETURNED, RAISED_EVENT, MISSING_EVENT))  # the lines that answer a call
 
 
 _DECODER = json.JSONDecoder()
@@ -217,8 +217,8 @@ class _Child:
             self.lines += 1
             yield _parse(line) if line else MALFORMED
         end_now, lines, started = self._header()
-        self.in_flight_started = (started if end_now == end and lines == self.lines and 0 < started <= time.monotonic()
-                                  else None)
+        self.in_flight_started = started if not self.overflowed and end_now == end and lines == self.lines and \
+            0 < started <= time.monotonic() else None
 
     def stop(self) -> str:
         """Kill the child and everything it started; return what learner code printed (capped)."""
@@ -330,8 +330,9 @@ class Progress:
 
     def call_began(self, started: float) -> None:
         """The call in flight began at `started` (as the child says, in shared memory: its line has not come yet):
-        its time runs from then."""
-        if self.stage is Stage.CALL and started < self.call_started:
+        its time runs from then. A time before its chapter began here is not taken (we may have read the chapter's
+        first line late; a header read half-written could say anything): its time then runs from our own view."""
+        if self.stage is Stage.CALL and self.chapter_end - self.limits.chapter_seconds <= started < self.call_started:
             self.call_started, self.deadline = started, started + self.call_budget
 
     def _next_chapter(self, now: float) -> None:
