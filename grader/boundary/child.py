@@ -4,10 +4,8 @@ This file runs in a separate interpreter (`python -I -S -c ...`, see grader.boun
 forked from grader.boundary.forkserver. It reads one JSON request (grader.boundary.wire), writes the learner's files
 that came with it into a fresh folder, points stdout/stderr at the capture file the parent opened,
 and for each chapter imports the learner's module and calls the named functions on the arguments
-the parent chose. Every outcome is one JSON line, written down the result pipe, or (a child forked from the fork
-server) into memory the parent shares, the pipe then only waking the parent at each chapter's start and end
-(grader.boundary.wire.SHARED_HEADER). Only numbers, shapes and type names travel back: never pickle, never a
-learner object.
+the parent chose. Every outcome is written to the result pipe as one JSON line. Only numbers,
+shapes and type names travel back: never pickle, never a learner object.
 
 Nothing here decides whether an answer is right; that happens in the parent.
 """
@@ -20,15 +18,12 @@ import json
 import os
 import signal
 import sys
-import time
 
 import numpy as np  # noqa: F401  (loaded before any learner code, and before the request arrives)
 
 from grader.boundary.wire import (
     COMPILING,
     DONE,
-    SHARED_HEADER,
-    SHARED_START,
     IMPORT,
     IMPORT_FAILED,
     IMPORTED,
@@ -133,44 +128,9 @@ class _Catalogue:
         return self._table[name]
 
 
-class _Channel:
-    """Where the child's lines go: the result pipe, a line at a time; or, where the parent shares memory
-    (grader.boundary.wire.SHARED_HEADER), that memory, the pipe only waking the parent."""
-
-    def __init__(self, out, shared=None) -> None:
-        self.out = out
-        self.shared = shared  # an mmap, None in line mode
-        self.end = SHARED_START
-        self.lines = 0
-
-    def emit(self, record: dict, wake: bool = False) -> None:
-        """One line (json.dumps of `record`: TypeError, ValueError or OverflowError when it has none); `wake`:
-        the parent is woken for it (in line mode every line wakes it)."""
-        line = json.dumps(record) + "\n"
-        if self.shared is not None:
-            data = line.encode("utf-8")
-            if self.end + len(data) <= len(self.shared):
-                self.shared[self.end:self.end + len(data)] = data
-                self.end += len(data)
-                self.lines += 1
-                SHARED_HEADER.pack_into(self.shared, 0, self.end, self.lines, 0.0)
-                if wake:
-                    self.wake()
-                return
-            SHARED_HEADER.pack_into(self.shared, 0, self.end, self.lines, 0.0)  # no call's start to go by
-            self.shared = None  # full: this line and all after it go down the pipe
-        self.out.write(line)
-        self.out.flush()
-
-    def call_starts(self) -> None:
-        """Say that a call starts now (in shared memory: the parent's deadline for it runs from now)."""
-        if self.shared is not None:
-            SHARED_HEADER.pack_into(self.shared, 0, self.end, self.lines, time.monotonic())
-
-    def wake(self) -> None:
-        if self.shared is not None:
-            self.out.write("\n")
-            self.out.flush()
+def _emit(stream, record: dict) -> None:
+    stream.write(json.dumps(record) + "\n")
+    stream.flush()
 
 
 def _redirect_output(capture_fd: int) -> None:
@@ -238,39 +198,33 @@ def _pin_package(root: str, package: str) -> None:
         raise
 
 
-def run(request: dict, out, shared=None) -> None:
-    """Run the request's chapters, their lines into `out` (the result pipe, as text) or, with `shared` (an mmap of
-    the memory the parent shares), into that memory."""
-    channel = _Channel(out, shared)
+def run(request: dict, out) -> None:
     root = os.path.realpath(request["root"])
     sys.path.insert(0, root)
     # the contract's plain form `from ch03_jacobian import ...` (also what runs as a script), last
     sys.path.append(os.path.join(root, request["package"]))
     sys.dont_write_bytecode = True
     catalogue = _Catalogue()
-    clock = time.monotonic
     for chapter in request["chapters"]:
         name = chapter["chapter"]
-        channel.emit({"event": IMPORT, "chapter": name}, wake=True)
+        _emit(out, {"event": IMPORT, "chapter": name})
         try:
             _pin_package(root, request["package"])
             module = importlib.import_module(f'{request["package"]}.{chapter["module"]}')
         except SyntaxError as exc:
-            channel.emit({"event": IMPORT_FAILED, "chapter": name, "error": _syntax_error(exc, root)}, wake=True)
+            _emit(out, {"event": IMPORT_FAILED, "chapter": name, "error": _syntax_error(exc, root)})
             continue
         except BaseException as exc:  # SystemExit and KeyboardInterrupt from learner code too
-            channel.emit({"event": IMPORT_FAILED, "chapter": name, "error": describe_exception(exc, root)}, wake=True)
+            _emit(out, {"event": IMPORT_FAILED, "chapter": name, "error": describe_exception(exc, root)})
             continue
         # the libraries that compile a function on its first call (jax.jit, torch.compile): its first call gets more time
-        channel.emit({"event": IMPORTED, "chapter": name, "compiling": sorted(COMPILING & set(sys.modules))})
+        _emit(out, {"event": IMPORTED, "chapter": name, "compiling": sorted(COMPILING & set(sys.modules))})
         for call in chapter["calls"]:
             index = call["index"]
             function = getattr(module, call["function"], None)
             if not callable(function):
-                channel.emit({"event": MISSING_EVENT, "chapter": name, "index": index, "s": 0.0})
+                _emit(out, {"event": MISSING_EVENT, "chapter": name, "index": index})
                 continue
-            channel.call_starts()
-            started = clock()
             try:
                 args = [decode_argument(a, catalogue) for a in call.get("args", [])]
                 kwargs = {k: decode_argument(v, catalogue) for k, v in call.get("kwargs", {}).items()}
@@ -279,15 +233,13 @@ def run(request: dict, out, shared=None) -> None:
             except BaseException as exc:
                 record = {"event": RAISED_EVENT, "chapter": name, "index": index,
                           "error": describe_exception(exc, root)}
-            record["s"] = clock() - started
             try:
-                channel.emit(record)
+                _emit(out, record)
             except (TypeError, ValueError, OverflowError):
-                channel.emit({"event": RETURNED, "chapter": name, "index": index, "s": record["s"],
-                              "value": {"t": T_OTHER, "type": "a value that cannot be encoded"}})
-        channel.wake()  # the chapter's lines are all there
+                _emit(out, {"event": RETURNED, "chapter": name, "index": index,
+                            "value": {"t": T_OTHER, "type": "a value that cannot be encoded"}})
     _flush_learner_output()  # before DONE: the parent may stop the process as soon as it reads it
-    channel.emit({"event": DONE}, wake=True)
+    _emit(out, {"event": DONE})
 
 
 def _flush_learner_output() -> None:
@@ -312,9 +264,8 @@ def _write_files(files: dict, root: str) -> None:
             handle.write(base64.b64decode(data))
 
 
-def serve(request_text: str, result_fd: int, capture_fd: int, shared_fd: int | None = None) -> None:
-    """Grade one request and leave the process (never returns); with `shared_fd`, the lines go into the memory
-    the parent shares (grader.boundary.wire.SHARED_HEADER)."""
+def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
+    """Grade one request and leave the process (never returns)."""
     request = json.loads(request_text)
     limits = dict(request.get("limits", {}))
     if request.get("confine"):  # in a sandbox: the learner's own namespaces, /tmp and caps (grader.boundary.confine)
@@ -324,17 +275,11 @@ def serve(request_text: str, result_fd: int, capture_fd: int, shared_fd: int | N
             # memory used is capped for all processes together (its watchdog names what happened)
             limits.pop("data_bytes", None)
     out = os.fdopen(result_fd, "w", buffering=1, encoding="utf-8", newline="\n")
-    shared = None
-    if shared_fd is not None:
-        import mmap
-
-        shared = mmap.mmap(shared_fd, os.fstat(shared_fd).st_size)  # the size the parent gave it
-        os.close(shared_fd)
     _write_files(request["files"], request["root"])  # the learner's files come with the request
     os.chdir(request["root"])
     _redirect_output(capture_fd)
     _apply_limits(limits)
-    run(request, out, shared)
+    run(request, out)
     out.close()
     os._exit(0)  # skip learner atexit handlers and finalizers
 

@@ -31,7 +31,7 @@ from grader.boundary.spawn import (
     kill_orphans,
     read_capture,
 )
-from grader.boundary.wire import SHARED_BYTES, placed
+from grader.boundary.wire import placed
 from grader.system import child_environment, child_path, read_chunk, temp_dir
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
@@ -73,22 +73,20 @@ class ForkServer:
         capture_fd = capture_file()
         root = f"/tmp/grade-run-{self._runs}" if self.sandboxed else \
             os.path.join(temp_dir(), f"grade-run-{os.getpid()}-{self._runs}")
-        shared_fd, shared = _shared_memory()
-        passed = [request_read, result_write, capture_fd] + ([shared_fd] if shared_fd is not None else [])
         sent = False
         for _ in range(2):  # a server that died since the last run (a learner killed it) is replaced
             if self.process is None or self.process.poll() is not None:
                 self.close()
                 self.launch()
             try:
-                socket.send_fds(self.socket, [b"run " + root.encode()], passed)
+                socket.send_fds(self.socket, [b"run " + root.encode()], [request_read, result_write, capture_fd])
                 sent = True
                 break
             except OSError:
                 self.close()
-        for fd in (request_read, result_write) + ((shared_fd,) if shared_fd is not None else ()):
+        for fd in (request_read, result_write):
             os.close(fd)
-        return ForkedChild(self, request_write, result_read, capture_fd, root, sent, shared)
+        return ForkedChild(self, request_write, result_read, capture_fd, root, sent)
 
     def reply(self, timeout: float) -> int | None:
         """The exit status the server reports for the current run; None if it gave none in time."""
@@ -125,34 +123,16 @@ class ForkServer:
             kill_orphans()
 
 
-def _shared_memory():
-    """(a descriptor of fresh memory for one run's lines, the parent's mmap of it), or (None, None) where the system
-    has no anonymous memory file (the child then writes its lines down the pipe)."""
-    import mmap
-
-    try:
-        fd = os.memfd_create("grade-results", os.MFD_CLOEXEC)
-    except (AttributeError, OSError):
-        return None, None
-    try:
-        os.ftruncate(fd, SHARED_BYTES)  # pages exist only where lines are written
-        return fd, mmap.mmap(fd, SHARED_BYTES, access=mmap.ACCESS_READ)
-    except (OSError, ValueError):
-        os.close(fd)
-        return None, None
-
-
 class ForkedChild:
     """One forked child, driven by grader.boundary.session like a spawned one (its ChildHandle)."""
 
     def __init__(self, server: ForkServer, request_fd: int, read_fd: int, capture_fd: int, root: str,
-                 sent: bool, shared=None) -> None:
+                 sent: bool) -> None:
         self.server = server
         self.request_fd = request_fd
         self.read_fd = read_fd
         self.capture_fd = capture_fd
         self.root = root
-        self.shared = shared  # the memory the child writes its lines into (an mmap), None where there is none
         self._returncode: int | None = None if sent else -signal.SIGKILL
 
     def send(self, request: str) -> None:
@@ -183,9 +163,6 @@ class ForkedChild:
                 self.server.close()
                 self._returncode = -signal.SIGKILL
         os.close(self.read_fd)
-        if self.shared is not None:
-            self.shared.close()
-            self.shared = None
         return read_capture(self.capture_fd, output_limit)
 
 
@@ -278,8 +255,7 @@ def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> 
     or None when the parent has gone away."""
     from grader.boundary.child import serve as serve_request
 
-    request_fd, result_fd, capture_fd = fds[:3]
-    shared_fd = fds[3] if len(fds) == 4 else None  # the memory the parent shares for the lines, if it does
+    request_fd, result_fd, capture_fd = fds
     server_pid = os.getpid()
     try:
         os.makedirs(root, mode=0o700, exist_ok=True)
@@ -298,7 +274,7 @@ def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> 
             _prctl(4, 1)  # PR_SET_DUMPABLE: its own /proc entries stay its own
             with open(request_fd, "rb") as pipe:
                 text = pipe.read().decode()
-            serve_request(text, result_fd, capture_fd, shared_fd)
+            serve_request(text, result_fd, capture_fd)
         finally:
             os._exit(70)
     for fd in fds:
@@ -373,12 +349,12 @@ def serve(argv: list[str] | None = None) -> None:
     _prctl(36, 1)  # PR_SET_CHILD_SUBREAPER: a run's orphans become ours, to be killed
     while True:
         try:
-            message, fds, _, _ = socket.recv_fds(server, _MESSAGE, 4)
+            message, fds, _, _ = socket.recv_fds(server, _MESSAGE, 3)
         except OSError:
             break
         if not message:
             break
-        if not message.startswith(b"run ") or len(fds) not in (3, 4):  # e.g. a "kill" after the run ended
+        if not message.startswith(b"run ") or len(fds) != 3:  # e.g. a "kill" that came after the run ended
             for fd in fds:
                 os.close(fd)
             continue

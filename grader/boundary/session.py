@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import enum
 import json
-import math
 import signal
 import time
 from dataclasses import dataclass, field
@@ -28,8 +27,6 @@ from grader.boundary.wire import (
     NOT_RUN,
     RAISED_EVENT,
     RETURNED,
-    SHARED_HEADER,
-    SHARED_START,
     TIMEOUT,
     Call,
     EncodedCalls,
@@ -128,17 +125,11 @@ def _parse(line: bytes) -> dict:
 
 
 class _Child:
-    """One running child (a ChildHandle) and its result pipe, and the memory it shares for its lines if it does
-    (the handle's `shared`: grader.boundary.wire.SHARED_HEADER)."""
+    """One running child (a ChildHandle) and its result pipe."""
 
     def __init__(self, handle: ChildHandle) -> None:
         self.handle = handle
         self.buffer = b""
-        self.shared = getattr(handle, "shared", None)
-        self.taken = SHARED_START  # how far the shared lines have been read
-        self.lines = 0  # how many shared lines have been read
-        self.in_flight_started: float | None = None  # when the call after the last line read started, if known
-        self.overflowed = False  # a line came down the pipe: the memory was full, its header says no more
 
     def send(self, request: str) -> None:
         self.handle.send(request)
@@ -146,11 +137,7 @@ class _Child:
     def events(self, deadline: Callable[[], float]):
         """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes. A line that
         is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
-        the caller stops the child for it. With shared memory, its lines come first, then any that came down the
-        pipe (those that did not fit); the pipe's empty lines only wake us."""
-        if self.shared is not None:
-            yield from self._shared_events(deadline)
-            return
+        the caller stops the child for it."""
         while True:
             if b"\n" in self.buffer:
                 *lines, self.buffer = self.buffer.split(b"\n")  # one split per chunk, not one copy per line
@@ -163,62 +150,6 @@ class _Child:
             if not chunk:
                 return
             self.buffer += chunk
-
-    def _shared_events(self, deadline: Callable[[], float]):
-        while True:
-            for event in self._drained():
-                yield event
-                if event is MALFORMED:
-                    return
-            if b"\n" in self.buffer:
-                *lines, self.buffer = self.buffer.split(b"\n")
-                for line in lines:
-                    if line:  # an empty line only wakes us
-                        self.overflowed = True
-                        yield _parse(line)
-            if len(self.buffer) > MAX_LINE:
-                yield MALFORMED
-                return
-            try:
-                chunk = self.handle.read(deadline() - time.monotonic())
-            except TimeoutError:
-                if self._header()[0] != self.taken:  # lines came without waking us: read them, then see again
-                    continue
-                raise
-            if not chunk:
-                yield from self._drained()  # the last lines
-                return
-            self.buffer += chunk
-
-    def _header(self) -> tuple[int, int, float]:
-        """(end of the lines, lines before the call in flight, when it started); a header not yet written (the
-        memory starts as zeros) says no line yet."""
-        end, lines, started = SHARED_HEADER.unpack_from(self.shared, 0)
-        return (SHARED_START if end == 0 else end), lines, started
-
-    def _drained(self):
-        """The lines written into shared memory since the last look (MALFORMED for a header or line no child of
-        ours writes). Each line is checked as it is read: where a processor lets us see the header before the
-        line it counts, a line not yet whole is looked at again a moment later."""
-        end, lines, started = self._header()
-        if end == self.taken:
-            self.in_flight_started = started if not self.overflowed and lines == self.lines and \
-                0 < started <= time.monotonic() else None
-            return
-        if not self.taken < end <= len(self.shared) or end - self.taken > MAX_LINE:
-            yield MALFORMED
-            return
-        data = self.shared[self.taken:end]
-        if not data.endswith(b"\n") or b"\x00" in data:  # not whole yet: written a moment ago
-            time.sleep(0.001)
-            data = self.shared[self.taken:end]
-        self.taken = end
-        for line in data.split(b"\n")[:-1] if data.endswith(b"\n") else [data]:
-            self.lines += 1
-            yield _parse(line) if line else MALFORMED
-        end_now, lines, started = self._header()
-        self.in_flight_started = started if not self.overflowed and end_now == end and lines == self.lines and \
-            0 < started <= time.monotonic() else None
 
     def stop(self) -> str:
         """Kill the child and everything it started; return what learner code printed (capped)."""
@@ -328,13 +259,6 @@ class Progress:
                     "likely never ends (a loop whose condition never changes?)")
         return f"{budget}: it may never end for these arguments (a loop whose condition never changes), or be too slow"
 
-    def call_began(self, started: float) -> None:
-        """The call in flight began at `started` (as the child says, in shared memory: its line has not come yet):
-        its time runs from then. A time before its chapter began here is not taken (we may have read the chapter's
-        first line late; a header read half-written could say anything): its time then runs from our own view."""
-        if self.stage is Stage.CALL and self.chapter_end - self.limits.chapter_seconds <= started < self.call_started:
-            self.call_started, self.deadline = started, started + self.call_budget
-
     def _next_chapter(self, now: float) -> None:
         self.chapter_at, self.call_at, self.compiling, self.first_call = self.chapter_at + 1, 0, (), False
         self.called = set()
@@ -347,11 +271,8 @@ class Progress:
             if kind in _RESULTS and name == self.chapter and event.get("index") == self.index:
                 function = self.function
                 runs[name].results[self.index] = from_event(function, event)
-                took = event.get("s")  # as the child timed it (its lines may come a chapter at a time)
-                if type(took) is not float or not 0.0 <= took < math.inf:
-                    took = now - self.call_started
-                if took > self.slowest.get(function, 0.0):
-                    self.slowest[function] = took
+                if now - self.call_started > self.slowest.get(function, 0.0):
+                    self.slowest[function] = now - self.call_started
                 self.call_at += 1
                 self._next_call(now)
                 return None
@@ -473,13 +394,8 @@ class Session:
         progress = Progress.of(pending, runs, self.limits)
         ending = Ending.PIPE_CLOSED
         trace("the grader's own work done; waiting for the child's lines")
-        def due() -> float:
-            if child.in_flight_started is not None:
-                progress.call_began(child.in_flight_started)
-            return min(progress.deadline, progress.chapter_end, self.learner_end)
-
         try:
-            for event in child.events(due):
+            for event in child.events(lambda: min(progress.deadline, progress.chapter_end, self.learner_end)):
                 if progress.stage is Stage.STARTUP:
                     trace("the child's first line")
                 ending = progress.take(event, time.monotonic(), runs)

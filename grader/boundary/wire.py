@@ -18,7 +18,6 @@ from __future__ import annotations
 import binascii
 import functools
 import math
-import struct
 from dataclasses import dataclass
 
 # ------------------------------------------------------------------------------ events (child -> parent)
@@ -27,15 +26,6 @@ IMPORT, IMPORTED, IMPORT_FAILED = "import", "imported", "import-failed"
 RETURNED, RAISED_EVENT, MISSING_EVENT = "returned", "raised", "missing"
 DONE = "done"
 MAX_LINE = 64 << 20  # a longer result line is a protocol violation
-# A forked child (grader.boundary.forkserver) writes its lines into memory it shares with the parent instead of
-# the result pipe: a header, then the lines one after another. The header holds how far the lines go (bytes from
-# the start of the memory, header included), how many lines there were when the call in flight started, and when
-# it started (time.monotonic(), the clock both processes read). The pipe then only wakes the parent (an empty
-# line) when a chapter begins and ends and when everything is done; a line that would not fit in the memory goes
-# down the pipe instead, as do all after it. A call's line says how long the call took ("s", in seconds).
-SHARED_BYTES = 64 << 20  # the shared memory's size (pages exist only where lines are written)
-SHARED_HEADER = struct.Struct("<QQd")  # (end of the lines, lines before the call in flight, when that call started)
-SHARED_START = 64  # where the first line begins
 # Libraries whose functions may compile on their first call (jax.jit, torch.compile): IMPORTED lists those the
 # learner's module loaded, and the first call of each function then gets the import's time instead of a call's.
 COMPILING = frozenset({"jax", "torch"})
