@@ -2,11 +2,12 @@
 
 Drawing (matplotlib) is most of the report's cost, and importing matplotlib alone takes about 0.4 s.
 So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
-forks imports matplotlib, draws one figure nobody sees (a first figure's own work, done once) and forks its own
-two drawing processes on the other core while the grader grades, then draws the chapters it is sent. Without it (not started, or it failed) two processes are
-forked when the figures are due; where forking is not safe (Windows, macOS) the figures are drawn in
-the grader's own process. A drawing process with nothing to draw (every figure reused, see
-grader.render.figure_cache, or the command ended early) is stopped. This module imports nothing heavy."""
+forks imports matplotlib, draws one figure nobody sees (a first figure's own work, done once) and forks its
+own two drawing processes on the other core while the grader grades, then draws the chapters it is sent.
+Without it (not started, or it failed) two processes are forked when the figures are due; where forking is
+not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing process with nothing to
+draw (every figure reused, see grader.render.figure_cache, or the command ended early) is stopped. This module
+imports nothing heavy."""
 
 from __future__ import annotations
 
