@@ -306,3 +306,32 @@ def test_the_figures_drawn_by_two_forked_processes_are_those_drawn_here(monkeypa
     assert [(f.uri, f.alt, f.caption) for f in drawn.values()] == [(f.uri, f.alt, f.caption) for f in here]
     assert drawn["ch09"].uri == "" and "could not be drawn" in drawn["ch09"].caption
     assert len(pools) == (1 if fork_is_safe() else 0)  # drawn by the two processes where they can be forked
+
+
+def test_no_drawing_process_is_forked_while_another_thread_runs(monkeypatch):
+    """A fork copies only the calling thread: where another one runs (it may hold a lock, an import's among them),
+    the figures are drawn here instead, the same figures."""
+    import threading
+
+    from grader.render import drawer, item_plots
+
+    rules = {"facility_low": 0.2, "facility_high": 0.95, "discrimination_low": 0.1}
+    items = [{"id": f"ch0{n}/item{k}", "chapter": f"ch0{n}", "facility": 0.1 * k, "discrimination": 0.05 * k,
+              "flags": []} for n in range(2) for k in range(1, 4)]
+    statistics = {"chapters": [{"chapter": "ch00"}, {"chapter": "ch01"}], "items": items, "rules": rules,
+                  "learners": 40}
+    alone = item_plots.figures(statistics)
+    pools = []
+    two = drawer.two_processes
+    monkeypatch.setattr(drawer, "two_processes", lambda: pools.append(two()) or pools[-1])
+    release = threading.Event()
+    other = threading.Thread(target=release.wait, daemon=True)
+    other.start()
+    try:
+        assert not drawer.forkable()
+        beside = item_plots.figures(statistics)
+    finally:
+        release.set()
+        other.join()
+    assert pools == []
+    assert [f.uri for f in beside.values()] == [f.uri for f in alone.values()]

@@ -105,8 +105,19 @@ def _draw_with(pool, chapters: list) -> list[list]:
     return [futures[i].result() for i in range(len(chapters))]
 
 
+def forkable() -> bool:
+    """Whether drawing processes may be forked from this process now: forking is safe on this system and no other
+    thread runs (a fork copies only the calling thread: one holding a lock, an import's among them, would leave
+    it held in the copy)."""
+    import threading
+
+    from grader.system import fork_is_safe
+
+    return fork_is_safe() and threading.active_count() == 1
+
+
 def two_processes():
-    """Two forked drawing processes (one where there is one core)."""
+    """Two forked drawing processes (one where there is one core); fork them only where `forkable` says so."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -125,11 +136,10 @@ def _draw_in_two(chapters: list) -> list[list]:
 def figures_due(chapters: list, here: bool = False):
     """Start drawing the figures of `chapters` (grader.model.ChapterResult); returns the function that
     waits for them, one list of figures per chapter: drawn by the started drawing process, else by two
-    processes forked then, where forking is safe, else by this process. With no chapters, the started
+    processes forked then, where `forkable`, else by this process. With no chapters, the started
     drawing process is stopped. `here`: drawn by this process in any case (a batch worker, one of as many
     as there are cores: forking more for each learner only costs forks)."""
     from grader.render.figures import figures, preload
-    from grader.system import fork_is_safe
 
     def drawn_here() -> list[list]:
         return [figures(chapter) for chapter in chapters]
@@ -158,10 +168,11 @@ def figures_due(chapters: list, here: bool = False):
             finally:
                 ours.close()
                 _ended(process)
-        if len(chapters) > 1 and fork_is_safe():
+        if len(chapters) > 1:
             try:
-                preload()
-                return _draw_in_two(chapters)
+                preload()  # here, before any fork (a thread still importing it keeps the figures here: forkable)
+                if forkable():
+                    return _draw_in_two(chapters)
             except (OSError, ValueError, ImportError, RuntimeError):
                 pass
         return drawn_here()

@@ -18,18 +18,14 @@ def figures(statistics: dict) -> dict[str, Figure]:
 
 
 def _drawn(jobs: list[tuple]) -> list[Figure]:
-    import threading
+    from grader.render.drawer import forkable, two_processes
 
-    from grader.system import fork_is_safe
-
-    if len(jobs) > 1 and fork_is_safe() and threading.active_count() == 1:  # a fork copies only this thread
-        from grader.render.drawer import two_processes
-
-        preload()  # imported once, here, before the fork
+    preload()  # imported once, here, before any fork
+    if len(jobs) > 1 and forkable():
         try:
             with two_processes() as pool:
                 return list(pool.map(_one, jobs))
-        except Exception:  # noqa: BLE001  no process could be forked, or one died: drawn here instead
+        except Exception:  # noqa: BLE001, S110  no process could be forked, or one died: drawn here instead
             pass
     return [_one(job) for job in jobs]
 
