@@ -155,7 +155,8 @@ def _version(stage: Path) -> str:
 
 
 # The handout's packages: the grader's own, every one (the instructor's also has the references and the keys).
-HANDOUT_PACKAGES = ("grader", "grader.boundary", "grader.checks", "grader.quiz", "grader.render")
+HANDOUT_PACKAGES = ("grader", "grader.boundary", "grader.checks", "grader.quiz", "grader.render",
+                    "grader.render.compiled")
 _PYPROJECT = """[build-system]
 requires = ["setuptools>=61"]
 build-backend = "setuptools.build_meta"

@@ -121,3 +121,62 @@ def test_report_in_a_real_browser(reports, name, tmp_path):
     assert total == f"{data['score']:g} / {data['max_score']:g}"
     for chapter in data["chapters"]:
         assert cells[chapter["chapter"]] == f"{chapter['score']:g} / {chapter['max_score']:g}"
+
+
+# ----------------------------------------------------------------------- the templates as shipped compiled
+
+def _small_report():
+    from grader.model import ChapterResult, CheckResult, Report, Status
+
+    check = CheckResult("c", "H_jacobian", "shape & values <b>", Status.FAIL, 0, 2, message="got <script>", expected=[[1.0, 0.0]],
+                        got=[[1.0, 2.0]], details={"wrong": [[0, 1]]})
+    passed = CheckResult("d", "H_jacobian", "another", Status.PASS, 1, 1)
+    return Report("subs/ana", [ChapterResult("ch06", "t", [check, passed], ["a note"])], learner_output="printed")
+
+
+def test_the_shipped_compiled_templates_are_those_of_the_templates_text():
+    """grader/render/compiled holds each template as jinja2 compiles it now: after a template's text changes,
+    `python -m grader.render.html` writes them again (until then every report compiles its template afresh)."""
+    import importlib
+
+    import jinja2
+
+    from grader.render import html, precompiled
+
+    for kind, source in html._SOURCES.items():
+        module = importlib.import_module(f"grader.render.compiled.{kind}")
+        if module.JINJA2 != jinja2.__version__:  # another jinja2: its own compiling is used, never this module
+            assert module.DIGEST != precompiled.digest(source)
+            continue
+        shipped = (precompiled.FOLDER / f"{kind}.py").read_text(encoding="utf-8")
+        assert shipped == precompiled.module_text(kind, source), "run `python -m grader.render.html`"
+
+
+def test_a_report_reads_the_same_from_the_shipped_template_and_from_one_compiled_here(monkeypatch):
+    import jinja2
+
+    from grader.render import html, precompiled
+    from grader.render.compiled import page as shipped_page
+
+    if shipped_page.JINJA2 != jinja2.__version__:
+        pytest.skip(f"the templates were compiled by jinja2 {shipped_page.JINJA2}, this is {jinja2.__version__}")
+    report = _small_report()
+    html._template.cache_clear()
+    shipped = html._template("page")
+    assert shipped.filename == str(precompiled.FOLDER / "page.py")  # loaded, not compiled
+    page, fragment = html.render(report), html.render_fragment(report, id_prefix="r-")
+    html._template.cache_clear()
+    monkeypatch.setattr(precompiled, "digest", lambda source: "another text")  # no shipped module matches
+    assert html._template("page").filename == "<template>"  # compiled here
+    assert html.render(report) == page and html.render_fragment(report, id_prefix="r-") == fragment
+    assert "got &lt;script&gt;" in page and "<script>" not in page  # escaped as ever
+    html._template.cache_clear()
+
+
+def test_a_template_whose_text_changed_is_compiled_not_taken_from_its_stale_module(monkeypatch):
+    from grader.render import html
+
+    html._template.cache_clear()
+    monkeypatch.setitem(html._SOURCES, "page", html.TEMPLATE.replace("</body>", "<p>changed</p></body>"))
+    assert "<p>changed</p>" in html.render(_small_report())
+    html._template.cache_clear()

@@ -170,13 +170,16 @@ def _values(check: CheckResult) -> str:
         return Markup("")
 
 
-@functools.lru_cache(maxsize=2)
-def _template(source: str = TEMPLATE):
-    """A template (the page's by default), compiled once per process (compiling costs more than rendering)."""
-    import jinja2
+_SOURCES = {"page": TEMPLATE, "fragment": FRAGMENT}
 
-    environment = jinja2.Environment(autoescape=True, undefined=jinja2.StrictUndefined)
-    return environment.from_string(source)
+
+@functools.lru_cache(maxsize=2)
+def _template(kind: str):
+    """The page's or the fragment's template, once per process: as shipped compiled (grader.render.precompiled),
+    else compiled here (compiling costs more than rendering)."""
+    from grader.render import precompiled
+
+    return precompiled.template(kind, _SOURCES[kind])
 
 
 def _verdict(report: Report, verdict_line) -> str:
@@ -187,7 +190,7 @@ def _verdict(report: Report, verdict_line) -> str:
     return verdict_line(report)
 
 
-def _render(source: str, report: Report, pid: str, root: str, kind: str, heading: int,
+def _render(report: Report, pid: str, root: str, kind: str, heading: int,
             kept: FigureCache | None, draw_here: bool = False) -> str:
     from markupsafe import Markup
 
@@ -213,7 +216,7 @@ def _render(source: str, report: Report, pid: str, root: str, kind: str, heading
                 figures[chapter.chapter] = [Figure(**figure) for figure in found]
         plotted = [c for c in plotted if not figures[c.chapter]]
     drawn = drawer.figures_due(plotted, here=draw_here)  # drawn elsewhere while the template compiles
-    template = _template(source)
+    template = _template(kind)
     for chapter, its_figures in zip(plotted, drawn()):
         figures[chapter.chapter] = its_figures
         if kept is not None:
@@ -230,7 +233,7 @@ def render(report: Report, kept: FigureCache | None = None, draw_here: bool = Fa
     no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes.
     Figures found in `kept` for the same plot data are reused, the others drawn and kept there; with
     `draw_here`, drawn by this process alone (see grader.render.drawer.figures_due)."""
-    return _render(TEMPLATE, report, "", "main", "page", 1, kept, draw_here)
+    return _render(report, "", "main", "page", 1, kept, draw_here)
 
 
 def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2,
@@ -247,4 +250,11 @@ def render_fragment(report: Report, id_prefix: str | None = None, heading_level:
         raise ValueError(f"id_prefix must be letters, digits, '-' or '_', starting with a letter: {id_prefix!r}")
     if not 1 <= heading_level <= 4:
         raise ValueError(f"heading_level must be 1 to 4 (the report uses three levels): {heading_level}")
-    return _render(FRAGMENT, report, id_prefix, "div", "fragment", heading_level, kept)
+    return _render(report, id_prefix, "div", "fragment", heading_level, kept)
+
+
+if __name__ == "__main__":  # after a template's text changed: ship it compiled again (grader.render.precompiled)
+    from grader.render import precompiled
+
+    for written in precompiled.write(_SOURCES):
+        print(f"wrote {written}")

@@ -1,0 +1,341 @@
+# The report's page template (grader.render.html) as jinja2 3.1.6 compiles it: written by
+# `python -m grader.render.html`, never by hand (grader.render.precompiled).
+JINJA2 = "3.1.6"
+DIGEST = "43968cd325ca361f3d8cc10ece7d2a4a15a6e7788ca416c0fb62f32aac7bc5e5"
+from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
+name = 'page'
+
+def root(context, missing=missing):
+    resolve = context.resolve_or_missing
+    undefined = environment.undefined
+    concat = environment.concat
+    cond_expr_undefined = Undefined
+    if 0: yield None
+    l_0_style = resolve('style')
+    l_0_root = resolve('root')
+    l_0_kind = resolve('kind')
+    l_0_pid = resolve('pid')
+    l_0_h = resolve('h')
+    l_0_report = resolve('report')
+    l_0_footer = resolve('footer')
+    l_0_landmark = resolve('landmark')
+    l_0_num = resolve('num')
+    l_0_adjustments = resolve('adjustments')
+    l_0_verdict = resolve('verdict')
+    try:
+        t_1 = environment.filters['length']
+    except KeyError:
+        @internalcode
+        def t_1(*unused):
+            raise TemplateRuntimeError("No filter named 'length' found.")
+    try:
+        t_2 = environment.filters['list']
+    except KeyError:
+        @internalcode
+        def t_2(*unused):
+            raise TemplateRuntimeError("No filter named 'list' found.")
+    try:
+        t_3 = environment.filters['selectattr']
+    except KeyError:
+        @internalcode
+        def t_3(*unused):
+            raise TemplateRuntimeError("No filter named 'selectattr' found.")
+    try:
+        t_4 = environment.filters['sum']
+    except KeyError:
+        @internalcode
+        def t_4(*unused):
+            raise TemplateRuntimeError("No filter named 'sum' found.")
+    try:
+        t_5 = environment.tests['none']
+    except KeyError:
+        @internalcode
+        def t_5(*unused):
+            raise TemplateRuntimeError("No test named 'none' found.")
+    try:
+        t_6 = environment.tests['sameas']
+    except KeyError:
+        @internalcode
+        def t_6(*unused):
+            raise TemplateRuntimeError("No test named 'sameas' found.")
+    pass
+    yield '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">\n<meta name="viewport" content="width=device-width, initial-scale=1">\n<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; style-src \'unsafe-inline\'">\n<title>Jacobians &amp; Linearization: grading report</title>\n<style>body{margin:0;background:#f8fafc}'
+    yield escape((undefined(name='style') if l_0_style is missing else l_0_style))
+    yield '</style></head>\n<body>\n<'
+    yield escape((undefined(name='root') if l_0_root is missing else l_0_root))
+    yield ' class="jl-report '
+    yield escape((undefined(name='kind') if l_0_kind is missing else l_0_kind))
+    yield '" id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'report" lang="en">\n<h'
+    yield escape((undefined(name='h') if l_0_h is missing else l_0_h))
+    yield ' class="title" id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'title">Jacobians &amp; Linearization: grading report</h'
+    yield escape((undefined(name='h') if l_0_h is missing else l_0_h))
+    yield '>\n<p class="note">Submission '
+    yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'submission'))
+    yield ' &middot; seed '
+    yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'seed'))
+    if environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'learner'):
+        pass
+        yield ' &middot; quiz learner '
+        yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'learner'))
+    yield '</p>\n<p class="note" id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'provenance">'
+    yield escape((undefined(name='footer') if l_0_footer is missing else l_0_footer))
+    yield '</p>\n<section id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'summary"'
+    yield escape(context.call((undefined(name='landmark') if l_0_landmark is missing else l_0_landmark), 'summary'))
+    yield '><h'
+    yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
+    yield ' class="summary-title" id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'summary-title">Summary</h'
+    yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
+    yield '>\n<table class="summary"><caption>Points by chapter</caption>\n<thead><tr><th scope="col">chapter</th><th scope="col">title</th><th scope="col" class="num">code</th><th scope="col" class="num">quiz</th><th scope="col" class="num">total</th></tr></thead>\n<tbody>'
+    for l_1_ch in environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'chapters'):
+        _loop_vars = {}
+        pass
+        yield '<tr><th scope="row"><a href="#'
+        yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '">'
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '</a></th><td>'
+        yield escape(environment.getattr(l_1_ch, 'title'))
+        yield '</td>\n<td class="num" data-code="'
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '">'
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'score_of'), 'code', _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+        yield ' / '
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'max_score_of'), 'code', _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+        yield '</td>\n<td class="num" data-quiz="'
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '">'
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'score_of'), 'quiz', _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+        yield ' / '
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'max_score_of'), 'quiz', _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+        yield '</td>\n<td class="num" data-total="'
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '">'
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_1_ch, 'score'), _loop_vars=_loop_vars))
+        yield ' / '
+        yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_1_ch, 'max_score'), _loop_vars=_loop_vars))
+        yield '</td></tr>'
+    l_1_ch = missing
+    yield '</tbody>\n<tfoot><tr><th scope="row" colspan="4">Total</th><td class="num" id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'total">'
+    yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'score')))
+    yield ' / '
+    yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'max_score')))
+    yield '</td></tr></tfoot></table>\n'
+    if (undefined(name='adjustments') if l_0_adjustments is missing else l_0_adjustments):
+        pass
+        yield '<ul id="'
+        yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+        yield 'adjustments">'
+        for l_1_a in (undefined(name='adjustments') if l_0_adjustments is missing else l_0_adjustments):
+            _loop_vars = {}
+            pass
+            yield '<li>'
+            yield escape(('late penalty' if (environment.getattr(l_1_a, 'kind') == 'late') else 'override'))
+            yield ': '
+            yield escape(context.call(environment.getattr(l_1_a, 'describe'), _loop_vars=_loop_vars))
+            yield '</li>'
+        l_1_a = missing
+        yield '</ul>'
+    yield '\n<p id="'
+    yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+    yield 'verdict">'
+    yield escape((undefined(name='verdict') if l_0_verdict is missing else l_0_verdict))
+    yield '</p>\n</section>\n'
+    for l_1_ch in environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'chapters'):
+        l_1_plural = resolve('plural')
+        l_1_figures = resolve('figures')
+        _loop_vars = {}
+        pass
+        yield '\n<section class="chapter" id="'
+        yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '"'
+        yield escape(context.call((undefined(name='landmark') if l_0_landmark is missing else l_0_landmark), environment.getattr(l_1_ch, 'chapter'), _loop_vars=_loop_vars))
+        yield '><h'
+        yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
+        yield ' class="chapter-title" id="'
+        yield escape((undefined(name='pid') if l_0_pid is missing else l_0_pid))
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield '-title">'
+        yield escape(environment.getattr(l_1_ch, 'chapter'))
+        yield ' &middot; '
+        yield escape(environment.getattr(l_1_ch, 'title'))
+        yield '</h'
+        yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
+        yield '>\n'
+        if (environment.getattr(l_1_ch, 'source') and (context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'endswith'), '.ipynb', _loop_vars=_loop_vars) or context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'startswith'), 'the code', _loop_vars=_loop_vars))):
+            pass
+            yield '<p class="note">graded: '
+            yield escape(environment.getattr(l_1_ch, 'source'))
+            yield '</p>'
+        yield '\n'
+        for l_2_note in environment.getattr(l_1_ch, 'notes'):
+            _loop_vars = {}
+            pass
+            yield '<p class="note">note: '
+            yield escape(l_2_note)
+            yield '</p>'
+        l_2_note = missing
+        yield '\n'
+        for l_2_problem in environment.getattr(l_1_ch, 'problems'):
+            _loop_vars = {}
+            pass
+            yield '<pre class="problem">'
+            yield escape(l_2_problem)
+            yield '</pre>'
+        l_2_problem = missing
+        yield '\n'
+        if environment.getattr(l_1_ch, 'hidden_checks'):
+            pass
+            yield '<p class="note">'
+            yield escape(context.call((undefined(name='plural') if l_1_plural is missing else l_1_plural), environment.getattr(l_1_ch, 'hidden_checks'), 'hidden check', _loop_vars=_loop_vars))
+            yield ' ('
+            yield escape(context.call((undefined(name='plural') if l_1_plural is missing else l_1_plural), environment.getattr(l_1_ch, 'hidden_points'), 'point', _loop_vars=_loop_vars))
+            yield ') run'
+            yield escape(('s' if (environment.getattr(l_1_ch, 'hidden_checks') == 1) else cond_expr_undefined("the inline if-expression on line 28 in 'page' evaluated to false and no else section was defined.")))
+            yield ' when you submit.</p>'
+        yield '\n'
+        for l_2_fig in environment.getitem((undefined(name='figures') if l_1_figures is missing else l_1_figures), environment.getattr(l_1_ch, 'chapter')):
+            _loop_vars = {}
+            pass
+            yield '<figure>'
+            if environment.getattr(l_2_fig, 'uri'):
+                pass
+                yield '<img src="'
+                yield escape(environment.getattr(l_2_fig, 'uri'))
+                yield '" alt="'
+                yield escape(environment.getattr(l_2_fig, 'alt'))
+                yield '" width="'
+                yield escape(environment.getattr(l_2_fig, 'width'))
+                yield '" height="'
+                yield escape(environment.getattr(l_2_fig, 'height'))
+                yield '">'
+            yield '\n<figcaption>'
+            yield escape(environment.getattr(l_2_fig, 'caption'))
+            if environment.getattr(l_2_fig, 'gave'):
+                pass
+                yield '<span class="gave">'
+                yield escape(environment.getattr(l_2_fig, 'gave'))
+                yield '</span>'
+            yield '</figcaption></figure>'
+        l_2_fig = missing
+        yield '\n'
+        for (l_2_kind, l_2_label) in (('code', 'Code'), ('quiz', 'Quiz')):
+            l_2_not_written = resolve('not_written')
+            l_2_folded = resolve('folded')
+            l_2_checks = missing
+            _loop_vars = {}
+            pass
+            l_2_checks = t_2(context.eval_ctx, t_3(context, environment.getattr(l_1_ch, 'checks'), 'kind', 'equalto', l_2_kind))
+            _loop_vars['checks'] = l_2_checks
+            yield '\n'
+            if (undefined(name='checks') if l_2_checks is missing else l_2_checks):
+                pass
+                yield '<h'
+                yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
+                yield ' class="kind-title">'
+                yield escape(l_2_label)
+                yield ': '
+                yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+                yield ' / '
+                yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'max_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+                if context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars):
+                    pass
+                    yield ' (+'
+                    yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
+                    yield ' points recorded, graded when you submit)'
+                yield '</h'
+                yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
+                yield '>\n'
+                l_2_folded = (context.call((undefined(name='not_written') if l_2_not_written is missing else l_2_not_written), (undefined(name='checks') if l_2_checks is missing else l_2_checks), _loop_vars=_loop_vars) if (l_2_kind == 'code') else {})
+                _loop_vars['folded'] = l_2_folded
+                yield '\n'
+                for l_3_c in (undefined(name='checks') if l_2_checks is missing else l_2_checks):
+                    l_3_marks = resolve('marks')
+                    l_3_values = resolve('values')
+                    _loop_vars = {}
+                    pass
+                    if (environment.getattr(l_3_c, 'function') in (undefined(name='folded') if l_2_folded is missing else l_2_folded)):
+                        pass
+                        if t_6(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
+                            pass
+                            yield '<div class="check fail"><span class="status"><span aria-hidden="true">'
+                            yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), 'fail'))
+                            yield ' </span>fail</span>'
+                            yield escape(environment.getattr(l_3_c, 'function'))
+                            yield ': not implemented yet ('
+                            yield escape(t_1(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function'))))
+                            yield ' check'
+                            yield escape(('s' if (t_1(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function'))) != 1) else cond_expr_undefined("the inline if-expression on line 34 in 'page' evaluated to false and no else section was defined.")))
+                            yield ')\n<span class="points">0 / '
+                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), t_4(environment, environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), attribute='max_points'), _loop_vars=_loop_vars))
+                            yield '<span class="sr-only"> points</span></span></div>'
+                    else:
+                        pass
+                        yield '<div class="check '
+                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
+                        yield '"><span class="status"><span aria-hidden="true">'
+                        yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), environment.getattr(environment.getattr(l_3_c, 'status'), 'value')))
+                        yield ' </span>'
+                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
+                        yield '</span>'
+                        yield escape(environment.getattr(l_3_c, 'description'))
+                        yield '\n<span class="points">'
+                        if environment.getattr(l_3_c, 'practice'):
+                            pass
+                            yield 'practice, not counted'
+                        else:
+                            pass
+                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'points'), _loop_vars=_loop_vars))
+                            yield ' / '
+                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'max_points'), _loop_vars=_loop_vars))
+                            yield '<span class="sr-only"> points</span>'
+                        yield '</span>\n<span class="note"> &middot; '
+                        yield escape(environment.getattr(l_1_ch, 'chapter'))
+                        yield '/'
+                        yield escape(environment.getattr(l_3_c, 'id'))
+                        yield '</span>\n'
+                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'message')):
+                            pass
+                            yield '<pre>'
+                            yield escape(environment.getattr(l_3_c, 'message'))
+                            yield '</pre>'
+                        yield '\n'
+                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'help')):
+                            pass
+                            yield '<p class="help"><strong>Hint:</strong> '
+                            yield escape(environment.getattr(l_3_c, 'help'))
+                            yield '</p>'
+                        yield '\n'
+                        if ((environment.getattr(l_3_c, 'kind') == 'quiz') and (not t_5(environment.getattr(l_3_c, 'got')))):
+                            pass
+                            yield '<p class="note">your answer: '
+                            yield escape(environment.getattr(l_3_c, 'got'))
+                            yield '</p>'
+                        yield '\n'
+                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') == 'fail') and (environment.getattr(l_3_c, 'kind') == 'code')):
+                            pass
+                            yield escape(context.call((undefined(name='values') if l_3_values is missing else l_3_values), l_3_c, _loop_vars=_loop_vars))
+                        yield '\n</div>'
+                l_3_c = l_3_marks = l_3_values = missing
+        l_2_kind = l_2_label = l_2_checks = l_2_not_written = l_2_folded = missing
+        yield '\n</section>'
+    l_1_ch = l_1_plural = l_1_figures = missing
+    yield '\n</'
+    yield escape((undefined(name='root') if l_0_root is missing else l_0_root))
+    yield '>\n</body></html>'
+
+blocks = {}
+debug_info = '6=59&8=61&9=67&10=73&11=81&12=85&15=95&16=106&17=112&18=118&19=126&20=132&21=148&23=152&24=158&25=174&26=180&27=188&28=196&29=206&30=222&31=231&32=240&33=258&34=261&35=279&36=292&37=302&38=306&39=312&40=318&41=324&44=333'
