@@ -66,13 +66,14 @@ def main() -> None:
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
     trace("launcher")
-    # matplotlib's import, the report's longest step, starts first on a first run; where figures are kept, the
-    # command decides once it knows whether any has to be drawn (grader.cli)
+    _prestart(sys.argv[1:])
+    # matplotlib's import, the report's longest step, starts next on a first run (in the drawing process, forked
+    # once numpy is imported here); where figures are kept, the command decides once it knows whether any has to
+    # be drawn (grader.cli)
     if _draws_figures(sys.argv[1:]) and not _figures_kept(sys.argv[1:]):
         from grader.render import drawer
 
         drawer.start()
-    _prestart(sys.argv[1:])
     from grader.cli import main as cli_main
 
     trace("click and the command line's module imported")
