@@ -70,11 +70,31 @@ def test_an_unused_drawing_process_ends_with_the_grader():
     pytest.fail(f"the drawing process {pid} outlived the grader that started it")
 
 
+def test_the_learners_child_starts_first_then_the_drawing_process_is_forked_with_numpy_imported(tmp_path):
+    """The learner's child starts first (its start is what the learner waits on); then numpy is imported, once
+    for the grader and the drawing process it forks (where matplotlib needs it), not again there."""
+    script = textwrap.dedent("""
+        import sys
+        from grader.render import drawer
+        assert "numpy" not in sys.modules
+        assert drawer.start()
+        assert "numpy" in sys.modules
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    environment = {**os.environ, "GRADER_TRACE": repr(time.time()), "GRADER_CACHE_DIR": ""}
+    proc = subprocess.run([sys.executable, "-m", "grader", "ch06", "--solutions", "--html", str(tmp_path / "r.html")],
+                          cwd=REPO, capture_output=True, text=True, env=environment, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    points = [line.split(" ms  ", 1)[1] for line in proc.stderr.splitlines() if line.startswith("trace ")]
+    assert points.index("child started") < points.index("drawing process started"), points
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("extra", [[], ["--seed", "not-a-number"]], ids=["graded", "usage-error"])
 def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
-    """`grade ... --html` forks the drawing process before anything else (grader.launch, before click parses
-    the command line): when the command ends, graded (with every figure) or refused as misused, no process of
+    """`grade ... --html` forks the drawing process early (grader.launch, once the learner's child has started,
+    before click parses the command line): when the command ends, graded (with every figure) or refused as misused, no process of
     it is left, not even for a moment. Forked processes keep the command line, which names the report."""
     from tests.support import processes_with
 
