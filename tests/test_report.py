@@ -180,3 +180,16 @@ def test_a_template_whose_text_changed_is_compiled_not_taken_from_its_stale_modu
     monkeypatch.setitem(html._SOURCES, "page", html.TEMPLATE.replace("</body>", "<p>changed</p></body>"))
     assert "<p>changed</p>" in html.render(_small_report())
     html._template.cache_clear()
+
+
+def test_a_shipped_template_module_that_does_not_load_is_compiled_here_instead(monkeypatch):
+    from grader.render import html, precompiled
+
+    def not_loadable(name):
+        raise SyntaxError(f"{name}: written for another Python")
+
+    html._template.cache_clear()
+    monkeypatch.setattr(precompiled.importlib, "import_module", not_loadable)
+    assert html._template("page").filename == "<template>"
+    assert "got &lt;script&gt;" in html.render(_small_report())
+    html._template.cache_clear()

@@ -43,7 +43,7 @@ def template(kind: str, source: str) -> jinja2.Template:
     environment_ = environment()
     try:
         module = importlib.import_module(f"grader.render.compiled.{kind}")
-    except ImportError:
+    except Exception:  # noqa: BLE001  missing, or not loadable with this jinja2 or Python: compiled here instead
         module = None
     if module is not None and getattr(module, "DIGEST", None) == digest(source):
         return environment_.template_class.from_module_dict(environment_, vars(module),
