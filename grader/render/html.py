@@ -215,7 +215,7 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int,
             if found is not None:
                 figures[chapter.chapter] = [Figure(**figure) for figure in found]
         plotted = [c for c in plotted if not figures[c.chapter]]
-    drawn = drawer.figures_due(plotted, here=draw_here)  # drawn elsewhere while the template compiles
+    drawn = drawer.figures_due(plotted, here=draw_here)  # drawn elsewhere while the template loads
     template = _template(kind)
     for chapter, its_figures in zip(plotted, drawn()):
         figures[chapter.chapter] = its_figures

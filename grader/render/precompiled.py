@@ -33,8 +33,8 @@ def digest(source: str) -> str:
 def module_text(kind: str, source: str) -> str:
     """The module shipped for template `kind` ("page", "fragment"): jinja2's compiled code, with its DIGEST."""
     code = environment().compile(source, name=kind, raw=True, defer_init=True)
-    return (f"# The report's {kind} template (grader.render.html) as jinja2 {jinja2.__version__} compiles it: written by\n"
-            f"# `python -m grader.render.html`, never by hand (grader.render.precompiled).\n"
+    return (f"# The report's {kind} template (grader.render.html) as jinja2 {jinja2.__version__} compiles it: "
+            f"written by\n# `python -m grader.render.html`, never by hand (grader.render.precompiled).\n"
             f'JINJA2 = "{jinja2.__version__}"\nDIGEST = "{digest(source)}"\n{code}\n')
 
 
