@@ -70,6 +70,20 @@ def test_an_unused_drawing_process_ends_with_the_grader():
     pytest.fail(f"the drawing process {pid} outlived the grader that started it")
 
 
+def test_no_drawing_process_is_started_while_another_thread_runs():
+    """The same rule as every fork of drawing processes (drawer.forkable): a fork copies only the calling thread."""
+    script = textwrap.dedent("""
+        import threading
+        from grader.render import drawer
+        release = threading.Event()
+        threading.Thread(target=release.wait, daemon=True).start()
+        assert not drawer.start() and not drawer._STARTED
+        release.set()
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_the_learners_child_starts_first_then_the_drawing_process_is_forked_with_numpy_imported(tmp_path):
     """The learner's child starts first (its start is what the learner waits on); then numpy is imported, once
     for the grader and the drawing process it forks (where matplotlib needs it), not again there."""

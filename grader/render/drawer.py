@@ -4,9 +4,8 @@ Drawing (matplotlib) is most of the report's cost, and importing matplotlib alon
 So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
 forks (with numpy already imported) imports matplotlib, draws one figure nobody sees (a first figure's own
 work, done once) and forks its own two drawing processes on the other core while the grader grades, then
-draws the chapters it is sent.
-Without it (not started, or it failed) two processes are forked when the figures are due; where forking is
-not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing process with nothing to
+draws the chapters it is sent. Without it (not started, or it failed) two processes are forked when the
+figures are due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing process with nothing to
 draw (every figure reused, see grader.render.figure_cache, or the command ended early) is stopped. This module
 imports nothing heavy until `start`."""
 
@@ -23,10 +22,10 @@ def start() -> bool:
     here (to plan and judge the calls whose results the figures show), so it is imported once for both, not in
     each (about 0.1 s of CPU on two busy cores). Call it before any thread starts (a fork copies only the
     calling thread), and after the learner's child is started (numpy's import would delay it). False where
-    forking is not safe or fails."""
-    from grader.system import fork_is_safe, keep, trace
+    forking is not safe here now (`forkable`) or fails."""
+    from grader.system import keep, trace
 
-    if _STARTED or not fork_is_safe():
+    if _STARTED or not forkable():
         return bool(_STARTED)
     import multiprocessing
 
