@@ -433,36 +433,6 @@ def _put_back(skipped: dict) -> None:
         del sys.modules[_NO_3D]
 
 
-def warm_up() -> None:
-    """Draw one figure that is never shown, with what the report's figures use (lines and markers, log axes, an
-    equal aspect, a legend, contours, arrows, labels), and write its SVG: what matplotlib does only for a
-    process's first figure (loading the font, filling its caches) is done once, before the drawing processes
-    fork (grader.render.drawer), instead of in each while the learner waits for the figures."""
-    preload()
-    from matplotlib.figure import Figure as Canvas
-
-    fig = Canvas(figsize=(6, 3.6))
-    lines, logs = fig.subplots(1, 2)
-    x = np.linspace(0.1, 1.0, 5)
-    lines.plot(x, x, "o--", color=REFERENCE, label="one")
-    lines.plot(x, x * x, "s-", color=LEARNER, label="two")
-    lines.plot(x, x, "+", color=GUIDE, ms=4, linestyle="none")
-    lines.annotate("", xy=(1.0, 1.0), xytext=(0.5, 0.5), arrowprops={"arrowstyle": "->", "color": "black"})
-    grid = np.linspace(0.1, 1.0, 10)
-    X, Y = np.meshgrid(grid, grid)
-    lines.contour(X, Y, X * X - Y * Y, levels=3, colors=GUIDE, linewidths=0.8)
-    lines.quiver([0.5], [0.5], [0.2], [0.1], angles="xy", scale_units="xy", scale=6)
-    lines.set(aspect="equal", xlabel="x", ylabel="y", title="a figure never shown")
-    lines.legend(fontsize=8)
-    logs.loglog(x, x, "o-", color=LEARNER, label="three")
-    logs.loglog(x, x * x, ":", color=GUIDE, label="four")
-    logs.set(xlabel="h", title="log axes")
-    logs.legend(fontsize=7, markerscale=4)
-    _light_ticks(fig)
-    fig.subplots_adjust(left=0.12, right=0.97, bottom=0.15, top=0.9, wspace=0.3)
-    svg_uri(fig)
-
-
 def draw(chapter_id: str, data: dict):
     """One plot of a chapter as a matplotlib figure, with its caption: (figure, caption)."""
     preload()
