@@ -64,6 +64,17 @@ def test_files_a_run_leaves_in_tmp_are_gone_for_the_next(server, submission_fact
     assert checks["range_bearing_worked_example"].status == Status.PASS, checks["range_bearing_worked_example"].message
 
 
+def test_learner_code_of_a_forked_run_has_the_collector_on_and_the_servers_objects_frozen(server, submission_factory):
+    """The server imports with the collector off and freezes what it made before it forks; each run's child turns
+    the collector on for learner code."""
+    from tests.test_process_boundary import GC_STATE
+
+    checks = grade_checks(submission_factory({"ch06_measurement": GC_STATE}), "ch06", seed=3, limits=LIMITS,
+                          boundary=server)
+    enabled, frozen = checks["range_bearing_worked_example"].got
+    assert enabled == 1.0 and frozen > 10_000, (enabled, frozen)
+
+
 def test_a_learner_who_kills_the_server_ends_only_their_own_run(server, submission_factory):
     killer = submission_factory({"ch06_measurement": replace_function(
         "ch06_measurement", "H_jacobian",

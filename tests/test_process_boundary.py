@@ -160,6 +160,18 @@ def test_child_runs_in_another_process(submission_factory):
     assert got[0] != os.getpid()
 
 
+GC_STATE = replace_function("ch06_measurement", "range_bearing", "def range_bearing(x, y):\n    import gc\n"
+                            "    return np.array([float(gc.isenabled()), float(gc.get_freeze_count())])\n")
+
+
+def test_learner_code_runs_with_the_collector_on_and_the_childs_own_objects_frozen(submission_factory):
+    """The child starts with the collector off (numpy's import and the request make no garbage) and turns it on
+    for learner code, with what it made frozen: the learner's collections never walk it."""
+    report = grade_code(submission_factory({"ch06_measurement": GC_STATE}), ["ch06"], limits=FAST)
+    enabled, frozen = checks_by_id(report.chapters[0])["range_bearing_worked_example"].got
+    assert enabled == 1.0 and frozen > 10_000, (enabled, frozen)
+
+
 @pytest.mark.parametrize("value", [
     np.arange(40, dtype=np.float64).reshape(5, 8) / 3.0,  # large: travels as float64 bytes
     np.array([[0.1, -2.5], [1e-300, 7.0]]),  # small: travels as numbers

@@ -12,6 +12,7 @@ Nothing here decides whether an answer is right; that happens in the parent.
 
 from __future__ import annotations
 
+import gc
 import importlib
 import importlib.machinery
 import json
@@ -279,6 +280,11 @@ def serve(request_text: str, result_fd: int, capture_fd: int) -> None:
     os.chdir(request["root"])
     _redirect_output(capture_fd)
     _apply_limits(limits)
+    # The collector was off since the interpreter started (spawn's boot line, the fork server's warm-up): numpy's
+    # import and the request make tens of thousands of objects and no garbage. On again for learner code, whose
+    # collections never walk what is frozen here.
+    gc.freeze()
+    gc.enable()
     run(request, out)
     out.close()
     os._exit(0)  # skip learner atexit handlers and finalizers

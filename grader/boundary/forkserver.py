@@ -14,6 +14,7 @@ server ends that run as a crash, and the parent starts a new server for the next
 
 from __future__ import annotations
 
+import gc
 import json
 import os
 import selectors
@@ -340,7 +341,9 @@ def _warm_up() -> None:
 def serve(argv: list[str] | None = None) -> None:
     """The server's loop (inside the sandbox): one run at a time until the parent closes the socket."""
     argv = sys.argv[1:] if argv is None else argv
+    gc.disable()  # off for the imports and in each run's child until its learner code runs (child.serve)
     _warm_up()
+    gc.freeze()  # what every run's child shares: its collections never walk it (nor copy its pages)
 
     server = socket.socket(fileno=int(argv[0]))
     config = json.loads(argv[1])

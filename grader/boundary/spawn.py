@@ -32,9 +32,9 @@ from grader.system import (
 
 # The child's command line: the interpreter isolated (-I), without site (-S, faster), in UTF-8 mode (-X utf8: a
 # learner printing σ on Windows would otherwise fail there, in the console's code page, and pass elsewhere), on
-# the grader's own path.
+# the grader's own path. The collector stays off until learner code runs (grader.boundary.child.serve).
 INTERPRETER = ("-I", "-S", "-X", "utf8")
-_BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.child import main; main()"
+_BOOT = "import gc; gc.disable(); import sys; sys.path[:] = {!r}; from grader.boundary.child import main; main()"
 
 TYPE_CHECKING = False  # not typing's: its import costs the launcher 5 ms before the child starts
 if TYPE_CHECKING:
