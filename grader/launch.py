@@ -7,6 +7,7 @@ submission turns out wrong, the CLI discards it.
 
 from __future__ import annotations
 
+import gc
 import os
 import sys
 
@@ -63,6 +64,9 @@ def _figures_kept(args: list[str]) -> bool:
 
 
 def main() -> None:
+    # the imports below (click, the command line's modules, numpy for --html) make tens of thousands of objects and
+    # no garbage: the collector stays off until they are done, and then leaves them out of its passes (frozen)
+    gc.disable()
     # before anything here imports numpy: the grader's own BLAS threads would only spin beside the child
     os.environ.update(SINGLE_THREADED_BLAS)
     trace("launcher")
@@ -76,6 +80,8 @@ def main() -> None:
         drawer.start()
     from grader.cli import main as cli_main
 
+    gc.freeze()
+    gc.enable()
     trace("click and the command line's module imported")
 
     code: int | str | None = 0
