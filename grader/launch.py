@@ -93,7 +93,8 @@ def main() -> None:
         from grader import prestart
 
         prestart.take("", None)  # stops a prestarted child nobody took
-        if "grader.render.drawer" in sys.modules:  # and a drawing process nobody used (no atexit after os._exit)
+        if "grader.render.drawer" in sys.modules:  # a drawing process: stopped if unused, else waited for (no atexit
+            # after os._exit)
             sys.modules["grader.render.drawer"].stop_unused()
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):
     # everything is written and every child is stopped by now.

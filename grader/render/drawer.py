@@ -14,6 +14,7 @@ import os
 import signal
 
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
+_ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by stop_unused)
 
 
 def start() -> bool:
@@ -49,12 +50,15 @@ def start() -> bool:
 
 def stop_unused() -> None:
     """Stop the drawing process if nothing was sent to it, rather than let it import matplotlib for nobody:
-    at once while it imports, else as soon as its drawing processes have ended (see _draw_what_comes)."""
+    at once while it imports, else as soon as its drawing processes have ended (see _draw_what_comes); and wait
+    for one that sent its figures to end."""
     while _STARTED:
         process, ours = _STARTED.pop()
         ours.close()
         process.terminate()
         _ended(process)
+    while _ENDING:
+        _ended(_ENDING.pop())
 
 
 def _ended(process) -> None:
@@ -176,12 +180,16 @@ def figures_due(chapters: list, here: bool = False):
         if sent is not None:
             process, ours = sent
             try:
-                return ours.recv()
-            except (EOFError, OSError):
-                pass  # drawn below instead
-            finally:
+                drawn = ours.recv()
+            except (EOFError, OSError):  # drawn below instead
                 ours.close()
                 _ended(process)
+            else:
+                # it ends once its drawing processes have (10 to 30 ms): waited for when the command ends
+                # (grader.launch), not before the page is written
+                ours.close()
+                _ENDING.append(process)
+                return drawn
         if len(chapters) > 1:
             try:
                 preload()  # here, before any fork (a thread still importing it keeps the figures here: forkable)
