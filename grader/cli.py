@@ -249,12 +249,19 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
         finally:
             session.close()
     trace("judged")
+    shown: list[str] = []
     if html_path is not None:
         from grader.render import figure_cache, html
 
-        write_atomically(html_path, html.render(report, figure_cache.default()))
+        def show_meanwhile() -> None:  # the terminal's text, made while the figures are drawn
+            try:
+                shown.append(_shown(report, output_format, verbose))
+            except Exception:  # noqa: BLE001  made again by _emit, which meets what it raises
+                pass
+
+        write_atomically(html_path, html.render(report, figure_cache.default(), meanwhile=show_meanwhile))
         click.echo(f"Wrote the HTML report: {os.path.abspath(html_path)}", err=True)
-    _emit(report, output_format, verbose, session.isolation)
+    _emit(report, output_format, verbose, session.isolation, shown=shown[0] if shown else None)
 
 
 def _figures_likely_drawn(session, chapters: list[str], verdicts) -> bool:
@@ -369,18 +376,22 @@ def _renderer(output_format: str):
     return text
 
 
-def _emit(report, output_format: str, verbose: bool, isolation: str = "") -> None:
-    """Print the report in the chosen format and exit 0 (all passed) or 1; with `verbose`, the isolation line
-    (what held for the learner's code) first, on stderr."""
-    if verbose and isolation:
-        click.echo(isolation, err=True)
+def _shown(report, output_format: str, verbose: bool) -> str:
+    """The report as the chosen format prints it on stdout."""
     renderer = _renderer(output_format)
     if output_format == "json":
-        click.echo(renderer.render(report), nl=False)
-    else:
-        stream = sys.stdout
-        click.echo(renderer.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream),
-                                   verbose=verbose), nl=False, color=_use_colour(stream))
+        return renderer.render(report)
+    stream = sys.stdout
+    return renderer.render(report, colour=_use_colour(stream), unicode_ok=_unicode_ok(stream), verbose=verbose)
+
+
+def _emit(report, output_format: str, verbose: bool, isolation: str = "", shown: str | None = None) -> None:
+    """Print the report in the chosen format (`shown`: as _shown made it already) and exit 0 (all passed) or 1;
+    with `verbose`, the isolation line (what held for the learner's code) first, on stderr."""
+    if verbose and isolation:
+        click.echo(isolation, err=True)
+    text = _shown(report, output_format, verbose) if shown is None else shown
+    click.echo(text, nl=False, color=None if output_format == "json" else _use_colour(sys.stdout))
     sys.exit(EXIT_ALL_PASSED if report.all_passed else EXIT_NOT_ALL_PASSED)
 
 

@@ -101,6 +101,50 @@ def test_the_drawing_processes_get_matplotlib_frozen_out_of_the_collectors_passe
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+def test_a_drawing_process_that_sent_its_figures_is_waited_for_when_the_command_ends_not_before():
+    """Its figures come back at once; its own end (its drawing processes shut down first) is waited for by
+    stop_unused, which the command calls once the page and the terminal's text are written."""
+    script = textwrap.dedent("""
+        import os, types
+        from grader.render import drawer, figures
+        def said(chapter):
+            return [chapter.chapter]
+        figures.figures = said
+        assert drawer.start()
+        process = drawer._STARTED[0][0]
+        drawn = drawer.figures_due([types.SimpleNamespace(chapter="ch00"), types.SimpleNamespace(chapter="ch05")])()
+        assert drawn == [["ch00"], ["ch05"]], drawn
+        assert drawer._ENDING == [process]
+        drawer.stop_unused()
+        assert not drawer._ENDING and process.exitcode == 0 and not os.path.exists(f"/proc/{process.pid}")
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_the_pages_meanwhile_work_runs_once_the_figures_are_sent_to_be_drawn():
+    """html.render sends the figures' data first; the caller's work (the terminal's text) and the rest of the page's
+    cleaning happen while they are drawn."""
+    script = textwrap.dedent("""
+        import sys
+        from pathlib import Path
+        from grader.render import drawer, html
+        assert drawer.start()
+        from grader.boundary import open_session
+        from grader.grading import grade
+        from grader.submission import Submission
+        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        report = grade(session, ["ch06"], with_plots=True)
+        sent = []
+        page = html.render(report, meanwhile=lambda: sent.append(not drawer._STARTED))
+        assert sent == [True] and page.count("data:image/svg+xml;base64,") == 1, sent
+        drawer.stop_unused()
+    """)
+    proc = subprocess.run([sys.executable, "-c", script, str(REPO)], cwd=REPO, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_the_learners_child_starts_first_then_the_drawing_process_is_forked_with_numpy_imported(tmp_path):
     """The learner's child starts first (its start is what the learner waits on); then numpy is imported, once
     for the grader and the drawing process it forks (where matplotlib needs it), not again there."""

@@ -84,6 +84,26 @@ def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
     assert "H[1,0] = d bearing/d x: got 0.16, expected -0.16" in text
 
 
+def test_learner_text_in_a_figure_is_cleaned_as_on_the_rest_of_the_page(repo_root, tmp_path):
+    """The figures' data are cleaned (grader.safe_text.for_html) before they are sent to be drawn, apart from the
+    rest of the report: a control character the learner returned shows as U+FFFD in the figure, as in the text."""
+    import base64
+
+    from tests.support import build_submission, replace_function
+
+    source = replace_function("ch09_choose_your_tool", "classify_critical_point",
+                              "def classify_critical_point(hessian) -> str:\n    return 'saddle\\x1b[31m\\x07'\n")
+    root = build_submission(tmp_path / "sub", {"ch09_choose_your_tool": source})
+    out = tmp_path / "r.html"
+    grade_json("ch09", "--submission", root, html=out, cwd=repo_root)
+    text = out.read_text(encoding="utf-8")
+    svgs = [base64.b64decode(uri).decode("utf-8") for uri in re.findall(r'src="data:image/svg\+xml;base64,([^"]+)"',
+                                                                          text)]
+    assert svgs and any("saddle\ufffd[31m\ufffd" in svg for svg in svgs), [svg[-3000:] for svg in svgs]
+    assert not any(ch in svg for svg in svgs for ch in "\x1b\x07")
+    assert "saddle\ufffd[31m\ufffd" in text and "\x1b" not in text
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(CHROMIUM is None and not os.environ.get("CI"),
                     reason="Debian's chromium is not installed (apt-get install chromium)")

@@ -23,6 +23,8 @@ from grader.render import plural
 from grader.render.figures import Figure
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from grader.render.figure_cache import FigureCache
 
 # Text colours with their contrast on white (the report's cards) and on the page's #f8fafc; WCAG 2.1 AA
@@ -191,12 +193,26 @@ def _verdict(report: Report, verdict_line) -> str:
 
 
 def _render(report: Report, pid: str, root: str, kind: str, heading: int,
-            kept: FigureCache | None, draw_here: bool = False) -> str:
+            kept: FigureCache | None, draw_here: bool = False, meanwhile: Callable[[], None] | None = None) -> str:
+    import dataclasses
+
     from markupsafe import Markup
 
     from grader import provenance, safe_text
+    from grader.render import drawer
     from grader.render.text import verdict_line
 
+    # the figures' data cleaned first and sent to be drawn; the rest of the report is cleaned while they draw
+    plotted = [dataclasses.replace(c, plots=safe_text.clean_value(c.plots, safe_text.for_html))
+               for c in report.chapters if c.plots]
+    figures: dict[str, list[Figure]] = {c.chapter: [] for c in report.chapters}
+    if kept is not None:
+        for chapter in plotted:
+            found = kept.load(chapter.chapter, chapter.plots)
+            if found is not None:
+                figures[chapter.chapter] = [Figure(**figure) for figure in found]
+        plotted = [c for c in plotted if not figures[c.chapter]]
+    drawn = drawer.figures_due(plotted, here=draw_here)
     report = safe_text.clean_report(report, safe_text.for_html)
     style = Markup(STYLE.replace("#S", f"#{pid}report"))
 
@@ -205,18 +221,9 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int,
         reports in one notebook would repeat the names (axe: landmark-unique)."""
         return Markup(f' aria-labelledby="{pid}{section}-title"') if kind == "page" else Markup("")
 
-    from grader.render import drawer
-
-    figures: dict[str, list[Figure]] = {c.chapter: [] for c in report.chapters}
-    plotted = [c for c in report.chapters if c.plots]
-    if kept is not None:
-        for chapter in plotted:
-            found = kept.load(chapter.chapter, chapter.plots)
-            if found is not None:
-                figures[chapter.chapter] = [Figure(**figure) for figure in found]
-        plotted = [c for c in plotted if not figures[c.chapter]]
-    drawn = drawer.figures_due(plotted, here=draw_here)  # drawn elsewhere while the template loads
     template = _template(kind)
+    if meanwhile is not None:
+        meanwhile()
     for chapter, its_figures in zip(plotted, drawn()):
         figures[chapter.chapter] = its_figures
         if kept is not None:
@@ -228,12 +235,14 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int,
                            adjustments=report.all_adjustments())
 
 
-def render(report: Report, kept: FigureCache | None = None, draw_here: bool = False) -> str:
+def render(report: Report, kept: FigureCache | None = None, draw_here: bool = False,
+           meanwhile: Callable[[], None] | None = None) -> str:
     """The report as one self-contained HTML page. Learner text is escaped by the template and has
     no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes.
     Figures found in `kept` for the same plot data are reused, the others drawn and kept there; with
-    `draw_here`, drawn by this process alone (see grader.render.drawer.figures_due)."""
-    return _render(report, "", "main", "page", 1, kept, draw_here)
+    `draw_here`, drawn by this process alone (see grader.render.drawer.figures_due). `meanwhile`: the
+    caller's own work, done while the figures are drawn elsewhere (its exceptions are the caller's)."""
+    return _render(report, "", "main", "page", 1, kept, draw_here, meanwhile)
 
 
 def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2,
