@@ -101,6 +101,24 @@ def test_the_drawing_processes_get_matplotlib_frozen_out_of_the_collectors_passe
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+def test_the_drawing_processes_yield_to_the_grading():
+    """The drawing process and the two it forks run at a lower priority (nice 10) than the grader, whose grading is
+    what the figures wait for."""
+    script = textwrap.dedent("""
+        import os, types
+        from grader.render import drawer, figures
+        def said(chapter):
+            return [os.getpriority(os.PRIO_PROCESS, 0)]
+        figures.figures = said
+        assert drawer.start()
+        mine = os.getpriority(os.PRIO_PROCESS, 0)
+        drawn = drawer.figures_due([types.SimpleNamespace(chapter="ch00"), types.SimpleNamespace(chapter="ch01")])()
+        assert all(nice == min(mine + 10, 19) for [nice] in drawn), (mine, drawn)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_a_drawing_process_that_sent_its_figures_is_waited_for_when_the_command_ends_not_before():
     """Its figures come back at once; its own end (its drawing processes shut down first) is waited for by
     stop_unused, which the command calls once the page and the terminal's text are written."""

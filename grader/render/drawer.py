@@ -3,7 +3,8 @@
 Drawing (matplotlib) is most of the report's cost, and importing matplotlib alone takes about 0.4 s.
 So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
 forks (with numpy already imported) imports matplotlib and forks its own two drawing processes on the other
-core while the grader grades, then draws the chapters it is sent. Without it (not started, or it failed) two processes are forked when the
+core while the grader grades (at a lower priority: the grading is what the figures wait for), then draws the
+chapters it is sent. Without it (not started, or it failed) two processes are forked when the
 figures are due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing process with nothing to
 draw (every figure reused, see grader.render.figure_cache, or the command ended early) is stopped. This module
 imports nothing heavy until `start`."""
@@ -80,6 +81,9 @@ def _draw_what_comes(connection) -> None:
 
     from grader.render.figures import preload
 
+    # Background work: matplotlib's import runs while the grader and the learner's child grade, on the same cores,
+    # and the grading is what the figures wait for (first run -3% wall, paired). Its drawing processes inherit it.
+    os.nice(10)
     keep = connection.fileno()
     null = os.open(os.devnull, os.O_RDWR)
     for standard in (0, 1, 2):
