@@ -253,3 +253,22 @@ def test_grade_chapter_imports_nothing_heavy_it_does_not_use():
     heavy = {m for m in imported if m.split(".")[0] in ("sympy", "jinja2", "matplotlib", "email")
              or m == "importlib.metadata"}
     assert not heavy, sorted(heavy)
+
+
+@pytest.mark.parametrize("command", ["list", "batch"])
+def test_the_launcher_turns_the_collector_back_on_before_the_command_runs(command):
+    """grader.launch imports with the collector off, then turns it on with what it imported frozen, before the
+    command runs: a long-running one (batch, --watch) collects as ever."""
+    script = (
+        "import gc, sys\n"
+        "import grader.cli\n"
+        "def command():\n"
+        "    print(gc.isenabled(), gc.get_freeze_count() > 1000)\n"
+        "grader.cli.main = command\n"
+        f"sys.argv = ['grade', {command!r}]\n"
+        "from grader.launch import main\n"
+        "main()\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.split() == ["True", "True"], proc.stdout + proc.stderr[-2000:]
