@@ -93,9 +93,8 @@ def main() -> None:
         from grader import prestart
 
         prestart.take("", None)  # stops a prestarted child nobody took
-        if "grader.render.drawer" in sys.modules:  # a drawing process: stopped if unused, else waited for (no atexit
-            # after os._exit)
-            sys.modules["grader.render.drawer"].stop_unused()
+        if "grader.render.drawer" in sys.modules:  # its drawing process: stopped if unused, else waited for
+            sys.modules["grader.render.drawer"].end()  # (no atexit handler runs after os._exit)
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):
     # everything is written and every child is stopped by now.
     if isinstance(code, str):

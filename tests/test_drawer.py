@@ -121,7 +121,7 @@ def test_the_drawing_processes_yield_to_the_grading():
 
 def test_a_drawing_process_that_sent_its_figures_is_waited_for_when_the_command_ends_not_before():
     """Its figures come back at once; its own end (its drawing processes shut down first) is waited for by
-    stop_unused, which the command calls once the page and the terminal's text are written."""
+    drawer.end, which the command calls once the page and the terminal's text are written."""
     script = textwrap.dedent("""
         import os, types
         from grader.render import drawer, figures
@@ -133,7 +133,7 @@ def test_a_drawing_process_that_sent_its_figures_is_waited_for_when_the_command_
         drawn = drawer.figures_due([types.SimpleNamespace(chapter="ch00"), types.SimpleNamespace(chapter="ch05")])()
         assert drawn == [["ch00"], ["ch05"]], drawn
         assert drawer._ENDING == [process]
-        drawer.stop_unused()
+        drawer.end()
         assert not drawer._ENDING and process.exitcode == 0 and not os.path.exists(f"/proc/{process.pid}")
     """)
     proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)
@@ -156,7 +156,7 @@ def test_the_pages_meanwhile_work_runs_once_the_figures_are_sent_to_be_drawn():
         sent = []
         page = html.render(report, meanwhile=lambda: sent.append(not drawer._STARTED))
         assert sent == [True] and page.count("data:image/svg+xml;base64,") == 1, sent
-        drawer.stop_unused()
+        drawer.end()
     """)
     proc = subprocess.run([sys.executable, "-c", script, str(REPO)], cwd=REPO, capture_output=True, text=True,
                           timeout=120)

@@ -4,10 +4,11 @@ Drawing (matplotlib) is most of the report's cost, and importing matplotlib alon
 So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
 forks (with numpy already imported) imports matplotlib and forks its own two drawing processes on the other
 core while the grader grades (at a lower priority: the grading is what the figures wait for), then draws the
-chapters it is sent. Without it (not started, or it failed) two processes are forked when the
-figures are due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing process with nothing to
-draw (every figure reused, see grader.render.figure_cache, or the command ended early) is stopped. This module
-imports nothing heavy until `start`."""
+chapters it is sent. Without it (not started, or it failed) two processes are forked when the figures are
+due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing
+process with nothing to draw (every figure reused, see grader.render.figure_cache, or the command ended early)
+is stopped; one that sent its figures is waited for when the command ends (`end`). This module imports nothing
+heavy until `start`."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import os
 import signal
 
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
-_ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by stop_unused)
+_ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by `end`)
 
 
 def start() -> bool:
@@ -45,14 +46,14 @@ def start() -> bool:
     _STARTED.append((process, ours))
     import atexit
 
-    atexit.register(stop_unused)  # before multiprocessing's own exit handler, which would wait for it
+    atexit.register(end)  # before multiprocessing's own exit handler, which would wait for it
     return True
 
 
-def stop_unused() -> None:
-    """Stop the drawing process if nothing was sent to it, rather than let it import matplotlib for nobody:
-    at once while it imports, else as soon as its drawing processes have ended (see _draw_what_comes); and wait
-    for one that sent its figures to end."""
+def end() -> None:
+    """End the drawing process: stopped if nothing was sent to it, rather than let it import matplotlib for
+    nobody (at once while it imports, else as soon as its drawing processes have ended, see _draw_what_comes);
+    waited for if it sent its figures (it ends on its own once its drawing processes have)."""
     while _STARTED:
         process, ours = _STARTED.pop()
         ours.close()
@@ -100,7 +101,7 @@ def _draw_what_comes(connection) -> None:
         finally:
             gc.freeze()
             gc.enable()
-        # Until here SIGTERM (stop_unused) ends this process at once. From here it waits (blocked): ending now
+        # Until here SIGTERM (`end`) ends this process at once. From here it waits (blocked): ending now
         # would leave the drawing processes waiting for work forever, while the pipe's end (EOF) ends them
         # and this process in order.
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
@@ -169,7 +170,7 @@ def figures_due(chapters: list, here: bool = False):
     if here:
         return drawn_here
     if not chapters:
-        stop_unused()
+        end()
     sent = None
     if chapters and _STARTED:
         process, ours = _STARTED.pop()
@@ -178,7 +179,7 @@ def figures_due(chapters: list, here: bool = False):
             sent = (process, ours)
         except Exception:  # noqa: BLE001  it died, or the chapters would not pickle: drawn below instead
             _STARTED.append((process, ours))
-            stop_unused()
+            end()
 
     def wait() -> list[list]:
         if sent is not None:
