@@ -119,10 +119,14 @@ def _scratch(sandboxed: bool) -> tuple[str, str]:
 
 
 def _send(stream, request: bytes) -> None:
+    """Write the request and close the pipe; a child already gone (a broken pipe) gets it closed all the same."""
     try:
         stream.write(request)
-        stream.close()
-    except (BrokenPipeError, OSError):
+    except OSError:  # BrokenPipeError among them
+        pass
+    try:
+        stream.close()  # its flush fails again where the write did; the descriptor is closed even so
+    except OSError:
         pass
 
 
