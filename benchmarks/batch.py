@@ -15,11 +15,18 @@ the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades t
 `grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with one, then two `grade worker`
 processes of one worker each, each run right after the local pool's, and prints both in submissions per second
 (needs the [cluster] extra). --repeat N runs each N times: medians.
+
+The floor, timed in the same rounds: the learner side alone, as `grade batch` would run it (the same number of
+worker processes, each with its own sandboxed fork server; every learner's calls run in a forked child and read
+back, line by line, into results) with nothing else of the grader's: no judging, no quiz, no report written.
+With --repeat N the batch, its floor and `grade all --solutions` run in N interleaved rounds, and each figure
+is printed as the median and spread of its per-round ratios.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import random
 import shutil
@@ -146,6 +153,61 @@ def run_batch(submissions: Path, out: Path, jobs: int | None, env: dict,
     cpu = None if cpu_before is None or cpu_after is None else cpu_after - cpu_before
     lines = (proc.stdout.strip().splitlines()[:1] + proc.stderr.strip().splitlines()[:1]) or [proc.stderr[-500:]]
     return wall, cpu, "\n".join(lines)
+
+
+def _learner_side(submissions: str, jobs: int) -> None:
+    """The floor (run as its own process, `--learner-side`): every submission's calls run behind the batch's
+    boundary, in `jobs` worker processes, and read back. Prints, as JSON, the seconds and the machine's busy CPU
+    seconds this took (staging and planning, done first, left out), the learners, the calls asked and the calls
+    that returned a value."""
+    import multiprocessing
+
+    from grader import staging
+    from grader.batch import choose_boundary
+    from grader.chapters import CHAPTERS
+    from grader.grading import DEFAULT_SEED, _plan
+
+    scratch = Path(tempfile.mkdtemp(prefix="grade-floor-"))
+    try:
+        roots = [str(staging.stage(entry, scratch)) for entry in staging.discover(Path(submissions))]
+        _PLANNED.extend(_plan(chapter.id, DEFAULT_SEED, False, frozenset()).request() for chapter in CHAPTERS)
+        choose_boundary("required", probe=True)  # as the batch does before any learner
+        cpu_before, started = busy_cpu_seconds(), time.perf_counter()
+        with multiprocessing.get_context("fork").Pool(jobs) as pool:
+            answered = sum(pool.imap_unordered(_run_learner, roots))
+        seconds, cpu_after = time.perf_counter() - started, busy_cpu_seconds()
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    cpu = None if cpu_before is None or cpu_after is None else cpu_after - cpu_before
+    calls = len(roots) * sum(len(request.calls) for request in _PLANNED)
+    print(json.dumps({"seconds": seconds, "cpu": cpu, "learners": len(roots), "calls": calls, "answered": answered}))
+
+
+_PLANNED: list = []  # the chapters' requests, planned once before the pool forks
+_WORKER: dict = {}
+
+
+def _run_learner(root: str) -> int:
+    """One learner's calls, run in a child of this worker's fork server: how many it answered."""
+    from grader.batch import choose_boundary
+    from grader.boundary import Limits
+    from grader.boundary.wire import RAISED, VALUE
+    from grader.submission import Submission
+
+    if "boundary" not in _WORKER:
+        _WORKER["boundary"] = choose_boundary("required")
+    runs = _WORKER["boundary"].open_session(Submission(Path(root), "exercises"), Limits()).run(_PLANNED)
+    return sum(result.kind in (VALUE, RAISED) for run in runs.values() for result in run.results)
+
+
+def run_learner_side(submissions: Path, jobs: int | None, env: dict) -> dict:
+    """The floor for `submissions` (see _learner_side), from a process of its own."""
+    command = [sys.executable, str(Path(__file__).resolve()), "--learner-side", str(submissions),
+               "--jobs", str(jobs or os.cpu_count() or 1)]
+    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False, env=env)
+    if proc.returncode != 0:
+        raise SystemExit(f"the learner side alone failed: {proc.stderr[-800:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 # ------------------------------------------------------------------------------------ memory against the count
@@ -374,7 +436,11 @@ def main() -> None:
     parser.add_argument("--scheduler", action="store_true",
                         help="throughput through grade batch --scheduler with 1 and 2 local Dask workers, beside the "
                              "local pool")
+    parser.add_argument("--learner-side", metavar="FOLDER", help=argparse.SUPPRESS)  # the floor's own process
     args = parser.parse_args()
+    if args.learner_side:
+        _learner_side(args.learner_side, args.jobs or os.cpu_count() or 1)
+        return
     if args.scheduler:
         work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
         try:
@@ -395,36 +461,66 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="grade-batch-bench-"))
     make(work / "submissions", args.count, args.styles)
     make(work / "baseline", args.baseline_count, args.styles)
+    env = dict(os.environ)
+    rounds = args.repeat or 1
     singles: list[float] = []
+    walls: list[float] = []
+    cpus: list[float] = []
+    floors: list[float] = []
+    ratios: list[float] = []
+    floor_ratios: list[float] = []
 
-    def grade_all(times: int = 3) -> None:
+    def grade_all(times: int) -> list[float]:
         """`grade all --solutions` judged afresh (nothing kept: as a batch judges each learner's code)."""
+        seconds = []
         for _ in range(times):
             started = time.perf_counter()
             subprocess.run([sys.executable, "-m", "grader", "all", "--solutions"], cwd=ROOT, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL, check=False, env=dict(os.environ, GRADER_CACHE_DIR=""))
-            singles.append(time.perf_counter() - started)
+                           stderr=subprocess.DEVNULL, check=False, env=dict(env, GRADER_CACHE_DIR=""))
+            seconds.append(time.perf_counter() - started)
+        singles.extend(seconds)
+        return seconds
 
-    grade_all()
-    env = dict(os.environ)
-    wall, cpu, output = run_batch(work / "submissions", work / "out", args.jobs, env)
-    grade_all()  # as many after the batch as before: the machine's drift shows in the spread
-    single = statistics.median(singles)
+    output = ""
+    for _ in range(rounds):  # one round: grade all, the batch, its floor, grade all (3 of each grade all for one round)
+        beside = grade_all(3 if rounds == 1 else 1)
+        wall, cpu, output = run_batch(work / "submissions", work / "out", args.jobs, env)
+        shutil.rmtree(work / "out", ignore_errors=True)  # the next round grades everyone again
+        floor = run_learner_side(work / "submissions", args.jobs, env)["seconds"]
+        beside += grade_all(3 if rounds == 1 else 1)  # as many after as before: the machine's drift shows
+        single = statistics.median(beside)
+        walls.append(wall / args.count)
+        floors.append(floor / args.count)
+        ratios.append(wall / args.count / single)
+        floor_ratios.append(floor / args.count / single)
+        if cpu is not None:
+            cpus.append(cpu / args.count)
     base_wall, base_cpu, _ = run_batch(work / "baseline", work / "out-baseline", args.jobs,
                                        dict(env, GRADER_FORK_SERVER="off"))
     print(output)
-    per, base_per = wall / args.count, base_wall / args.baseline_count
-    cpu_text = lambda total, n: "" if total is None else f", {total / n * 1000:.0f} ms CPU"  # noqa: E731
-    print(f"fork server: {args.count} submissions (all chapters and quizzes) in {wall:.1f} s: "
-          f"{args.count / wall:.1f} submissions/s, {per * 1000:.0f} ms wall each{cpu_text(cpu, args.count)}")
+
+    def spread(values: list[float], scale: float = 1.0, digits: int = 0) -> str:
+        middle = f"{statistics.median(values) * scale:.{digits}f}"
+        if len(values) == 1:
+            return middle
+        return f"{middle} (median of {len(values)} rounds; {min(values) * scale:.{digits}f} to {max(values) * scale:.{digits}f})"
+
+    per = statistics.median(walls)
+    base_per = base_wall / args.baseline_count
+    cpu_text = f", {spread(cpus, 1000)} ms CPU" if cpus else ""
+    print(f"fork server: {args.count} submissions (all chapters and quizzes): {args.count / per / args.count:.1f} "
+          f"submissions/s, {spread(walls, 1000)} ms wall each{cpu_text}")
+    print(f"the floor, the learner side alone (calls run and read back; no judging, quiz or outputs): "
+          f"{spread(floors, 1000)} ms wall each")
+    base_cpu_text = "" if base_cpu is None else f", {base_cpu / args.baseline_count * 1000:.0f} ms CPU"
     print(f"fresh sandboxed interpreter per learner: {args.baseline_count} in {base_wall:.1f} s: "
           f"{args.baseline_count / base_wall:.1f} submissions/s, {base_per * 1000:.0f} ms wall each"
-          f"{cpu_text(base_cpu, args.baseline_count)}; fork server speed-up {base_per / per:.2f}x")
-    print(f"one `grade all --solutions` from the CLI, judged afresh: median {single:.2f} s ({min(singles):.2f} to "
-          f"{max(singles):.2f}, {len(singles)} runs, half before the batch, half after); batch per submission / that = "
-          f"{per / single:.2f} (target <= 0.12)")
+          f"{base_cpu_text}; fork server speed-up {base_per / per:.2f}x")
+    print(f"one `grade all --solutions` from the CLI, judged afresh: median {statistics.median(singles):.2f} s "
+          f"({min(singles):.2f} to {max(singles):.2f}, {len(singles)} runs, half before the batch, half after)")
+    print(f"batch per submission / that `grade all`: {spread(ratios, digits=3)} (target <= 0.12); "
+          f"its floor / that `grade all`: {spread(floor_ratios, digits=3)}")
     shutil.rmtree(work, ignore_errors=True)
-
 
 if __name__ == "__main__":
     main()
