@@ -380,8 +380,10 @@ def test_time_budget_bounds_all_of_a_learners_code(tmp_path):
 
 @pytest.mark.slow
 def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preloaded_it(tmp_path):
-    """The batch's fork server imports sympy before it forks (the learner's code finds it already imported); a
-    learner whose gradient differentiates with sympy at every call is graded as the reference is."""
+    """A learner whose files name sympy is forked from a server that imported it (the learner's code finds it
+    already imported), and one whose files do not from the lean server, which holds numpy only (its forks copy no
+    sympy pages); one worker keeps both. The learner whose gradient differentiates with sympy at every call is
+    graded as the reference is."""
     sympy_style = replace_function("ch02_gradient", "example_gradient", """
         def example_gradient(x, y):
             import sys
@@ -391,11 +393,26 @@ def test_a_learner_using_sympy_gets_full_marks_from_the_fork_server_that_preload
             f = X ** 2 + X * Y
             return np.array([float(sympy.diff(f, v).subs({X: x, Y: y})) for v in (X, Y)])
         """)
+    plain = replace_function("ch02_gradient", "example_gradient", """
+        def example_gradient(x, y):
+            import sys
+            print("loaded before the learner's code:", "sym" + "py" in sys.modules)
+            return np.array([2 * x + y, x])
+        """)
     build_submission(tmp_path / "submissions" / "sam", {"ch02_gradient": sympy_style})
-    done = run_grade("batch", tmp_path / "submissions", "--out", tmp_path / "out", "--chapters", "ch02", "--no-html")
+    build_submission(tmp_path / "submissions" / "nora", {"ch02_gradient": plain})
+    done = run_grade("batch", tmp_path / "submissions", "--out", tmp_path / "out", "--chapters", "ch02", "--no-html",
+                     "--jobs", "1")
     assert done.returncode in (0, 1), done.stderr[-2000:]
     rows = {row["learner"]: row for row in _rows(tmp_path / "out" / "gradebook.csv")}
-    assert rows["sam"]["status"] == "graded" and rows["sam"]["ch02_code"] == code_points("ch02"), rows["sam"]
-    output = json.loads((tmp_path / "out" / "sam" / "report.json").read_text(encoding="utf-8"))["batch"]["learner_output"]
-    assert "sympy imported before the learner's code: True" in output, output
-    assert "sympy imported before the learner's code: False" not in output, output
+    for learner in ("sam", "nora"):
+        assert rows[learner]["status"] == "graded" and rows[learner]["ch02_code"] == code_points("ch02"), rows[learner]
+
+    def output_of(learner: str) -> str:
+        report = json.loads((tmp_path / "out" / learner / "report.json").read_text(encoding="utf-8"))
+        return report["batch"]["learner_output"]
+
+    assert "sympy imported before the learner's code: True" in output_of("sam"), output_of("sam")
+    assert "sympy imported before the learner's code: False" not in output_of("sam"), output_of("sam")
+    assert "loaded before the learner's code: False" in output_of("nora"), output_of("nora")
+    assert "loaded before the learner's code: True" not in output_of("nora"), output_of("nora")

@@ -4,7 +4,7 @@ From what the system offers (grader.system: process groups, whether a process ho
 bubblewrap on the PATH) and what the caller asks (a sandbox required, wanted where it starts, or off; a
 resident process kept between sessions), `choose` picks
 - the launcher: a resident fork server (grader.boundary.forkserver; where forking is safe and the caller keeps
-  the Boundary between sessions), a fresh interpreter per session with process groups and passed descriptors
+  the Boundary between sessions; a lean one, and one that also holds sympy for learners whose files name it), a fresh interpreter per session with process groups and passed descriptors
   (grader.boundary.spawn, POSIX), or the portable one (Windows: request over stdin, a job object);
 - the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts; where it does not and the
   grader is root, a dropped uid (grader.boundary.dropped: learner code as an unprivileged user that cannot read
@@ -17,6 +17,7 @@ fresh interpreter per session even where a fork server would serve), GRADER_LAUN
 from __future__ import annotations
 
 import enum
+import functools
 import os
 import shutil
 
@@ -51,7 +52,7 @@ class Boundary:
         self.sandbox = sandbox  # a grader.boundary.sandbox.Sandbox, or None
         self.turned_off = turned_off  # how the sandbox was turned off ("" when it was not)
         self.probe_failure = probe_failure  # why bubblewrap, installed, did not start here ("" when it did)
-        self._server = None
+        self._servers: dict = {}  # the resident fork servers, by what they preload (grader.boundary.forkserver)
 
     def command_prefix(self) -> list[str] | None:
         """What a child's command line is wrapped in (bubblewrap and its allow-list), None when it is not."""
@@ -87,33 +88,46 @@ class Boundary:
                else _no_bubblewrap(self.launch is Launch.PORTABLE))
         return f"isolation: no sandbox ({why}); it runs as you and can read every file you can ({readable})"
 
-    def start_child(self) -> ChildHandle:
-        """A fresh child for one session (a grader.boundary.session Launcher)."""
+    def start_child(self, preload: tuple[str, ...] = ()) -> ChildHandle:
+        """A fresh child for one session (a grader.boundary.session Launcher); a forked one comes from the fork
+        server that holds `preload` too."""
         if self.launch is Launch.FORK_SERVER:
-            return self._fork_server().start()
+            return self._fork_server(preload).start()
         return start_child(self.sandbox, portable=self.launch is Launch.PORTABLE)
 
-    def _fork_server(self):
-        if self._server is None:
+    def _fork_server(self, preload: tuple[str, ...] = ()):
+        if preload not in self._servers:
             from grader.boundary.forkserver import ForkServer
 
-            self._server = ForkServer(self.sandbox)
-        return self._server
+            self._servers[preload] = ForkServer(self.sandbox, preload)
+        return self._servers[preload]
 
     def warm_up(self) -> None:
-        """Start the resident fork server now, before the first session asks (nothing for the other launchers)."""
+        """Start the resident (lean) fork server now, before the first session asks (nothing for the other
+        launchers)."""
         if self.launch is Launch.FORK_SERVER and self._fork_server().process is None:
-            self._server.launch()
+            self._fork_server().launch()
 
     def open_session(self, submission, limits: Limits = Limits(), started: ChildHandle | None = None) -> Session:
-        """A session for `submission`: its first child starts now (or `started`, one this boundary started)."""
-        return Session(submission, self.start_child, limits, started=started, isolation=self.isolation,
-                       walled=self.sandboxed)
+        """A session for `submission`: its first child starts now (or `started`, one this boundary started); a
+        forked one from the server that preloads what its files name (grader.boundary.forkserver.preloads_for)."""
+        launcher, prepared = self.start_child, None
+        if self.launch is Launch.FORK_SERVER and started is None:
+            from grader.boundary.forkserver import preloads_for
+
+            try:
+                prepared = submission.prepare()
+            except Exception:  # noqa: BLE001  the session prepares it again, and meets this where it always did
+                prepared = None
+            else:
+                launcher = functools.partial(self.start_child, preloads_for(prepared.files))
+        return Session(submission, launcher, limits, started=started, isolation=self.isolation,
+                       walled=self.sandboxed, prepared=prepared)
 
     def close(self) -> None:
-        if self._server is not None:
-            self._server.close()
-            self._server = None
+        servers, self._servers = self._servers, {}
+        for server in servers.values():
+            server.close()
 
 
 def _no_bubblewrap(portable: bool) -> str:

@@ -1,6 +1,12 @@
 """A fork server for batch grading: one sandboxed interpreter imports numpy once, then forks a fresh
 child per grading run, so a learner costs a fork instead of a new interpreter.
 
+A server may also preload a library learners may use (PRELOADABLE: sympy, whose import is about 0.4 s). The
+grader keeps a lean server and, from the first learner whose files name such a library, one that holds it too
+(grader.boundary.door); each learner is forked from the one its files call for (`preloads_for`). A fork
+copies, then tears down, the pages of all that its server holds, three times per run (the fork here and the
+two of grader.boundary.confine): a learner who does not use sympy is not made to pay for its pages.
+
 The server runs inside the sandbox with no learner's files visible. For each run the parent sends,
 over a Unix socket, the child's three descriptors (request pipe, result pipe, capture file); the
 forked child gets the learner's files inside its request, writes them under a fresh folder and then
@@ -36,6 +42,7 @@ from grader.boundary.wire import placed
 from grader.system import child_environment, child_path, read_chunk, temp_dir
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
+PRELOADABLE = ("sympy",)  # libraries a server may hold for the learners whose files name them
 _MESSAGE = 4096
 _REPLY_SECONDS = 5.0  # how long the server may take to clean up after a run before it is replaced
 
@@ -44,8 +51,9 @@ class ForkServer:
     """The parent's end: starts the server (inside `wrap`, e.g. a grader.boundary.sandbox.Sandbox) on first use
     and again whenever it has died; `start` is a grader.boundary.session Launcher."""
 
-    def __init__(self, wrap: CommandWrapper | None = None) -> None:
+    def __init__(self, wrap: CommandWrapper | None = None, preload: tuple[str, ...] = ()) -> None:
         self.wrap = wrap
+        self.preload = preload  # what the server imports besides numpy (some of PRELOADABLE)
         self.sandboxed = bool(getattr(wrap, "available", False))  # its own PID namespace and /tmp
         self.process: subprocess.Popen | None = None
         self.socket: socket.socket | None = None
@@ -54,7 +62,8 @@ class ForkServer:
     def launch(self) -> None:
         """Start the server now (`start` does it on first use)."""
         parent_end, server_end = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-        config = {"scratch": self.wrap.scratch_dirs() if self.sandboxed else [], "pid_namespace": self.sandboxed}
+        config = {"scratch": self.wrap.scratch_dirs() if self.sandboxed else [], "pid_namespace": self.sandboxed,
+                  "preload": list(self.preload)}
         command = [sys.executable, *INTERPRETER, "-c", _BOOT.format(child_path()), str(server_end.fileno()),
                    json.dumps(config)]
         if self.wrap is not None:
@@ -316,21 +325,34 @@ def _run_one(server: socket.socket, root: str, fds: list[int], config: dict) -> 
     return None if parent_gone else status
 
 
-def _warm_up() -> None:
+def preloads_for(files: dict[str, str]) -> tuple[str, ...]:
+    """The libraries of PRELOADABLE that a submission's files (relative path -> base64, as prepared) name anywhere:
+    the server to fork its learner from. A library named nowhere but imported all the same is imported by that
+    learner's child, as any other."""
+    import base64
+
+    texts = [base64.b64decode(data) for data in files.values()]
+    return tuple(name for name in PRELOADABLE if any(name.encode() in text for text in texts))
+
+
+def _warm_up(preload: list[str]) -> None:
     """Import, once and before any fork, what every run would otherwise load again: numpy, the child
     side, the callables a request may name, numpy.random (for Generator arguments), what import
-    errors and submission files need, and sympy (the contract lets learners use it; its import, about
-    0.4 s, would otherwise be paid again by every learner who does)."""
+    errors and submission files need, and `preload` (libraries of PRELOADABLE the contract lets learners
+    use: sympy's import, about 0.4 s, would otherwise be paid again by every learner who uses it)."""
     import base64  # noqa: F401
+    import importlib
     import importlib.util  # noqa: F401
     import traceback  # noqa: F401
 
     import numpy as np
 
-    try:
-        import sympy  # noqa: F401
-    except ImportError:
-        pass
+    for name in preload:
+        if name in PRELOADABLE:
+            try:
+                importlib.import_module(name)
+            except ImportError:
+                pass
 
     import grader.boundary.child  # noqa: F401
     import grader.catalogue  # noqa: F401
@@ -341,12 +363,12 @@ def _warm_up() -> None:
 def serve(argv: list[str] | None = None) -> None:
     """The server's loop (inside the sandbox): one run at a time until the parent closes the socket."""
     argv = sys.argv[1:] if argv is None else argv
+    config = json.loads(argv[1])
     gc.disable()  # off for the imports and in each run's child until its learner code runs (child.serve)
-    _warm_up()
+    _warm_up(config.get("preload", []))
     gc.freeze()  # what every run's child shares: its collections never walk it (nor copy its pages)
 
     server = socket.socket(fileno=int(argv[0]))
-    config = json.loads(argv[1])
     config["pid_namespace"] = config.get("pid_namespace", False) and os.getpid() <= 3
     _prctl(4, 0)  # PR_SET_DUMPABLE 0: learner processes (same uid) cannot ptrace us or read our memory
     _prctl(36, 1)  # PR_SET_CHILD_SUBREAPER: a run's orphans become ours, to be killed

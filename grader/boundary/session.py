@@ -302,18 +302,20 @@ class Session:
     """Runs chapters' calls in child processes; start it early so its startup overlaps ours."""
 
     def __init__(self, submission: Submission, launcher: Launcher, limits: Limits = Limits(),
-                 started: ChildHandle | None = None, isolation: str = "", walled: bool = False) -> None:
+                 started: ChildHandle | None = None, isolation: str = "", walled: bool = False,
+                 prepared: Prepared | None = None) -> None:
         """Start the first child now (or adopt `started`, one the launcher already started); fresh children come
         from `launcher`. Made by grader.boundary.door.Boundary.open_session, which chose the launcher and says
         what isolates learner code (`isolation`, the line `-v` and the batch print) and whether learner code is
-        walled off from this user's files (`walled`: bubblewrap or a dropped uid)."""
+        walled off from this user's files (`walled`: bubblewrap or a dropped uid); `prepared`: the submission's
+        files, where the caller has read them already."""
         self.submission = submission
         self.limits = limits
         self.launcher = launcher
         self.isolation = isolation
         self.walled = walled
         self.output = ""
-        self._prepared: Prepared | None = None
+        self._prepared = prepared
         self._learner_end: float | None = None  # the learner's whole time budget runs out then (set by run)
         # work of the grader's own (no learner code) done once, in order, while the first child starts and
         # runs the calls: whatever does not need their results (the quiz, the output's modules)
