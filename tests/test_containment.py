@@ -112,6 +112,28 @@ def test_nothing_a_learner_leaves_reaches_the_next_learner_or_a_later_run(tmp_pa
     assert not {QUEUE_KEY, SEGMENT_KEY} & _host_ipc_keys()  # gone with the learner's IPC namespace
 
 
+def test_replacing_one_fork_server_leaves_the_workers_other_server_running(tmp_path, monkeypatch):
+    """A worker keeps a lean fork server and one that holds sympy (grader.boundary.forkserver.preloads_for). Closing
+    one (it died, or did not answer, and is replaced) clears the worker's orphans: the other server is no orphan,
+    and its next learner is still forked from it, not from a server started afresh."""
+    server = _fork_server(monkeypatch)
+    try:
+        grade_checks(_h(tmp_path, "plain", "def H_jacobian(x, y):\n    return np.eye(2)\n"), "ch06", seed=3,
+                     boundary=server)
+        lean = server._fork_server()
+        with_sympy = server._fork_server(("sympy",))
+        with_sympy.launch()
+        lean_pid = lean.process.pid
+        with_sympy.close()
+        state = Path(f"/proc/{lean_pid}/stat").read_text().rsplit(")", 1)[1].split()[0]  # gone: FileNotFoundError
+        assert state != "Z", "the lean server was killed with the other"
+        grade_checks(_h(tmp_path, "again", "def H_jacobian(x, y):\n    return np.eye(2)\n"), "ch06", seed=3,
+                     boundary=server)
+        assert lean.process is not None and lean.process.pid == lean_pid
+    finally:
+        server.close()
+
+
 MEMORY_HOG = f"""
 def H_jacobian(x, y):
     import subprocess, sys, time

@@ -4,8 +4,9 @@ From what the system offers (grader.system: process groups, whether a process ho
 bubblewrap on the PATH) and what the caller asks (a sandbox required, wanted where it starts, or off; a
 resident process kept between sessions), `choose` picks
 - the launcher: a resident fork server (grader.boundary.forkserver; where forking is safe and the caller keeps
-  the Boundary between sessions; a lean one, and one that also holds sympy for learners whose files name it), a fresh interpreter per session with process groups and passed descriptors
-  (grader.boundary.spawn, POSIX), or the portable one (Windows: request over stdin, a job object);
+  the Boundary between sessions; a lean one, and one that also holds sympy for learners whose files name it), a
+  fresh interpreter per session with process groups and passed descriptors (grader.boundary.spawn, POSIX), or
+  the portable one (Windows: request over stdin, a job object);
 - the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts; where it does not and the
   grader is root, a dropped uid (grader.boundary.dropped: learner code as an unprivileged user that cannot read
   the references, keys or course file), proved by a probe; else none, and the isolation line says which, and why.

@@ -39,7 +39,7 @@ from grader.boundary.spawn import (
     read_capture,
 )
 from grader.boundary.wire import placed
-from grader.system import child_environment, child_path, read_chunk, temp_dir
+from grader.system import child_environment, child_path, forget, keep, read_chunk, temp_dir
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
 PRELOADABLE = ("sympy",)  # libraries a server may hold for the learners whose files name them
@@ -71,6 +71,7 @@ class ForkServer:
         self.process = subprocess.Popen(
             command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             pass_fds=(server_end.fileno(),), start_new_session=True, env=child_environment(), cwd=temp_dir())
+        keep(self.process.pid)  # the grader's own: clearing orphans (another server's close) leaves it alone
         server_end.close()
         self.socket = parent_end
         become_subreaper()
@@ -124,6 +125,7 @@ class ForkServer:
             self.socket.close()
             self.socket = None
         if self.process is not None:
+            forget(self.process.pid)
             try:
                 os.killpg(self.process.pid, signal.SIGKILL)
             except (ProcessLookupError, PermissionError):
