@@ -159,7 +159,7 @@ def _learner_side(submissions: str, jobs: int) -> None:
     """The floor (run as its own process, `--learner-side`): every submission's calls run behind the batch's
     boundary, in `jobs` worker processes, and read back. Prints, as JSON, the seconds and the machine's busy CPU
     seconds this took (staging and planning, done first, left out), the learners, the calls asked and the calls
-    that returned a value."""
+    answered (a value returned, or an exception raised as the learner's function did)."""
     import multiprocessing
 
     from grader import staging
@@ -467,6 +467,7 @@ def main() -> None:
     walls: list[float] = []
     cpus: list[float] = []
     floors: list[float] = []
+    floor_cpus: list[float] = []
     ratios: list[float] = []
     floor_ratios: list[float] = []
 
@@ -486,7 +487,10 @@ def main() -> None:
         beside = grade_all(3 if rounds == 1 else 1)
         wall, cpu, output = run_batch(work / "submissions", work / "out", args.jobs, env)
         shutil.rmtree(work / "out", ignore_errors=True)  # the next round grades everyone again
-        floor = run_learner_side(work / "submissions", args.jobs, env)["seconds"]
+        floor_figures = run_learner_side(work / "submissions", args.jobs, env)
+        floor = floor_figures["seconds"]
+        if floor_figures["cpu"] is not None:
+            floor_cpus.append(floor_figures["cpu"] / args.count)
         beside += grade_all(3 if rounds == 1 else 1)  # as many after as before: the machine's drift shows
         single = statistics.median(beside)
         walls.append(wall / args.count)
@@ -503,15 +507,17 @@ def main() -> None:
         middle = f"{statistics.median(values) * scale:.{digits}f}"
         if len(values) == 1:
             return middle
-        return f"{middle} (median of {len(values)} rounds; {min(values) * scale:.{digits}f} to {max(values) * scale:.{digits}f})"
+        low, high = min(values) * scale, max(values) * scale
+        return f"{middle} (median of {len(values)} rounds; {low:.{digits}f} to {high:.{digits}f})"
 
     per = statistics.median(walls)
     base_per = base_wall / args.baseline_count
     cpu_text = f", {spread(cpus, 1000)} ms CPU" if cpus else ""
-    print(f"fork server: {args.count} submissions (all chapters and quizzes): {args.count / per / args.count:.1f} "
-          f"submissions/s, {spread(walls, 1000)} ms wall each{cpu_text}")
+    print(f"fork server: {args.count} submissions (all chapters and quizzes): {1 / per:.1f} submissions/s, "
+          f"{spread(walls, 1000)} ms wall each{cpu_text}")
+    floor_cpu_text = f", {spread(floor_cpus, 1000)} ms CPU" if floor_cpus else ""
     print(f"the floor, the learner side alone (calls run and read back; no judging, quiz or outputs): "
-          f"{spread(floors, 1000)} ms wall each")
+          f"{spread(floors, 1000)} ms wall each{floor_cpu_text}")
     base_cpu_text = "" if base_cpu is None else f", {base_cpu / args.baseline_count * 1000:.0f} ms CPU"
     print(f"fresh sandboxed interpreter per learner: {args.baseline_count} in {base_wall:.1f} s: "
           f"{args.baseline_count / base_wall:.1f} submissions/s, {base_per * 1000:.0f} ms wall each"
@@ -521,6 +527,7 @@ def main() -> None:
     print(f"batch per submission / that `grade all`: {spread(ratios, digits=3)} (target <= 0.12); "
           f"its floor / that `grade all`: {spread(floor_ratios, digits=3)}")
     shutil.rmtree(work, ignore_errors=True)
+
 
 if __name__ == "__main__":
     main()
