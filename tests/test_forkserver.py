@@ -16,6 +16,11 @@ from grader import boundary
 from grader.model import Status
 from tests.support import BWRAP, grade_checks, processes_with, replace_function
 
+try:
+    import fcntl
+except ImportError:  # not POSIX
+    fcntl = None
+
 MARKER = "271.828"  # sleep duration of the learner's background process, to find it in /proc
 LIMITS = boundary.Limits(import_seconds=3.0, call_seconds=3.0, chapter_seconds=10.0)
 
@@ -31,6 +36,42 @@ def server(monkeypatch):
     assert forks.launch is boundary.Launch.FORK_SERVER, forks.launch
     yield forks
     forks.close()
+
+
+def test_after_a_chunk_the_next_lines_get_a_moment_to_gather_but_never_near_a_deadline():
+    """A worker reads a run's lines a few dozen times per learner, not once for every two or three of them: after a
+    read that returned lines it pauses before the next. Never where the deadline is close: a line that came in
+    time is never turned into a timeout by the pause."""
+    from grader.boundary import forkserver
+
+    read_fd, write_fd = os.pipe()
+    child = forkserver.ForkedChild(None, -1, read_fd, -1, "", True)
+    try:
+        os.write(write_fd, b"1\n")
+        assert child.read(5.0) == b"1\n"  # the first read: at once
+        os.write(write_fd, b"2\n")
+        started = time.monotonic()
+        assert child.read(5.0) == b"2\n"
+        assert time.monotonic() - started >= forkserver._PAUSE_SECONDS
+        os.write(write_fd, b"3\n")
+        assert child.read(forkserver._PAUSE_SECONDS) == b"3\n"  # the deadline as near as the pause is long
+    finally:
+        os.close(read_fd)
+        os.close(write_fd)
+
+
+@pytest.mark.skipif(not hasattr(fcntl, "F_GETPIPE_SZ"), reason="pipe sizes are Linux's")
+def test_a_runs_result_pipe_holds_its_lines_while_the_worker_pauses(server):
+    """The lines a child writes while the worker pauses wait in the pipe; the child is never blocked on a full one
+    (a chapter's lines can be hundreds of kB: the Monte Carlo samples)."""
+    from grader.boundary import forkserver
+
+    wanted = min(forkserver._RESULT_PIPE_BYTES, int(Path("/proc/sys/fs/pipe-max-size").read_text()))
+    child = server.start_child()
+    try:
+        assert fcntl.fcntl(child.read_fd, fcntl.F_GETPIPE_SZ) >= wanted
+    finally:
+        child.stop(0)
 
 
 @pytest.mark.slow
