@@ -82,6 +82,9 @@ def kept() -> frozenset[int]:
 
 # ------------------------------------------------------------------------------ reading a pipe in time
 
+CHUNK_BYTES = 1 << 16  # the most read_chunk returns at once
+
+
 def read_chunk(fd: int, timeout: float) -> bytes:
     """The next bytes from a pipe (b"" at its end); TimeoutError when none come within `timeout`."""
     import select
@@ -90,7 +93,7 @@ def read_chunk(fd: int, timeout: float) -> bytes:
     poller.register(fd, select.POLLIN | select.POLLHUP | select.POLLERR)
     if timeout <= 0 or not poller.poll(timeout * 1000):
         raise TimeoutError
-    return os.read(fd, 1 << 16)
+    return os.read(fd, CHUNK_BYTES)
 
 
 class StreamReader:

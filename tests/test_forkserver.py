@@ -61,6 +61,30 @@ def test_after_a_chunk_the_next_lines_get_a_moment_to_gather_but_never_near_a_de
 
 
 @pytest.mark.skipif(not hasattr(fcntl, "F_GETPIPE_SZ"), reason="pipe sizes are Linux's")
+def test_a_full_chunk_is_followed_at_once(monkeypatch):
+    """Where a read filled its chunk, more lines are waiting: the next read takes them without the pause."""
+    from grader.boundary import forkserver
+    from grader.system import CHUNK_BYTES
+
+    pauses: list[float] = []
+    monkeypatch.setattr(forkserver.time, "sleep", pauses.append)
+    read_fd, write_fd = os.pipe()
+    forkserver._widen(write_fd)
+    child = forkserver.ForkedChild(None, -1, read_fd, -1, "", True)
+    try:
+        if fcntl.fcntl(write_fd, fcntl.F_GETPIPE_SZ) < 2 * CHUNK_BYTES:
+            pytest.skip("this system caps pipes below two chunks")
+        os.write(write_fd, b"x" * (CHUNK_BYTES + 10) + b"\n")
+        assert len(child.read(5.0)) == CHUNK_BYTES
+        assert len(child.read(5.0)) == 11 and pauses == []
+        os.write(write_fd, b"y\n")
+        assert child.read(5.0) == b"y\n" and pauses == [forkserver._PAUSE_SECONDS]
+    finally:
+        os.close(read_fd)
+        os.close(write_fd)
+
+
+@pytest.mark.skipif(not hasattr(fcntl, "F_GETPIPE_SZ"), reason="pipe sizes are Linux's")
 def test_a_runs_result_pipe_holds_its_lines_while_the_worker_pauses(server):
     """The lines a child writes while the worker pauses wait in the pipe; the child is never blocked on a full one
     (a chapter's lines can be hundreds of kB: the Monte Carlo samples)."""

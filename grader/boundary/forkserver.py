@@ -39,7 +39,7 @@ from grader.boundary.spawn import (
     read_capture,
 )
 from grader.boundary.wire import placed
-from grader.system import child_environment, child_path, forget, keep, read_chunk, temp_dir
+from grader.system import CHUNK_BYTES, child_environment, child_path, forget, keep, read_chunk, temp_dir
 
 _BOOT = "import sys; sys.path[:] = {!r}; from grader.boundary.forkserver import serve; serve()"
 PRELOADABLE = ("sympy",)  # libraries a server may hold for the learners whose files name them
@@ -159,7 +159,7 @@ class ForkedChild:
         self.capture_fd = capture_fd
         self.root = root
         self._returncode: int | None = None if sent else -signal.SIGKILL
-        self._read_before = False  # the last read returned lines
+        self._read_before = False  # the last read returned some lines, not a full chunk
 
     def send(self, request: str) -> None:
         """The request, with where the child writes the submission's files."""
@@ -172,13 +172,13 @@ class ForkedChild:
     def read(self, timeout: float) -> bytes:
         """The next chunk of result lines. After a chunk, the child's next lines get a moment to gather
         (_PAUSE_SECONDS, where the deadline is further off than ten of them): the worker wakes a few dozen
-        times per learner, not once for every two or three of some 850 lines. The last line is read as soon
-        as it comes (no read follows it)."""
+        times per learner, not once for every two or three of some 850 lines. A full chunk is followed at once
+        (more is waiting), and the last line is read as soon as it comes (no read follows it)."""
         if self._read_before and timeout > 10 * _PAUSE_SECONDS:
             time.sleep(_PAUSE_SECONDS)
             timeout -= _PAUSE_SECONDS
         chunk = read_chunk(self.read_fd, timeout)
-        self._read_before = bool(chunk)
+        self._read_before = 0 < len(chunk) < CHUNK_BYTES
         return chunk
 
     def wait(self, timeout: float) -> None:
