@@ -114,7 +114,7 @@ class StreamReader:
 
     def _pump(self) -> None:
         while True:
-            chunk = self.stream.read1(1 << 16) if hasattr(self.stream, "read1") else self.stream.read(1 << 16)
+            chunk = self.stream.read1(CHUNK_BYTES) if hasattr(self.stream, "read1") else self.stream.read(CHUNK_BYTES)
             self.chunks.put(chunk)
             if not chunk:
                 return

@@ -17,8 +17,8 @@ from tests.support import BWRAP, build_submission, replace_function
 
 REPO = Path(__file__).resolve().parents[1]
 
-pytestmark = [pytest.mark.slow,
-              pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"), reason="bubblewrap (bwrap) is not installed")]
+pytestmark = [pytest.mark.slow, pytest.mark.skipif(BWRAP is None and not os.environ.get("CI"),
+                                                   reason="bubblewrap (bwrap) is not installed")]
 
 
 def _floor(folder: Path) -> dict:
@@ -39,7 +39,8 @@ def test_the_floor_runs_every_call_of_every_learner(tmp_path: Path) -> None:
 
 
 def test_the_floor_counts_only_what_came_back(tmp_path: Path) -> None:
-    exits = replace_function("ch06_measurement", "H_jacobian", "def H_jacobian(x, y):\n    import os\n    os._exit(3)\n")
+    exits = replace_function("ch06_measurement", "H_jacobian",
+                             "def H_jacobian(x, y):\n    import os\n    os._exit(3)\n")
     build_submission(tmp_path / "hostile" / "a", {"ch06_measurement": exits})
     figures = _floor(tmp_path / "hostile")
     assert 0 < figures["answered"] < figures["calls"]
