@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 
 from grader.chapters import CHAPTERS
 from grader.render import plural
-from grader.safe_text import for_json
+from grader.safe_text import json_text
 from grader.staging import (  # noqa: F401  (RosterError, StagingError: what run_batch raises and reports)
     STAGING,
     Entry,
@@ -316,7 +316,7 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, bat
         return Graded(learner, "error", (f"not graded, twice, for a reason outside the learner's code: "
                                          f"{report.infrastructure}; the next run grades it again"),
                       {"results.json": None, "report.html": None,
-                       "report.json": json.dumps(for_json(data), allow_nan=False) + "\n"},
+                       "report.json": json_text(data) + "\n"},
                       infrastructure=report.infrastructure)
     data["batch"]["hash"] = staged.digest
     data["batch"].update(batch_extra)
@@ -328,7 +328,7 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, bat
 
         # this worker draws its learner's figures itself: the other workers keep the other cores busy
         files["report.html"] = html_renderer.render(report, draw_here=True)
-    files["report.json"] = json.dumps(for_json(data), allow_nan=False) + "\n"  # last: marks done
+    files["report.json"] = json_text(data) + "\n"  # last: marks done
     _settle_heap()
     problems = sum(bool(c.problems) for c in report.chapters)
     with_problems = f", {plural(problems, 'chapter')} with problems" if problems else ""

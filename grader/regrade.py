@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from grader.model import Report, points_text, rounded_points
-from grader.safe_text import for_csv, for_json
+from grader.safe_text import for_csv, json_text
 from grader.staging import STAGING, folder_name
 
 if TYPE_CHECKING:
@@ -239,7 +239,7 @@ def apply(out: Path, found: Regrade, course: Course | None, reason: str, overrid
             from grader.render import html as html_renderer
 
             batch.write_atomically(folder / "report.html", html_renderer.render(report, draw_here=True))
-        batch.write_atomically(folder / "report.json", json.dumps(for_json(data), allow_nan=False) + "\n")
+        batch.write_atomically(folder / "report.json", json_text(data) + "\n")
     history = histories.History(out / histories.FILE_NAME)
     before = history.results(found.run)
     learners = list(before)

@@ -85,26 +85,41 @@ def for_json(value: object) -> object:
     """Plain JSON data (dicts, lists, strings, numbers) whose strings all encode as UTF-8; JSON's
     own escaping takes care of control characters. Data that already does is returned as it is (one
     encoding in C tells, instead of a walk through every string)."""
-    return value if _utf8_json(value) is not None else clean_value(value, unicode_clean)
-
-
-def _utf8_json(value: object, allow_nan: bool = True) -> str | None:
-    """`value` as JSON text that keeps its characters (ensure_ascii=False), or None where it has a lone
-    surrogate, or is not JSON data."""
     import json
 
     try:
-        text = json.dumps(value, ensure_ascii=False, allow_nan=allow_nan)
-        text.encode("utf-8")
-    except (UnicodeEncodeError, TypeError, ValueError):
-        return None
-    return text
+        text = json.dumps(value, ensure_ascii=False)
+    except (TypeError, ValueError):  # not JSON data: its strings cleaned all the same
+        return clean_value(value, unicode_clean)
+    return clean_value(value, unicode_clean) if _SURROGATES.search(text) else value
+
+
+def json_text(value: object, indent: int | None = None) -> str:
+    """`json.dumps(for_json(value), allow_nan=False, indent=indent)`, encoded once where, as almost always, every
+    string is ASCII: that text is the same with or without ensure_ascii. NaN and what is not JSON data raise as
+    json.dumps does."""
+    import json
+
+    text = json.dumps(value, ensure_ascii=False, allow_nan=False, indent=indent)
+    if _ascii_as_escaped(text):
+        return text
+    if _SURROGATES.search(text):
+        value = clean_value(value, unicode_clean)
+    return json.dumps(value, allow_nan=False, indent=indent)
+
+
+def _ascii_as_escaped(text: str) -> bool:
+    """JSON text written with ensure_ascii=False that ensure_ascii=True would write the same: ASCII, and no DEL
+    (which only ensure_ascii escapes)."""
+    return text.isascii() and "\x7f" not in text
 
 
 # What for_terminal would change, as it shows in JSON text written with ensure_ascii=False: C0 controls
 # (escaped by JSON as \u00XX, \r, \b, \f), C1 controls and DEL, bidirectional marks and separators. A
 # backslash the text itself holds shows as \\ and may match too: that only sends the data the slow way.
 _TERMINAL_UNSAFE_JSON = re.compile(r"\\u00|\\[rbf]|[\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069\u2028\u2029]")
+# The same in ASCII JSON text without DEL, found by plain substring searches
+_TERMINAL_UNSAFE_ASCII_JSON = ("\\u00", "\\r", "\\b", "\\f")
 
 
 def json_for_terminal(data: object) -> str:
@@ -112,13 +127,40 @@ def json_for_terminal(data: object) -> str:
     nothing to clean, as almost all is (one encoding in C tells), is written as it is: no walk."""
     import json
 
-    text = _utf8_json(data, allow_nan=False)
-    if text is not None and not _TERMINAL_UNSAFE_JSON.search(text):
+    text = json.dumps(data, ensure_ascii=False, allow_nan=False)
+    if _ascii_as_escaped(text):
+        if not any(unsafe in text for unsafe in _TERMINAL_UNSAFE_ASCII_JSON):
+            return text
+    elif not _SURROGATES.search(text) and not _TERMINAL_UNSAFE_JSON.search(text):
         return json.dumps(data, allow_nan=False)
     return json.dumps(clean_value(data, for_terminal), allow_nan=False)  # for_terminal leaves no lone surrogate
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})
+# ASCII control characters but tab and newline: an ASCII string without them is one that unicode_clean, for_html,
+# for_xml and for_terminal all leave as it is
+_ASCII_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f]")
+# How clean_value walks a value, by its type: kept as it is, a string, items (a list or tuple), a dict, or a
+# dataclass (the names of the fields its __init__ sets)
+_KEEP, _TEXT, _ITEMS, _MAPPING = "keep", "text", "items", "mapping"
+_walk_of: dict[type, str | tuple[str, ...]] = {}
+
+
+def _how_to_walk(kind: type) -> str | tuple[str, ...]:
+    if kind in _PLAIN or issubclass(kind, Enum):
+        how: str | tuple[str, ...] = _KEEP
+    elif issubclass(kind, str):
+        how = _TEXT
+    elif kind is list or kind is tuple:
+        how = _ITEMS
+    elif issubclass(kind, dict):
+        how = _MAPPING
+    elif dataclasses.is_dataclass(kind):
+        how = tuple(f.name for f in dataclasses.fields(kind) if f.init) or _KEEP
+    else:
+        how = _KEEP  # numbers of other types, arrays, anything else
+    _walk_of[kind] = how
+    return how
 
 
 def clean_value(value: object, clean: Callable[[str], str]) -> object:
@@ -126,29 +168,42 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
     items and the fields of dataclasses. What changes is copied, never changed in place; what needs no
     cleaning (almost everything) is the same object, shared: the renderers that call this only read it.
     Enums, numbers and arrays are left as they are."""
-    kind = type(value)
-    if kind in _PLAIN or isinstance(value, Enum):
-        return value
-    if isinstance(value, str):
-        cleaned = clean(value)
-        return value if cleaned == value else cleaned
-    if isinstance(value, dict):
-        items = [(clean_value(k, clean), clean_value(v, clean)) for k, v in value.items()]
-        if all(k is old_k and v is old_v for (k, v), (old_k, old_v) in zip(items, value.items())):
+    keeps_plain_ascii = clean in _KEEP_PLAIN_ASCII
+
+    def walk(value: object) -> object:
+        kind = type(value)
+        how = _walk_of.get(kind) or _how_to_walk(kind)
+        if how is _KEEP:
             return value
-        return dict(items)
-    if kind in (list, tuple):
-        if all(type(v) in _PLAIN for v in value):  # numbers (a matrix row, a plot's curve): nothing to clean
+        if how is _TEXT:
+            if keeps_plain_ascii and value.isascii() and not _ASCII_CONTROL.search(value):
+                return value
+            cleaned = clean(value)
+            return value if cleaned == value else cleaned
+        if how is _ITEMS:
+            for i, item in enumerate(value):
+                if type(item) not in _PLAIN and walk(item) is not item:  # the first that changes: copy
+                    return kind([*value[:i], *map(walk, value[i:])])
             return value
-        items = [clean_value(v, clean) for v in value]
-        return value if all(new is old for new, old in zip(items, value)) else kind(items)
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = [f.name for f in dataclasses.fields(value) if f.init]
-        changes = {name: clean_value(getattr(value, name), clean) for name in fields}
-        if all(changes[name] is getattr(value, name) for name in fields):
+        if how is _MAPPING:
+            for i, (key, item) in enumerate(value.items()):
+                if walk(key) is not key or walk(item) is not item:
+                    pairs = list(value.items())
+                    return dict(pairs[:i] + [(walk(k), walk(v)) for k, v in pairs[i:]])
             return value
-        return dataclasses.replace(value, **changes)
-    return value
+        changes = {}
+        for name in how:
+            item = getattr(value, name)
+            if type(item) not in _PLAIN:
+                cleaned = walk(item)
+                if cleaned is not item:
+                    changes[name] = cleaned
+        return dataclasses.replace(value, **changes) if changes else value
+
+    return walk(value)
+
+
+_KEEP_PLAIN_ASCII = frozenset({unicode_clean, for_html, for_xml, for_terminal})
 
 
 def clean_report(report, clean: Callable[[str], str]):

@@ -125,3 +125,52 @@ def test_results_json_written_without_a_walk_is_what_the_walk_writes(text):
 
     data = {"id": text, "tests": [{"output": f"got {text}", "score": 1.5, "tags": [text, None, True]}]}
     assert json_for_terminal(data) == json.dumps(for_json(clean_value(data, for_terminal)), allow_nan=False)
+
+
+def _reference_clean(value, clean):
+    """What clean_value must give: `clean` applied to every string, walked the plain way."""
+    import dataclasses
+    from enum import Enum
+
+    if isinstance(value, Enum) or not isinstance(value, (str, dict, list, tuple)) and not dataclasses.is_dataclass(
+            value):
+        return value
+    if isinstance(value, str):
+        return clean(value)
+    if isinstance(value, dict):
+        return {_reference_clean(k, clean): _reference_clean(v, clean) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_reference_clean(v, clean) for v in value)
+    return dataclasses.replace(value, **{f.name: _reference_clean(getattr(value, f.name), clean)
+                                         for f in dataclasses.fields(value) if f.init})
+
+
+def test_every_cleaner_reaches_every_string_however_the_walk_is_shortened():
+    """clean_value skips strings it need not clean (ASCII without controls, for the cleaners that keep those) and
+    copies only what changes: for text with every ASCII character, C1 controls, bidirectional marks, lone
+    surrogates and more, in dicts, lists, tuples and a report's dataclasses, it gives what cleaning every string
+    gives, keeps what did not change, and json_text writes what json.dumps(for_json(...)) writes."""
+    import random
+
+    from grader.model import ChapterResult, CheckResult, Report, Status
+
+    alphabet = [chr(i) for i in range(0xa0)] + ["\u200e", "\u202e", "\u2028", "\udcff", "\ufffe", "é", "\U0001F600"]
+    cleaners = (safe_text.unicode_clean, safe_text.for_html, safe_text.for_xml, safe_text.for_terminal,
+                safe_text.for_csv, lambda text: safe_text.for_terminal(text, one_line=True))
+    draw = random.Random(7)
+    for _ in range(3000):
+        text = "".join(draw.choice(alphabet) if draw.random() < 0.3 else draw.choice("ab =+-@\\")
+                       for _ in range(draw.randint(0, 6)))
+        kept = CheckResult("x", "f", "d", Status.PASS, 1, 1)
+        report = Report(text, [ChapterResult("ch06", "t", [CheckResult(
+            "c", "f", "d", Status.FAIL, 0, 1, message=text, details={"rows": [[1.0, text], (2, 3)], text: 1},
+            got=[text]), kept], [text], plots={"curve": [(1.0, 2.0)], text: text})], learner_output=text)
+        data = {"k" + text: [text, (text, 1.5), {"x": text}], "n": None}
+        for clean in cleaners:
+            assert safe_text.clean_value(data, clean) == _reference_clean(data, clean), (clean, text)
+            cleaned = safe_text.clean_value(report, clean)
+            assert cleaned == _reference_clean(report, clean), (clean, text)
+            assert cleaned.chapters[0].checks[1] is kept and (cleaned is report) == (clean(text) == text)
+        for indent in (None, 2):
+            assert safe_text.json_text(data, indent) == json.dumps(safe_text.for_json(data), allow_nan=False,
+                                                                    indent=indent), text
