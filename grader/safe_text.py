@@ -169,6 +169,7 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
     cleaning (almost everything) is the same object, shared: the renderers that call this only read it.
     Enums, numbers and arrays are left as they are."""
     keeps_plain_ascii = clean in _KEEP_PLAIN_ASCII
+    unsafe = _ASCII_CONTROL.search
 
     def walk(value: object) -> object:
         kind = type(value)
@@ -176,14 +177,18 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
         if how is _KEEP:
             return value
         if how is _TEXT:
-            if keeps_plain_ascii and value.isascii() and not _ASCII_CONTROL.search(value):
+            if keeps_plain_ascii and value.isascii() and not unsafe(value):
                 return value
             cleaned = clean(value)
             return value if cleaned == value else cleaned
+        # below, a number or a string that needs no cleaning (most items) is passed over without a call
         if how is _ITEMS:
             for i, item in enumerate(value):
-                if type(item) not in _PLAIN and walk(item) is not item:  # the first that changes: copy
-                    return kind([*value[:i], *map(walk, value[i:])])
+                kind = type(item)
+                if kind in _PLAIN or kind is str and keeps_plain_ascii and item.isascii() and not unsafe(item):
+                    continue
+                if walk(item) is not item:  # the first that changes: copy
+                    return type(value)([*value[:i], *map(walk, value[i:])])
             return value
         if how is _MAPPING:
             for i, (key, item) in enumerate(value.items()):
@@ -194,10 +199,12 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
         changes = {}
         for name in how:
             item = getattr(value, name)
-            if type(item) not in _PLAIN:
-                cleaned = walk(item)
-                if cleaned is not item:
-                    changes[name] = cleaned
+            kind = type(item)
+            if kind in _PLAIN or kind is str and keeps_plain_ascii and item.isascii() and not unsafe(item):
+                continue
+            cleaned = walk(item)
+            if cleaned is not item:
+                changes[name] = cleaned
         return dataclasses.replace(value, **changes) if changes else value
 
     return walk(value)
