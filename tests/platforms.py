@@ -34,7 +34,10 @@ and files are emulated), Windows' process creation cost.
 from __future__ import annotations
 
 import ast
+import atexit
 import functools
+import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -352,19 +355,24 @@ def prelude(route: str) -> str:
     return f"EMULATION = {body!r}\nexec(EMULATION)\n"
 
 
+def _remove_in(pid: int, folder: Path) -> None:
+    """Remove `folder` when the process `pid` exits (not a forked copy of it, which runs the same exit handlers)."""
+    if os.getpid() == pid:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 @functools.lru_cache(maxsize=None)
 def site_folder(route: str) -> str:
     """A folder whose sitecustomize.py is the emulation: on PYTHONPATH, every interpreter that reads site is
     `route`'s (spawned workers, `python -m grader ...`, `grade`)."""
     folder = Path(tempfile.mkdtemp(prefix=f"emulated-{route}-"))
+    atexit.register(_remove_in, os.getpid(), folder)  # gone with the test process
     (folder / "sitecustomize.py").write_text(prelude(route), encoding="utf-8")
     return str(folder)
 
 
 def environment(route: str, base: dict | None = None) -> dict:
     """The environment that makes a command run as on `route` ("linux": unchanged)."""
-    import os
-
     env = dict(os.environ if base is None else base)
     if route != "linux":
         env["PYTHONPATH"] = os.pathsep.join(p for p in (site_folder(route), env.get("PYTHONPATH", "")) if p)
