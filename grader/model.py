@@ -22,6 +22,22 @@ class Status(str, Enum):
         return self is not Status.RECORDED
 
 
+class _RoundedPoints:
+    """A dataclass field of points, rounded once, as it is set (rounded_points): every sum and every output is of
+    these. A descriptor, so that setting the other fields costs no call of Python's."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.key = f"_{name}_rounded"
+
+    def __get__(self, instance: object, owner: type | None = None) -> float:
+        if instance is None:  # the field has no default (dataclasses: descriptor-typed fields)
+            raise AttributeError(self.key)
+        return instance.__dict__[self.key]
+
+    def __set__(self, instance: object, value: float) -> None:
+        instance.__dict__[self.key] = rounded_points(value)
+
+
 @dataclass
 class CheckResult:
     """The verdict on one check: a code check or a quiz question."""
@@ -30,8 +46,8 @@ class CheckResult:
     function: str
     description: str
     status: Status
-    points: float
-    max_points: float
+    points: float = _RoundedPoints()  # type: ignore[assignment]
+    max_points: float = _RoundedPoints()  # type: ignore[assignment]
     message: str = ""
     expected: object = None
     got: object = None
@@ -44,11 +60,6 @@ class CheckResult:
     # a judged quiz answer in the quiz's own terms, for the class summary: {"options": [canonical options
     # chosen]} (the letters are each learner's own) or {"form": the answer's form, its numbers by name}
     answer: dict = field(default_factory=dict)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        if name in ("points", "max_points"):  # rounded once, here: every sum and every output is of these
-            value = rounded_points(value)
-        object.__setattr__(self, name, value)
 
     def to_dict(self, chapter: str = "") -> dict:
         return {
@@ -87,17 +98,12 @@ class Adjustment:
     is the change it made (negative for a penalty), already kept within 0 and the check's maximum."""
 
     target: str
-    points: float
+    points: float = _RoundedPoints()  # type: ignore[assignment]  # rounded once, as CheckResult's
     reason: str
     kind: str = "override"  # "override" or "late"
     who: str = ""
     source: str = ""  # where it was read, e.g. "overrides.csv, line 3"
     check_kind: str = ""  # for a check: "code" or "quiz" (its chapter's column it changes)
-
-    def __setattr__(self, name: str, value: object) -> None:
-        if name == "points":  # rounded once, here (see CheckResult)
-            value = rounded_points(value)
-        object.__setattr__(self, name, value)
 
     @property
     def chapter(self) -> str | None:

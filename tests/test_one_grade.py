@@ -294,3 +294,24 @@ def test_percent_grade_says_when_the_kernels_code_is_not_the_saved_file(tmp_path
     assert "ch06 total: 27/27" in done.stdout, done.stdout[-2000:] + done.stderr[-2000:]
     assert "graded the code this notebook's kernel ran; the saved ch06_measurement.py has other code for" in done.stdout
     assert "save the notebook before you submit" in done.stdout
+
+
+def test_points_are_rounded_once_wherever_they_are_set():
+    """A check's and an adjustment's points are rounded as they are set: built, assigned, replaced, read back from
+    a report's data; and a check still cannot be built without them."""
+    import dataclasses
+
+    from grader.model import Adjustment, ChapterResult, CheckResult, Status, rounded_points
+
+    check = CheckResult("c", "f", "d", Status.PASS, 2 / 3, 1 / 3)
+    assert (check.points, check.max_points) == (rounded_points(2 / 3), rounded_points(1 / 3)) == (0.6667, 0.3333)
+    check.points = 1 / 7
+    assert check.points == 0.1429 and dataclasses.replace(check, max_points=5 / 7).max_points == 0.7143
+    assert ChapterResult.from_dict({"chapter": "ch06", "checks": [dict(check.to_dict(), points=1 / 9)]}).checks[
+        0].points == 0.1111
+    adjustment = Adjustment("total", -2 / 3, "late")
+    assert adjustment.points == -0.6667
+    adjustment.points = 1 / 6
+    assert adjustment.points == 0.1667
+    with pytest.raises(TypeError):
+        CheckResult("c", "f", "d", Status.PASS)  # type: ignore[call-arg]
