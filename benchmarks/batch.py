@@ -20,7 +20,8 @@ The floor, timed in the same rounds: the learner side alone, as `grade batch` wo
 worker processes, each with its own sandboxed fork server; every learner's calls run in a forked child and read
 back, line by line, into results) with nothing else of the grader's: no judging, no quiz, no report written.
 With --repeat N the batch, its floor and `grade all --solutions` run in N interleaved rounds, and each figure
-is printed as the median and spread of its per-round ratios.
+is printed as the median and spread of its per-round ratios; so is the batch against its floor of the same round
+(what the grader's own work adds to the learner side, on a machine whose speed drifts between rounds).
 """
 
 from __future__ import annotations
@@ -470,6 +471,7 @@ def main() -> None:
     floor_cpus: list[float] = []
     ratios: list[float] = []
     floor_ratios: list[float] = []
+    over_floor: list[float] = []  # the batch against its floor in the same round: what the grader's own work adds
 
     def grade_all(times: int) -> list[float]:
         """`grade all --solutions` judged afresh (nothing kept: as a batch judges each learner's code)."""
@@ -497,6 +499,7 @@ def main() -> None:
         floors.append(floor / args.count)
         ratios.append(wall / args.count / single)
         floor_ratios.append(floor / args.count / single)
+        over_floor.append(wall / floor)
         if cpu is not None:
             cpus.append(cpu / args.count)
     base_wall, base_cpu, _ = run_batch(work / "baseline", work / "out-baseline", args.jobs,
@@ -526,6 +529,8 @@ def main() -> None:
           f"({min(singles):.2f} to {max(singles):.2f}, {len(singles)} runs, half before the batch, half after)")
     print(f"batch per submission / that `grade all`: {spread(ratios, digits=3)} (target <= 0.12); "
           f"its floor / that `grade all`: {spread(floor_ratios, digits=3)}")
+    print(f"batch per submission / its floor's, each round's own: {spread(over_floor, digits=2)} (what the grader's "
+          "own work adds: judging, the quiz, the outputs)")
     shutil.rmtree(work, ignore_errors=True)
 
 
