@@ -499,6 +499,11 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     isolation = pool.isolation(sandboxed)
     if announce is not None:
         announce(isolation)
+    # the class summary's figures, drawn at the end: matplotlib's import (about 0.4 s) runs meanwhile in a drawing
+    # process, forked now where that is safe (no thread yet: not beside a cluster's client), at a low priority
+    from grader.render import drawer
+
+    drawer.start()
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}

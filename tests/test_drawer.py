@@ -308,3 +308,32 @@ def test_the_lighter_import_changes_no_figure(tmp_path):
         assert proc.returncode == 0, proc.stderr[-3000:]
         digests[how] = proc.stdout.strip()
     assert len(set(digests.values())) == 1, digests
+
+
+@pytest.mark.slow
+def test_a_batch_draws_the_class_summarys_figures_in_the_drawing_process_it_started(tmp_path):
+    """`grade batch` starts the drawing process before grading: the class summary's figures (one per chapter, drawn
+    for a class of grader.statistics.RELIABLE_LEARNERS or more) are drawn there, so the batch's own process never
+    imports matplotlib, which it did at the end before."""
+    import shutil
+
+    from grader.statistics import RELIABLE_LEARNERS
+    from tests.support import build_submission
+
+    first = build_submission(tmp_path / "subs" / "learner00")
+    for number in range(1, RELIABLE_LEARNERS):
+        shutil.copytree(first, tmp_path / "subs" / f"learner{number:02d}")
+    script = textwrap.dedent("""
+        import re, sys
+        from pathlib import Path
+        from grader.batch import run_batch
+
+        out = Path(sys.argv[1]) / "out"
+        run_batch(Path(sys.argv[1]) / "subs", out, chapters=["ch01", "ch06"], jobs=2, seed=3, html=False)
+        page = (out / "summary.html").read_text(encoding="utf-8")
+        print("matplotlib" in sys.modules, len(re.findall("data:image/svg[+]xml", page)), "could not be drawn" in page)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path)], cwd=REPO, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["False", "2", "False"], proc.stdout + proc.stderr[-2000:]

@@ -107,8 +107,7 @@ def _draw_what_comes(connection) -> None:
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
         with two_processes() as pool:
             list(pool.map(int, range(2)))  # both drawing processes forked now, not when the figures are due
-            chapters = connection.recv()
-            connection.send(_draw_with(pool, chapters))
+            connection.send(_draw_with(pool, *connection.recv()))
     except Exception:  # noqa: BLE001  the grader ended (EOF), or draws the figures itself as we send none
         return
 
@@ -118,14 +117,43 @@ def _take_sigterm() -> None:
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
 
 
-def _draw_with(pool, chapters: list) -> list[list]:
-    """Each chapter's figures (grader.render.figures.figures), drawn by `pool`'s processes, the two-panel
-    figures first (they take longest)."""
-    from grader.render.figures import TWO_PANELS, figures
+def _draw_with(pool, draw: tuple[str, str], items: list, order: list[int]) -> list:
+    """`draw` (a module and the name of its function, found here: this process's own) of each of `items`, in
+    their order, drawn by `pool`'s processes and started in `order` (the longest first)."""
+    import importlib
 
-    order = sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS)
-    futures = {i: pool.submit(figures, chapters[i]) for i in order}
-    return [futures[i].result() for i in range(len(chapters))]
+    function = getattr(importlib.import_module(draw[0]), draw[1])
+    futures = {i: pool.submit(function, items[i]) for i in order}
+    return [futures[i].result() for i in range(len(items))]
+
+
+def _chapters_job(chapters: list) -> tuple:
+    """What the drawing processes get to draw each chapter's figures (grader.render.figures.figures): the
+    two-panel figures first (they take longest)."""
+    from grader.render.figures import TWO_PANELS
+
+    return (("grader.render.figures", "figures"), chapters,
+            sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS))
+
+
+def drawn_by_started(draw: tuple[str, str], items: list) -> list | None:
+    """`draw` (a module and the name of its function) of each of `items`, in their order, by the started drawing
+    process (matplotlib imported there while this process worked, its two drawing processes waiting): None where
+    none was started or it failed, for the caller to draw them itself."""
+    if not _STARTED:
+        return None
+    process, ours = _STARTED.pop()
+    try:
+        ours.send((draw, items, list(range(len(items)))))
+        drawn = ours.recv()
+    except Exception:  # noqa: BLE001  it died, or what it got or sent would not pickle: drawn by the caller instead
+        ours.close()
+        process.terminate()
+        _ended(process)
+        return None
+    ours.close()
+    _ENDING.append(process)  # it ends once its drawing processes have: waited for by `end`
+    return drawn
 
 
 def forkable() -> bool:
@@ -153,7 +181,7 @@ def _draw_in_two(chapters: list) -> list[list]:
 
     trace("drawing processes forked when the figures were due")
     with two_processes() as pool:
-        return _draw_with(pool, chapters)
+        return _draw_with(pool, *_chapters_job(chapters))
 
 
 def figures_due(chapters: list, here: bool = False):
@@ -175,7 +203,7 @@ def figures_due(chapters: list, here: bool = False):
     if chapters and _STARTED:
         process, ours = _STARTED.pop()
         try:
-            ours.send(chapters)
+            ours.send(_chapters_job(chapters))
             sent = (process, ours)
         except Exception:  # noqa: BLE001  it died, or the chapters would not pickle: drawn below instead
             _STARTED.append((process, ours))

@@ -10,16 +10,19 @@ from grader.render.figures import GUIDE, LEARNER, REFERENCE, Figure, preload, sv
 
 def figures(statistics: dict) -> dict[str, Figure]:
     """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so);
-    drawn by two forked processes where forking is safe and nothing else runs in this process (a batch's end:
-    its workers are done), else here."""
+    drawn by the drawing process the batch started (grader.render.drawer.start), else by two processes forked now
+    where forking is safe and nothing else runs in this process (a batch's end: its workers are done), else here."""
     jobs = [(chapter["chapter"], [item for item in statistics["items"] if item["chapter"] == chapter["chapter"]],
              statistics["rules"], statistics["learners"]) for chapter in statistics["chapters"]]
     return dict(zip((job[0] for job in jobs), _drawn(jobs)))
 
 
 def _drawn(jobs: list[tuple]) -> list[Figure]:
-    from grader.render.drawer import forkable, two_processes
+    from grader.render.drawer import drawn_by_started, forkable, two_processes
 
+    drawn = drawn_by_started((__name__, _one.__name__), jobs) if jobs else None  # by the drawing process a batch started
+    if drawn is not None:
+        return drawn
     preload()  # imported once, here, before any fork
     if len(jobs) > 1 and forkable():
         try:
