@@ -503,7 +503,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     # process, forked now where that is safe (no thread yet: not beside a cluster's client), at a low priority
     from grader.render import drawer
 
-    drawer.start()
+    drawer.start(numpy_here=False)
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}
