@@ -1,4 +1,4 @@
-"""The HTML report's figures, drawn in processes of their own.
+"""The HTML report's figures (and a batch's class summary's), drawn in processes of their own.
 
 Drawing (matplotlib) is most of the report's cost, and importing matplotlib alone takes about 0.4 s.
 So where forking is safe, `grade ... --html` calls `start` before it grades: the drawing process it
@@ -7,7 +7,8 @@ core while the grader grades (at a lower priority: the grading is what the figur
 chapters it is sent. Without it (not started, or it failed) two processes are forked when the figures are
 due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing
 process with nothing to draw (every figure reused, see grader.render.figure_cache, or the command ended early)
-is stopped; one that sent its figures is waited for when the command ends (`end`). This module imports nothing
+is stopped; one that sent its figures is waited for when the command ends (`end`). `grade batch` starts one
+too: it draws the class summary's figures at the batch's end (`drawn_by_started`). This module imports nothing
 heavy until `start`."""
 
 from __future__ import annotations

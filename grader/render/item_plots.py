@@ -20,7 +20,7 @@ def figures(statistics: dict) -> dict[str, Figure]:
 def _drawn(jobs: list[tuple]) -> list[Figure]:
     from grader.render.drawer import drawn_by_started, forkable, two_processes
 
-    drawn = drawn_by_started((__name__, _one.__name__), jobs) if jobs else None  # by the drawing process a batch started
+    drawn = drawn_by_started((__name__, _one.__name__), jobs) if jobs else None  # the one a batch started
     if drawn is not None:
         return drawn
     preload()  # imported once, here, before any fork
