@@ -499,11 +499,14 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     isolation = pool.isolation(sandboxed)
     if announce is not None:
         announce(isolation)
-    # the class summary's figures, drawn at the end: matplotlib's import (about 0.4 s) runs meanwhile in a drawing
-    # process, forked now where that is safe (no thread yet: not beside a cluster's client), at a low priority
+    # the class summary's figures, drawn at the end for a class large enough to have them: matplotlib's import
+    # (about 0.4 s) runs meanwhile in a drawing process, forked now where that is safe (no thread yet: not beside a
+    # cluster's client), at a low priority; numpy, which this process imports for the statistics, is shared with it
+    from grader import statistics
     from grader.render import drawer
 
-    drawer.start(numpy_here=False)
+    if len(entries) >= statistics.RELIABLE_LEARNERS:
+        drawer.start()
     out.mkdir(parents=True, exist_ok=True)
     statuses: dict[str, str] = {}
     messages: dict[str, str] = {}

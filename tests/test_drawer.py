@@ -337,3 +337,25 @@ def test_a_batch_draws_the_class_summarys_figures_in_the_drawing_process_it_star
                           timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert proc.stdout.split() == ["False", "2", "False"], proc.stdout + proc.stderr[-2000:]
+
+
+def test_a_batch_too_small_for_the_summarys_figures_starts_no_drawing_process(tmp_path):
+    """Below grader.statistics.RELIABLE_LEARNERS the class summary has no figures: a batch that small (a regrade of a
+    few learners) forks no drawing process to import matplotlib for nothing."""
+    from tests.support import build_submission
+
+    for learner in ("ann", "bo"):
+        build_submission(tmp_path / "subs" / learner)
+    script = textwrap.dedent("""
+        import sys
+        from pathlib import Path
+        from grader.batch import run_batch
+        from grader.render import drawer
+
+        run_batch(Path(sys.argv[1]) / "subs", Path(sys.argv[1]) / "out", chapters=["ch01"], jobs=1, seed=3, html=False)
+        print(bool(drawer._STARTED or drawer._ENDING), "matplotlib" in sys.modules)
+    """)
+    proc = subprocess.run([sys.executable, "-c", script, str(tmp_path)], cwd=REPO, capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["False", "False"], proc.stdout + proc.stderr[-2000:]

@@ -20,21 +20,19 @@ _STARTED: list = []  # the drawing process and our end of its pipe, until they a
 _ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by `end`)
 
 
-def start(numpy_here: bool = True) -> bool:
+def start() -> bool:
     """Fork the drawing process now, with numpy imported: matplotlib needs it there, and the grader needs it
     here (to plan and judge the calls whose results the figures show), so it is imported once for both, not in
-    each (about 0.1 s of CPU on two busy cores). With `numpy_here` False (a batch's own process, which judges
-    nothing), the drawing process imports it. Call it before any thread starts (a fork copies only the calling
-    thread), and after the learner's child is started (numpy's import would delay it). False where forking is not
-    safe here now (`forkable`) or fails."""
+    each (about 0.1 s of CPU on two busy cores). Call it before any thread starts (a fork copies only the
+    calling thread), and after the learner's child is started (numpy's import would delay it). False where
+    forking is not safe here now (`forkable`) or fails."""
     from grader.system import keep, trace
 
     if _STARTED or not forkable():
         return bool(_STARTED)
     import multiprocessing
 
-    if numpy_here:
-        import numpy  # noqa: F401
+    import numpy  # noqa: F401
 
     context = multiprocessing.get_context("fork")
     ours, theirs = context.Pipe()
