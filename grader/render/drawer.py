@@ -141,19 +141,37 @@ def drawn_by_started(draw: tuple[str, str], items: list) -> list | None:
     """`draw` (a module and the name of its function) of each of `items`, in their order, by the started drawing
     process (matplotlib imported there while this process worked, its two drawing processes waiting): None where
     none was started or it failed, for the caller to draw them itself."""
+    sent = _send((draw, items, list(range(len(items)))))
+    return None if sent is None else _received(sent)
+
+
+def _send(job: tuple):
+    """`job` sent to the started drawing process: (the process, our end of its pipe), or None where none was
+    started, or it died, or the job would not pickle (then it is stopped)."""
     if not _STARTED:
         return None
     process, ours = _STARTED.pop()
     try:
-        ours.send((draw, items, list(range(len(items)))))
+        ours.send(job)
+    except Exception:  # noqa: BLE001  it died, or the job would not pickle: drawn elsewhere instead
+        _STARTED.append((process, ours))
+        end()
+        return None
+    return process, ours
+
+
+def _received(sent: tuple) -> list | None:
+    """What the drawing process `sent` a job to drew; None where it died first. It ends once its drawing processes
+    have (10 to 30 ms): waited for by `end` when the command ends, not before its output is written."""
+    process, ours = sent
+    try:
         drawn = ours.recv()
-    except Exception:  # noqa: BLE001  it died, or what it got or sent would not pickle: drawn by the caller instead
+    except (EOFError, OSError):
         ours.close()
-        process.terminate()
         _ended(process)
         return None
     ours.close()
-    _ENDING.append(process)  # it ends once its drawing processes have: waited for by `end`
+    _ENDING.append(process)
     return drawn
 
 
@@ -200,30 +218,12 @@ def figures_due(chapters: list, here: bool = False):
         return drawn_here
     if not chapters:
         end()
-    sent = None
-    if chapters and _STARTED:
-        process, ours = _STARTED.pop()
-        try:
-            ours.send(_chapters_job(chapters))
-            sent = (process, ours)
-        except Exception:  # noqa: BLE001  it died, or the chapters would not pickle: drawn below instead
-            _STARTED.append((process, ours))
-            end()
+    sent = _send(_chapters_job(chapters)) if chapters else None
 
     def wait() -> list[list]:
-        if sent is not None:
-            process, ours = sent
-            try:
-                drawn = ours.recv()
-            except (EOFError, OSError):  # drawn below instead
-                ours.close()
-                _ended(process)
-            else:
-                # it ends once its drawing processes have (10 to 30 ms): waited for when the command ends
-                # (grader.launch), not before the page is written
-                ours.close()
-                _ENDING.append(process)
-                return drawn
+        drawn = None if sent is None else _received(sent)
+        if drawn is not None:
+            return drawn
         if len(chapters) > 1:
             try:
                 preload()  # here, before any fork (a thread still importing it keeps the figures here: forkable)
