@@ -205,7 +205,11 @@ def run_learner_side(submissions: Path, jobs: int | None, env: dict) -> dict:
     """The floor for `submissions` (see _learner_side), from a process of its own."""
     command = [sys.executable, str(Path(__file__).resolve()), "--learner-side", str(submissions),
                "--jobs", str(jobs or os.cpu_count() or 1)]
-    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False, env=env)
+    from grader.system import SINGLE_THREADED_BLAS
+
+    # one BLAS thread, set before numpy loads, as `grade` sets it (grader.launch): idle OpenBLAS threads would spin
+    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False,
+                          env=dict(env, **SINGLE_THREADED_BLAS))
     if proc.returncode != 0:
         raise SystemExit(f"the learner side alone failed: {proc.stderr[-800:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
