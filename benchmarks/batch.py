@@ -166,12 +166,11 @@ def _learner_side(submissions: str, jobs: int) -> None:
     from grader import staging
     from grader.batch import choose_boundary
     from grader.chapters import CHAPTERS
-    from grader.grading import DEFAULT_SEED, _plan
 
     scratch = Path(tempfile.mkdtemp(prefix="grade-floor-"))
     try:
         roots = [str(staging.stage(entry, scratch)) for entry in staging.discover(Path(submissions))]
-        _PLANNED.extend(_plan(chapter.id, DEFAULT_SEED, False, frozenset()).request() for chapter in CHAPTERS)
+        _PLANNED.extend(_encoded_once(chapter.id, chapter.module) for chapter in CHAPTERS)
         choose_boundary("required", probe=True)  # as the batch does before any learner
         cpu_before, started = busy_cpu_seconds(), time.perf_counter()
         with multiprocessing.get_context("fork").Pool(jobs) as pool:
@@ -185,6 +184,18 @@ def _learner_side(submissions: str, jobs: int) -> None:
 
 
 _PLANNED: list = []  # the chapters' requests, planned once before the pool forks
+
+
+def _encoded_once(chapter: str, module: str):
+    """A chapter's request as a batch worker sends it to all its learners: the calls planned once at the default
+    seed and kept with their JSON text (grader.memo.Memo.calls), so no learner's request encodes them again."""
+    from grader.boundary.session import ChapterRequest
+    from grader.grading import DEFAULT_SEED, _plan
+    from grader.memo import Memo
+
+    memo = Memo(None, "the floor")
+    memo.keep_calls(chapter, "planned", _plan(chapter, DEFAULT_SEED, False, frozenset()).calls)
+    return ChapterRequest(chapter, module, memo.calls(chapter, "planned"))
 _WORKER: dict = {}
 
 
