@@ -196,6 +196,8 @@ def _encoded_once(chapter: str, module: str):
     memo = Memo(None, "the floor")
     memo.keep_calls(chapter, "planned", _plan(chapter, DEFAULT_SEED, False, frozenset()).calls)
     return ChapterRequest(chapter, module, memo.calls(chapter, "planned"))
+
+
 _WORKER: dict = {}
 
 
