@@ -41,6 +41,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from grader.system import SINGLE_THREADED_BLAS  # noqa: E402
 from tests.support import build_submission, replace_function  # noqa: E402
 
 BUGGY = [
@@ -218,8 +219,6 @@ def run_learner_side(submissions: Path, jobs: int | None, env: dict) -> dict:
     """The floor for `submissions` (see _learner_side), from a process of its own."""
     command = [sys.executable, str(Path(__file__).resolve()), "--learner-side", str(submissions),
                "--jobs", str(jobs or os.cpu_count() or 1)]
-    from grader.system import SINGLE_THREADED_BLAS
-
     # one BLAS thread, set before numpy loads, as `grade` sets it (grader.launch): idle OpenBLAS threads would spin
     proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False,
                           env=dict(env, **SINGLE_THREADED_BLAS))

@@ -44,3 +44,19 @@ def test_the_floor_counts_only_what_came_back(tmp_path: Path) -> None:
     build_submission(tmp_path / "hostile" / "a", {"ch06_measurement": exits})
     figures = _floor(tmp_path / "hostile")
     assert 0 < figures["answered"] < figures["calls"]
+
+
+def test_the_floor_sends_each_chapters_calls_encoded_once_as_a_batch_worker_does() -> None:
+    """A batch worker sends every learner the calls its memo keeps with their JSON text (grader.memo.Memo.calls);
+    a floor that encoded them again for each learner would count work the batch does not do."""
+    from benchmarks.batch import _encoded_once
+    from grader.boundary.wire import EncodedCalls
+    from grader.chapters import CHAPTERS
+    from grader.grading import DEFAULT_SEED, _plan
+
+    for chapter in CHAPTERS:
+        request = _encoded_once(chapter.id, chapter.module)
+        planned = _plan(chapter.id, DEFAULT_SEED, False, frozenset()).calls
+        assert (request.chapter, request.module) == (chapter.id, chapter.module)
+        assert isinstance(request.calls, EncodedCalls)
+        assert json.loads(request.calls.text) == json.loads(json.dumps([c.to_json(i) for i, c in enumerate(planned)]))
