@@ -9,7 +9,7 @@ CLI, and the same batch with a fresh sandboxed interpreter per learner instead o
 --rss grades 250, 500 and 1000 generated submissions instead (--rss-counts) and prints, against the count,
 the peak resident memory of the batch's own process and of its process tree (workers, fork servers,
 learner children: /proc polled), and the ratio of each at the largest count to at the smallest (flat: near
-1). --discovery times grader.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
+1). --discovery times grader.course.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
 giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
 the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades the --count submissions through
 `grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with one, then two `grade worker`
@@ -101,8 +101,8 @@ STYLED = [
 def own_answers(answers: Path, learner: str) -> None:
     """The right quiz answers for `learner`'s own numbers and option letters, and learner.yaml naming them."""
     from grader.chapters import CHAPTERS
+    from grader.course.submit import write_learner_yaml
     from grader.quiz.templates import reference_answers
-    from grader.submit import write_learner_yaml
 
     for chapter in CHAPTERS:
         (answers / f"{chapter.id}.yaml").write_text(reference_answers(chapter.id, learner), encoding="utf-8")
@@ -164,9 +164,9 @@ def _learner_side(submissions: str, jobs: int) -> None:
     answered (a value returned, or an exception raised as the learner's function did)."""
     import multiprocessing
 
-    from grader import staging
-    from grader.batch import choose_boundary
     from grader.chapters import CHAPTERS
+    from grader.course import staging
+    from grader.course.batch import choose_boundary
 
     scratch = Path(tempfile.mkdtemp(prefix="grade-floor-"))
     try:
@@ -189,10 +189,10 @@ _PLANNED: list = []  # the chapters' requests, planned once before the pool fork
 
 def _encoded_once(chapter: str, module: str):
     """A chapter's request as a batch worker sends it to all its learners: the calls planned once at the default
-    seed and kept with their JSON text (grader.memo.Memo.calls), so no learner's request encodes them again."""
+    seed and kept with their JSON text (grader.core.memo.Memo.calls), so no learner's request encodes them again."""
     from grader.boundary.session import ChapterRequest
-    from grader.grading import DEFAULT_SEED, _plan
-    from grader.memo import Memo
+    from grader.core.grading import DEFAULT_SEED, _plan
+    from grader.core.memo import Memo
 
     memo = Memo(None, "the floor")
     memo.keep_calls(chapter, "planned", _plan(chapter, DEFAULT_SEED, False, frozenset()).calls)
@@ -204,9 +204,9 @@ _WORKER: dict = {}
 
 def _run_learner(root: str) -> int:
     """One learner's calls, run in a child of this worker's fork server: how many it answered."""
-    from grader.batch import choose_boundary
     from grader.boundary import Limits
     from grader.boundary.wire import RAISED, VALUE
+    from grader.course.batch import choose_boundary
     from grader.submission import Submission
 
     if "boundary" not in _WORKER:
@@ -219,7 +219,7 @@ def run_learner_side(submissions: Path, jobs: int | None, env: dict) -> dict:
     """The floor for `submissions` (see _learner_side), from a process of its own."""
     command = [sys.executable, str(Path(__file__).resolve()), "--learner-side", str(submissions),
                "--jobs", str(jobs or os.cpu_count() or 1)]
-    # one BLAS thread, set before numpy loads, as `grade` sets it (grader.launch): idle OpenBLAS threads would spin
+    # one BLAS thread, set before numpy loads, as `grade` sets it (grader.faces.launch): idle OpenBLAS threads would spin
     proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=False,
                           env=dict(env, **SINGLE_THREADED_BLAS))
     if proc.returncode != 0:
@@ -335,10 +335,10 @@ DISCOVERY_BASELINE = 3.4  # seconds for 10,000 empty folders, as issue 14 measur
 
 
 def discovery_figures(work: Path, counts: list[int], repeat: int) -> None:
-    """grader.staging.discover on empty folders (by name, and with a roster giving every one the same id, which
+    """grader.course.staging.discover on empty folders (by name, and with a roster giving every one the same id, which
     makes each id unique in turn): seconds per count (medians), the cost per folder at the largest count
     against at the smallest, and the largest against the issue's baseline."""
-    from grader.staging import discover
+    from grader.course.staging import discover
 
     for label, with_roster in (("by folder name", False), ("one id for all, from a roster", True)):
         seconds = {}

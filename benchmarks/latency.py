@@ -7,7 +7,7 @@ Target: `grade ch06` (a right submission and the stubs, quiz included, sandbox o
 What is timed (the grader's caches in a private folder, warmed by one run first, as on a learner's machine
 after their first `grade`):
 - `grade ch06 --solutions` and `grade ch06` on the stubs, run again with the answers unchanged: the kept
-  sandbox starts the child first, and the kept verdicts are reused (grader.memo);
+  sandbox starts the child first, and the kept verdicts are reused (grader.core.memo);
 - the same with a function changed before every run (a new constant each time): that chapter is planned while
   the child runs and judged afresh, numpy and the checks imported;
 - the first run of all, with nothing kept (a fresh cache folder each time): the door decides, the sandbox's

@@ -5,7 +5,7 @@ a right answer (there must be none).
   mistakes, each with the mistake the grader should name (quiz keys of per-learner questions computed by
   the installed references). Target: at least 80% named.
 - The generated corpus, made independently of that catalogue: every single-slip variant of each graded
-  function's reference (grader.mutants: a term dropped, a factor 2, a power off by one, sin for cos,
+  function's reference (grader.judging.mutants: a term dropped, a factor 2, a power off by one, sin for cos,
   a sign, degrees, the point of evaluation moved, integer arithmetic, mean for max, an index for its
   value, a missing normalisation, ...), each written into the reference solutions as a learner's file
   would hold it and graded through the normal pipeline on its function's checks. Counted are the
@@ -625,8 +625,9 @@ def diagnoses_on_right_submissions(folder: Path) -> list[tuple]:
 
 
 def generated_corpus(chapters: list[str]) -> list[tuple[str, str, object]]:
-    """(chapter, function, mutant) for every single slip grader.mutants makes of every graded function."""
-    from grader import checks, mutants
+    """(chapter, function, mutant) for every single slip grader.judging.mutants makes of every graded function."""
+    from grader import checks
+    from grader.judging import mutants
 
     out = []
     for chapter in chapters:
@@ -637,9 +638,10 @@ def generated_corpus(chapters: list[str]) -> list[tuple[str, str, object]]:
 
 def grade_mutant(folder: Path, chapter: str, function: str, mutant) -> list:
     """The results of `function`'s checks for the reference solutions with `function` replaced by `mutant`."""
-    from grader import checks, mutants
+    from grader import checks
     from grader.chapters import BY_ID
-    from grader.grading import DEFAULT_SEED, grade
+    from grader.core.grading import DEFAULT_SEED, grade
+    from grader.judging import mutants
     from tests.support import open_session
 
     module = BY_ID[chapter].module
@@ -652,8 +654,8 @@ def grade_mutant(folder: Path, chapter: str, function: str, mutant) -> list:
 def planned_calls(chapter: str) -> dict[str, list]:
     """The learner calls every check of `chapter` makes at the public seed, by function."""
     from grader import checks
-    from grader.grading import DEFAULT_SEED
-    from grader.planning import ChapterPlan
+    from grader.core.grading import DEFAULT_SEED
+    from grader.core.planning import ChapterPlan
 
     out: dict[str, list] = {}
     for call in ChapterPlan(checks.load(chapter), DEFAULT_SEED).calls:
@@ -666,7 +668,7 @@ def equivalent(chapter: str, function: str, mutant, calls: dict, copies: int = 3
     input would tell it from right: it is the right function written otherwise)."""
     import numpy as np
 
-    from grader import mutants
+    from grader.judging import mutants
 
     rng = np.random.default_rng(0)
     probes = [mutants.perturbed(c, rng) for c in calls.get(function, []) for _ in range(copies)]
@@ -676,7 +678,7 @@ def equivalent(chapter: str, function: str, mutant, calls: dict, copies: int = 3
 def run_generated(chapters: list[str], verbose: bool) -> None:
     from collections import Counter
 
-    from grader import mutants
+    from grader.judging import mutants
 
     corpus = generated_corpus(chapters)
     calls = {chapter: planned_calls(chapter) for chapter in chapters}

@@ -1,6 +1,6 @@
 """Cost of the HTML report: `grade all --html` against `grade all`, both on the reference solutions.
 
-Three cases of the report, as a learner meets them (grader.render.figure_cache, grader.memo):
+Three cases of the report, as a learner meets them (grader.render.figure_cache, grader.core.memo):
 - first run: nothing kept, every figure drawn (GRADER_CACHE_DIR empty: no cache);
 - one chapter changed: every chapter's figures kept from the last run but ch06's, which is drawn;
 - nothing changed: every figure and verdict reused from the last run, nothing drawn.

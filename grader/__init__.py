@@ -4,13 +4,13 @@ __version__ = "0.1.0"  # pyproject.toml reads it (a handout's wheel adds its own
 
 
 def load_ipython_extension(ipython) -> None:
-    """`%load_ext grader` in IPython or Jupyter: the `%grade` magic (grader.magic)."""
-    from grader.magic import load
+    """`%load_ext grader` in IPython or Jupyter: the `%grade` magic (grader.faces.magic)."""
+    from grader.faces.magic import load
 
     load(ipython)
 
 
 def unload_ipython_extension(ipython) -> None:
-    from grader.magic import unload
+    from grader.faces.magic import unload
 
     unload(ipython)

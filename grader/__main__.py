@@ -1,5 +1,5 @@
 """`python -m grader` is the `grade` command."""
 
-from grader.launch import main
+from grader.faces.launch import main
 
 main()

@@ -1,5 +1,5 @@
 """The grader's own helper processes (never learner code): sympy's worker for the quiz's symbolic answers
-(grader.quiz.symbolic) and the notebook's grading process (grader.magic). Learner code starts only through
+(grader.quiz.symbolic) and the notebook's grading process (grader.faces.magic). Learner code starts only through
 grader.boundary."""
 
 from __future__ import annotations

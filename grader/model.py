@@ -53,7 +53,7 @@ class CheckResult:
     got: object = None
     kind: str = "code"  # "code" or "quiz"
     details: dict = field(default_factory=dict)  # renderer hints, e.g. the wrong matrix entries
-    mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.diagnose), "" if none
+    mistake: str = ""  # the name of the known mistake a wrong answer matches (grader.judging.diagnose), "" if none
     help: str = ""  # what to change (the named mistake's sentence), kept apart from the message, which says what is wrong
     practice: bool = False  # a quiz question of a practice quiz (immediate feedback): judged, never counted
     upstream: list[str] = field(default_factory=list)  # failing helpers this failure may come from (point_upstream)
@@ -206,7 +206,7 @@ class ChapterResult:
 
     def to_kept(self) -> dict:
         """to_dict() with each check's details and the plot data: what from_dict() makes this chapter again from
-        (grader.memo)."""
+        (grader.core.memo)."""
         data = self.to_dict()
         for check, kept in zip(self.checks, data["checks"]):
             if check.details:
@@ -302,6 +302,39 @@ class Report:
             "infrastructure": self.infrastructure or None,
             "chapters": [c.to_dict() for c in self.chapters],
         }
+
+
+@dataclass
+class LearnerResult:
+    """One learner's line in a run of the history (grader.course.history): what the gradebooks export, and what
+    changes.csv compares."""
+
+    learner: str
+    status: str  # graded, unreadable, error
+    message: str = ""
+    files_hash: str | None = None
+    content_hash: str | None = None
+    manifest_handout: str | None = None
+    submitted: str | None = None
+    grader: str | None = None
+    seed: int | None = None
+    raw_score: float | None = None
+    score: float | None = None
+    max_score: float | None = None
+    chapters: dict = field(default_factory=dict)  # chNN -> {"code", "quiz", "score", "max"}
+    adjustments: list = field(default_factory=list)  # Adjustment.to_dict()s
+    flags: list = field(default_factory=list)  # what an instructor should look at
+
+    @classmethod
+    def of(cls, learner: str, report, status: str = "graded", message: str = "", **extra) -> LearnerResult:
+        """The result of `report` (None: not graded) as the gradebooks show it."""
+        if report is None:
+            return cls(learner, status, message, **extra)
+        chapters = {c.chapter: {"code": c.score_of("code"), "quiz": c.score_of("quiz"), "score": c.score,
+                                "max": c.max_score} for c in report.chapters}
+        return cls(learner, status, message, grader=report.grader, seed=report.seed, raw_score=report.raw_score,
+                   score=report.score, max_score=report.max_score, chapters=chapters,
+                   adjustments=[a.to_dict() for a in report.all_adjustments()], **extra)
 
 
 POINTS_DECIMALS = 4  # points are rounded once, here, to this many decimals; every output prints that value

@@ -5,7 +5,7 @@ A notebook's code cells, in order, are the module; IPython magics (`%...`, a `%%
 lines (`!...`) and help lines (`name?`) are left out, as nbconvert's script export leaves them to
 IPython. Each left-out line becomes `pass` (or an empty line) so every other line keeps its place:
 `ModuleSource.where` turns a line of the module back into "cell N, line M". The same conversion
-serves the cells an IPython kernel ran (`%grade`, grader.magic), labelled "In [N]".
+serves the cells an IPython kernel ran (`%grade`, grader.faces.magic), labelled "In [N]".
 
 Only json, re and tokenize here (the first two loaded when needed): this runs in the parent on every `grade chNN` that meets a notebook,
 and the child never sees a notebook, only the module made from it.

@@ -1,5 +1,5 @@
 """How a number reads in a learner-facing message: one leaf both the process boundary's labels
-(grader.boundary.wire) and every comparison's message (grader.compare) use."""
+(grader.boundary.wire) and every comparison's message (grader.judging.compare) use."""
 
 from __future__ import annotations
 

@@ -64,12 +64,12 @@ def code_digest() -> str:
 def grader_version() -> str:
     """This grader's version: a handout's own ("0.1.0+handout.3f2a..."), else the package's version with
     the hash of what it grades with ("0.1.0+g1a2b3c4d5e6f")."""
-    from grader import course
+    from grader import course_config
 
-    if course.in_handout():
+    if course_config.in_handout():
         try:
-            return str(course.current().handout["version"])
-        except (course.CourseError, KeyError, TypeError):
+            return str(course_config.current().handout["version"])
+        except (course_config.CourseError, KeyError, TypeError):
             pass
     return f"{base_version()}+g{code_digest()[:12]}"
 
@@ -77,7 +77,7 @@ def grader_version() -> str:
 def handout_id(the_course=None) -> str | None:
     """The handout this result is tied to: in a handout its own version; on the instructor's side the
     course's current handout (course.yaml `handout:`), or None."""
-    from grader import course as courses
+    from grader import course_config as courses
 
     the_course = the_course or (courses.current() if courses.in_handout() else None)
     if the_course is None:
@@ -101,7 +101,7 @@ def footer(report, learner_sees: bool = False) -> str:
     """The one line every text output ends with: what graded this, at which seed, for whom. Where the
     learner sees it (`learner_sees`: Gradescope's output), a seed other than the public one is not shown: it is
     the instructor's secret, or drawn from it."""
-    from grader.course import PUBLIC_SEED
+    from grader.course_config import PUBLIC_SEED
 
     parts = [f"grader {report.grader or 'unknown'}", f"handout {report.handout or 'none'}"]
     if report.course:

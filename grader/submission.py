@@ -12,7 +12,7 @@ MAX_FILES_BYTES = 32 << 20
 
 class Submission(NamedTuple):
     """Where the learner's chapter files are: `root/package/chNN_*.py` or `chNN_*.ipynb`. `kernel` holds
-    chapters whose code an IPython kernel ran (`%grade`, grader.magic): (module, ((label, cell source),
+    chapters whose code an IPython kernel ran (`%grade`, grader.faces.magic): (module, ((label, cell source),
     ...)) each, graded instead of that chapter's file."""
 
     root: Path

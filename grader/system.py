@@ -3,7 +3,7 @@ from the system's name. A leaf: the learner's boundary (grader.boundary), the gr
 (grader.helpers) and the HTML report's drawing processes all read them here; which launcher learner code
 gets is decided from them in one place, grader.boundary.door.choose.
 
-Only os and sys at import: grader.launch starts the child before the heavy imports (click, numpy), and the
+Only os and sys at import: grader.faces.launch starts the child before the heavy imports (click, numpy), and the
 child's own side (grader.boundary.child, the fork server) imports this inside the sandbox.
 """
 

@@ -137,9 +137,9 @@ def open_session(root: Path, package: str = "exercises", limits=None, boundary=N
 
 def grade_code(root: Path, chapters, package: str = "exercises", *, seed: int | None = None, limits=None,
                boundary=None, with_plots: bool = False):
-    """The Report of `chapters` of the submission at root/package, graded by grader.grading.grade in a child
+    """The Report of `chapters` of the submission at root/package, graded by grader.core.grading.grade in a child
     (see open_session); `seed`: the public seed unless given."""
-    from grader.grading import DEFAULT_SEED, grade
+    from grader.core.grading import DEFAULT_SEED, grade
 
     session = open_session(root, package, limits, boundary)
     return grade(session, list(chapters), seed=DEFAULT_SEED if seed is None else seed, with_plots=with_plots)

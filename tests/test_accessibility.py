@@ -338,8 +338,8 @@ def in_process(repo_root, reports) -> dict:
     child like the CLI: the stubs, the reference solutions and the partly right submission."""
     from grader import boundary
     from grader.chapters import CHAPTERS as chapters
-    from grader.grading import DEFAULT_SEED
-    from grader.pipeline import Request, build_report
+    from grader.core.grading import DEFAULT_SEED
+    from grader.core.pipeline import Request, build_report
     from grader.submission import Submission, solutions_submission
 
     partly = reports["partly"][0].parent / "partly"

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from grader.batch import run_batch
+from grader.course.batch import run_batch
 from grader.system import GRADER_PARENT
 from tests.support import BWRAP, build_submission, processes_with, replace_function
 

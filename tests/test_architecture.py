@@ -18,12 +18,12 @@ from tests.support import REPO, slow_but_the_first
 # Each contract with one import that breaks it: (the file it is planted in, the line planted).
 PLANTED = {
     "no-cycles": ("grader/system.py", "from grader.boundary import door"),
-    "layers": ("grader/pipeline.py", "from grader import cli"),
+    "layers": ("grader/core/pipeline.py", "from grader.faces import cli"),
     "boundary-holds-no-answer": ("grader/boundary/door.py", "import solutions.ch06_measurement"),
-    "sandboxed-side": ("grader/boundary/child.py", "from grader import course"),
+    "sandboxed-side": ("grader/boundary/child.py", "from grader import course_config"),
     "renderers-only-read": ("grader/render/summary.py", "from grader.quiz import bank"),
     "checks-use-only-the-wire": ("grader/checks/ch06.py", "from grader.boundary.spawn import start_child"),
-    "one-door": ("grader/cli.py", "from grader.boundary.forkserver import ForkServer"),
+    "one-door": ("grader/faces/cli.py", "from grader.boundary.forkserver import ForkServer"),
 }
 
 
@@ -115,7 +115,7 @@ def test_every_package_of_the_grader_is_installed_and_released():
     except ImportError:  # Python 3.10
         import tomli as tomllib
 
-    from grader import release
+    from grader.course import release
 
     packages = {p.parent.relative_to(REPO).as_posix().replace("/", ".")
                 for p in (REPO / "grader").rglob("__init__.py") if "__pycache__" not in p.parts}

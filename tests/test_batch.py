@@ -18,8 +18,8 @@ from xml.etree import ElementTree
 import pytest
 from click.testing import CliRunner
 
-from grader.cli import main
-from grader.staging import StagingError, discover, stage
+from grader.course.staging import StagingError, discover, stage
+from grader.faces.cli import main
 from tests.support import (
     build_submission,
     code_points,
@@ -187,7 +187,7 @@ def test_zip_entries_outside_the_archive_are_never_extracted(tmp_path):
         archive.writestr("../../ch06_measurement.py", "x = 1\n")
         archive.writestr("/abs/ch03_jacobian.py", "x = 1\n")
         archive.writestr("exercises/ch00_range_sensor.py", "x = 1\n")
-    from grader.staging import Entry
+    from grader.course.staging import Entry
 
     root = stage(Entry("evil", target), tmp_path / "staging")
     assert sorted(p.name for p in (root / "exercises").glob("ch*.py")) == ["ch00_range_sensor.py"]
@@ -198,7 +198,7 @@ def test_oversized_zip_member_is_refused(tmp_path):
     target = tmp_path / "bomb.zip"
     with zipfile.ZipFile(target, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         archive.writestr("ch06_measurement.py", "#" * (4 << 20))
-    from grader.staging import Entry
+    from grader.course.staging import Entry
 
     with pytest.raises(StagingError, match="bytes"):
         stage(Entry("bomb", target), tmp_path / "staging")
@@ -269,7 +269,7 @@ def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions
     when their turn comes: every order of finishing gives what the batch wrote."""
     import io
 
-    from grader import batch
+    from grader.course import batch
     from grader.render import summary
 
     out = tmp_path / "out"
@@ -313,7 +313,7 @@ def test_the_summary_counts_failure_messages_as_a_counter_does():
 
 
 def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
-    from grader.staging import Entry
+    from grader.course.staging import Entry
 
     source = build_submission(tmp_path / "learner")
     staged = stage(Entry("learner", source), tmp_path / "staging") / "exercises"
@@ -338,7 +338,7 @@ def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_
 def test_fork_server_and_fresh_interpreters_give_the_same_verdicts(submissions, tmp_path, monkeypatch):
     """GRADER_FORK_SERVER=off (a fresh sandboxed interpreter per learner, the benchmark's baseline)
     and the fork server grade every learner alike."""
-    from grader.batch import run_batch
+    from grader.course.batch import run_batch
 
     verdicts = {}
     for mode in ("fork", "off"):

@@ -47,12 +47,12 @@ def test_the_floor_counts_only_what_came_back(tmp_path: Path) -> None:
 
 
 def test_the_floor_sends_each_chapters_calls_encoded_once_as_a_batch_worker_does() -> None:
-    """A batch worker sends every learner the calls its memo keeps with their JSON text (grader.memo.Memo.calls);
+    """A batch worker sends every learner the calls its memo keeps with their JSON text (grader.core.memo.Memo.calls);
     a floor that encoded them again for each learner would count work the batch does not do."""
     from benchmarks.batch import _encoded_once
     from grader.boundary.wire import EncodedCalls
     from grader.chapters import CHAPTERS
-    from grader.grading import DEFAULT_SEED, _plan
+    from grader.core.grading import DEFAULT_SEED, _plan
 
     for chapter in CHAPTERS:
         request = _encoded_once(chapter.id, chapter.module)

@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 
 from grader import checks as check_registry
-from grader import expected
 from grader.boundary.wire import Array
 from grader.chapters import BY_ID
-from grader.grading import DEFAULT_SEED
-from grader.planning import ChapterPlan
+from grader.core.grading import DEFAULT_SEED
+from grader.core.planning import ChapterPlan
+from grader.judging import expected
 from grader.model import Status
 from tests.support import (
     BEYOND_THE_WORKED_EXAMPLES,

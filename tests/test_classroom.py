@@ -16,8 +16,8 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
-from grader import release
-from grader.cli import main
+from grader.course import release
+from grader.faces.cli import main
 from grader.render import lms
 from tests.support import (
     REAL_BWRAP,

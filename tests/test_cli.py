@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
-from grader.cli import main
+from grader.faces.cli import main
 from tests.support import (
     REPO,
     run_grade,
@@ -257,16 +257,16 @@ def test_grade_chapter_imports_nothing_heavy_it_does_not_use():
 
 @pytest.mark.parametrize("command", ["list", "batch"])
 def test_the_launcher_turns_the_collector_back_on_before_the_command_runs(command):
-    """grader.launch imports with the collector off, then turns it on with what it imported frozen, before the
+    """grader.faces.launch imports with the collector off, then turns it on with what it imported frozen, before the
     command runs: a long-running one (batch, --watch) collects as ever."""
     script = (
         "import gc, sys\n"
-        "import grader.cli\n"
+        "import grader.faces.cli\n"
         "def command():\n"
         "    print(gc.isenabled(), gc.get_freeze_count() > 1000)\n"
-        "grader.cli.main = command\n"
+        "grader.faces.cli.main = command\n"
         f"sys.argv = ['grade', {command!r}]\n"
-        "from grader.launch import main\n"
+        "from grader.faces.launch import main\n"
         "main()\n"
     )
     proc = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=60)

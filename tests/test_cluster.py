@@ -1,4 +1,4 @@
-"""grade batch on a Dask cluster (--scheduler, grader.cluster): a real `dask scheduler` and `grade worker`
+"""grade batch on a Dask cluster (--scheduler, grader.course.cluster): a real `dask scheduler` and `grade worker`
 processes on 127.0.0.1; nothing lost and nothing twice when a worker or the coordinator is killed; outputs
 equal to a local batch's but for timings and the isolation line per learner; workers that refuse to start;
 and a batch without --scheduler that never imports Dask.
@@ -30,7 +30,7 @@ from tests.support import FakeBwrap, build_submission, hostile_module, replace_f
 REPO = Path(__file__).resolve().parents[1]
 CHAPTERS = "ch03,ch05,ch06,ch07"
 COUNT = 60
-VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # grader.cluster.VERSION_KEY, as the scheduler keeps it
+VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # grader.course.cluster.VERSION_KEY, as the scheduler keeps it
 
 distributed = pytest.importorskip("distributed", reason="Dask is not installed here (the [cluster] extra; CI "
                                                         "installs it with the test extras)")
@@ -365,7 +365,7 @@ def test_a_worker_whose_sandbox_cannot_start_never_grades_and_its_learners_are_g
 
 @pytest.mark.slow
 def test_a_worker_refuses_to_start_beside_a_coordinator_of_another_grader_version(place, cluster):
-    """`grade worker` and `dask worker --preload grader.cluster` refuse to join while the running coordinator
+    """`grade worker` and `dask worker --preload grader.course.cluster` refuse to join while the running coordinator
     (its version published on the scheduler) grades with another grader, and say which versions differ."""
     folder, env = place
     with cluster.client() as client:
@@ -373,7 +373,7 @@ def test_a_worker_refuses_to_start_beside_a_coordinator_of_another_grader_versio
         try:
             done = grade(env, "worker", cluster.address, "--nworkers", "1", "--no-dashboard", cwd=folder)
             preloaded = subprocess.run([sys.executable, "-m", "distributed.cli.dask_worker", cluster.address,
-                                        "--preload", "grader.cluster", "--nthreads", "1", "--no-dashboard",
+                                        "--preload", "grader.course.cluster", "--nthreads", "1", "--no-dashboard",
                                         "--local-directory", str(folder / "refused")], env=env, cwd=folder,
                                        capture_output=True,
                                        text=True, timeout=300, check=False)
@@ -436,15 +436,15 @@ def test_the_instructors_checkout_and_its_wheel_are_one_grader_version(place, tm
 def test_the_course_file_names_the_scheduler(tmp_path):
     """`scheduler:` in the course file is the cluster grade batch grades on; anything but an address is refused
     with the file and line."""
-    from grader import course
+    from grader import course_config
 
-    good = tmp_path / "course.yaml"
+    good = tmp_path / "course_config.yaml"
     good.write_text("course: c\nseed: 5\nscheduler: tcp://scheduler.example.org:8786\n", encoding="utf-8")
-    assert course._from_yaml(good).scheduler == "tcp://scheduler.example.org:8786"
+    assert course_config._from_yaml(good).scheduler == "tcp://scheduler.example.org:8786"
     bad = tmp_path / "bad.yaml"
     bad.write_text("course: c\nseed: 5\nscheduler: 8786\n", encoding="utf-8")
-    with pytest.raises(course.CourseError, match=r"bad.yaml, line 3: scheduler is the address"):
-        course._from_yaml(bad)
+    with pytest.raises(course_config.CourseError, match=r"bad.yaml, line 3: scheduler is the address"):
+        course_config._from_yaml(bad)
 
 
 @pytest.mark.slow
@@ -477,8 +477,8 @@ def test_the_scheduler_is_taken_from_the_option_the_environment_or_the_course_fi
 def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_twice_is_recorded_once(tmp_path):
     """The local pool is the default and imports no Dask (`python -X importtime`); and run_batch records a learner
     whose result arrives twice (a task run again) once: the same outputs as a batch where each arrived once."""
-    from grader import batch
-    from grader.course import current
+    from grader.course import batch
+    from grader.course_config import current
 
     submissions = tmp_path / "submissions"
     build_submission(submissions / "ann")
@@ -489,7 +489,7 @@ def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_tw
                           capture_output=True, text=True, timeout=600, check=False)
     assert done.returncode == 0, done.stderr[-3000:]
     imported = [line.rsplit("|", 1)[-1].strip() for line in done.stderr.splitlines() if line.startswith("import time:")]
-    assert "grader.batch" in imported and not [name for name in imported if name.split(".")[0] in ("dask",
+    assert "grader.course.batch" in imported and not [name for name in imported if name.split(".")[0] in ("dask",
                                                                                                      "distributed")]
 
     class Twice(batch.LocalPool):
@@ -512,8 +512,8 @@ def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_tw
 def test_a_task_is_keyed_by_the_learner_its_content_hash_and_the_grader_version():
     """The same grading asked twice (a coordinator run again while the first one's task still runs) is one task;
     another learner, other files or another grader is another, and so is a try on another worker."""
-    from grader.batch import Staged
-    from grader.cluster import task_key
+    from grader.course.batch import Staged
+    from grader.course.cluster import task_key
 
     def staged(learner: str, digest: str) -> Staged:
         return Staged(learner, "unused", digest, [], "", None, None, (), "f" * 64)

@@ -261,7 +261,7 @@ def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tm
     from grader.boundary.sandbox import Sandbox
     from grader.boundary.session import Session
     from grader.boundary.spawn import start_child
-    from grader.grading import grade
+    from grader.core.grading import grade
     from grader.submission import Submission
 
     class Broken(Sandbox):

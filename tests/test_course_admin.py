@@ -192,9 +192,9 @@ def test_the_copied_pair_tops_the_similarity_list(course):
 
 
 def test_similarity_ranks_a_renamed_copy_first_among_learners_who_wrote_alike(tmp_path):
-    """grader.similarity on its own (the batch above runs it with --similarity): frank's renamed copy of gina's
+    """grader.course.similarity on its own (the batch above runs it with --similarity): frank's renamed copy of gina's
     measurement_covariance makes them the most alike pair, above two learners who both handed in the references."""
-    from grader import similarity
+    from grader.course import similarity
 
     staging = tmp_path / "staging"
     for name in ("alice", "bob"):
@@ -305,8 +305,8 @@ def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
 def solutions_report():
     """ch05 and ch06 of the references, graded once in a course whose ch06 quiz is practice."""
     from grader import boundary
-    from grader.course import Course
-    from grader.pipeline import Request, build_report
+    from grader.core.pipeline import Request, build_report
+    from grader.course_config import Course
     from grader.submission import solutions_submission
 
     course = Course(id="practice-course", quiz_feedback="recorded", quiz_feedback_by={"ch06": "immediate"})
@@ -349,8 +349,8 @@ def test_overrides_stay_within_the_points_and_apply_in_order(solutions_report):
     import copy
     from datetime import datetime, timezone
 
-    from grader import overrides
-    from grader.course import Late
+    from grader.course import overrides
+    from grader.course_config import Late
 
     report = copy.deepcopy(solutions_report)
     ch06 = report.chapters[1]
@@ -382,24 +382,24 @@ def test_overrides_stay_within_the_points_and_apply_in_order(solutions_report):
     ("handout: 7\n", "line 1: handout is the id of the current handout"),
 ])
 def test_a_course_config_that_cannot_be_used_names_its_file_and_line(tmp_path, text, says):
-    from grader import course
+    from grader import course_config
 
-    path = tmp_path / "course.yaml"
+    path = tmp_path / "course_config.yaml"
     path.write_text(text, encoding="utf-8")
-    with pytest.raises(course.CourseError, match=says):
-        course._from_yaml(path)
+    with pytest.raises(course_config.CourseError, match=says):
+        course_config._from_yaml(path)
 
 
 def test_a_course_config_gives_quiz_feedback_per_chapter_and_the_deadline(tmp_path):
-    from grader import course
+    from grader import course_config
 
-    path = tmp_path / "course.yaml"
+    path = tmp_path / "course_config.yaml"
     path.write_text("quiz_feedback: {default: immediate, ch06: recorded}\nhandout: 0.1.0+handout.abc\n"
                     "deadline: 2026-05-01T23:59:00+02:00\nlate_penalty: {per_day: 0.1, max: 0.3, grace_minutes: 10}\n",
                     encoding="utf-8")
-    loaded = course._from_yaml(path)
+    loaded = course_config._from_yaml(path)
     assert loaded.practice("ch05") and not loaded.practice("ch06") and loaded.current_handout == "0.1.0+handout.abc"
-    at = course.datetime.fromisoformat
+    at = course_config.datetime.fromisoformat
     assert loaded.late.fraction(at("2026-05-02T00:05:00+02:00")) == (0.0, 0)  # within the grace minutes
     assert loaded.late.fraction(at("2026-05-02T00:10:00+02:00")) == (0.1, 1)  # 11 minutes late, 1 after the grace
     assert loaded.late.fraction(at("2026-05-05T00:00:00+02:00")) == (0.3, 3)  # capped at max

@@ -27,7 +27,7 @@ SCRIPT = textwrap.dedent("""
     process = drawer._STARTED[0][0]
     spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
 
-    from grader.grading import grade
+    from grader.core.grading import grade
     from grader.boundary import open_session
     from grader.submission import Submission
     session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
@@ -149,7 +149,7 @@ def test_the_pages_meanwhile_work_runs_once_the_figures_are_sent_to_be_drawn():
         from grader.render import drawer, html
         assert drawer.start()
         from grader.boundary import open_session
-        from grader.grading import grade
+        from grader.core.grading import grade
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
         report = grade(session, ["ch06"], with_plots=True)
@@ -186,7 +186,7 @@ def test_the_learners_child_starts_first_then_the_drawing_process_is_forked_with
 @pytest.mark.slow
 @pytest.mark.parametrize("extra", [[], ["--seed", "not-a-number"]], ids=["graded", "usage-error"])
 def test_the_grade_command_leaves_no_drawing_process_behind(tmp_path, extra):
-    """`grade ... --html` forks the drawing process early (grader.launch, once the learner's child has started,
+    """`grade ... --html` forks the drawing process early (grader.faces.launch, once the learner's child has started,
     before click parses the command line): when the command ends, graded (with every figure) or refused as misused, no process of
     it is left, not even for a moment. Forked processes keep the command line, which names the report."""
     from tests.support import processes_with
@@ -219,7 +219,7 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
         while Path(f"/proc/{process.pid}/stat").read_text().split()[2] != "Z":
             pass  # dead and unreaped: a zombie until someone waits for it
 
-        from grader.grading import grade
+        from grader.core.grading import grade
         from grader.boundary import open_session
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
@@ -244,7 +244,7 @@ def test_figures_due_here_draws_them_in_this_process_alone():
         from grader.render import drawer
 
         assert drawer.start()
-        from grader.grading import grade
+        from grader.core.grading import grade
         from grader.boundary import open_session
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
@@ -294,7 +294,7 @@ def test_the_lighter_import_changes_no_figure(tmp_path):
     import json
 
     from grader.boundary import open_session
-    from grader.grading import grade
+    from grader.core.grading import grade
     from grader.submission import Submission
 
     session = open_session(Submission(REPO, "solutions"), sandbox="off")
@@ -313,11 +313,11 @@ def test_the_lighter_import_changes_no_figure(tmp_path):
 @pytest.mark.slow
 def test_a_batch_draws_the_class_summarys_figures_in_the_drawing_process_it_started(tmp_path):
     """`grade batch` starts the drawing process before grading: the class summary's figures (one per chapter, drawn
-    for a class of grader.statistics.RELIABLE_LEARNERS or more) are drawn there, so the batch's own process never
+    for a class of grader.course.statistics.RELIABLE_LEARNERS or more) are drawn there, so the batch's own process never
     imports matplotlib, which it did at the end before."""
     import shutil
 
-    from grader.statistics import RELIABLE_LEARNERS
+    from grader.course.statistics import RELIABLE_LEARNERS
     from tests.support import build_submission
 
     first = build_submission(tmp_path / "subs" / "learner00")
@@ -326,7 +326,7 @@ def test_a_batch_draws_the_class_summarys_figures_in_the_drawing_process_it_star
     script = textwrap.dedent("""
         import re, sys
         from pathlib import Path
-        from grader.batch import run_batch
+        from grader.course.batch import run_batch
 
         out = Path(sys.argv[1]) / "out"
         run_batch(Path(sys.argv[1]) / "subs", out, chapters=["ch01", "ch06"], jobs=2, seed=3, html=False)
@@ -340,7 +340,7 @@ def test_a_batch_draws_the_class_summarys_figures_in_the_drawing_process_it_star
 
 
 def test_a_batch_too_small_for_the_summarys_figures_starts_no_drawing_process(tmp_path):
-    """Below grader.statistics.RELIABLE_LEARNERS the class summary has no figures: a batch that small (a regrade of a
+    """Below grader.course.statistics.RELIABLE_LEARNERS the class summary has no figures: a batch that small (a regrade of a
     few learners) forks no drawing process to import matplotlib for nothing."""
     from tests.support import build_submission
 
@@ -349,7 +349,7 @@ def test_a_batch_too_small_for_the_summarys_figures_starts_no_drawing_process(tm
     script = textwrap.dedent("""
         import sys
         from pathlib import Path
-        from grader.batch import run_batch
+        from grader.course.batch import run_batch
         from grader.render import drawer
 
         run_batch(Path(sys.argv[1]) / "subs", Path(sys.argv[1]) / "out", chapters=["ch01"], jobs=1, seed=3, html=False)

@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 
 from grader import checks as check_registry
-from grader import course as courses
+from grader import course_config as courses
 from grader.chapters import CHAPTERS
+from grader.core.pipeline import Request, build_report
 from grader.model import Status
-from grader.pipeline import Request, build_report
 from tests.support import (
     HAVE_JAX,
     build_submission,
@@ -107,7 +107,7 @@ def test_the_course_setting_is_validated_with_file_and_line(tmp_path):
 
 
 def test_a_handout_of_a_course_without_exact_checks_records_none_and_grades_none(tmp_path):
-    from grader import release
+    from grader.course import release
 
     off = courses.Course(seed=12, exact_derivatives=False)
     recorded = release.record(off).data
@@ -115,14 +115,14 @@ def test_a_handout_of_a_course_without_exact_checks_records_none_and_grades_none
     handout = tmp_path / "handout.json"
     handout.write_text(json.dumps({"course": "c1", "public_seed": 20261122, "exact_derivatives": False, "hidden": {}}),
                        encoding="utf-8")
-    from grader.pipeline import switched_off
+    from grader.core.pipeline import switched_off
 
     assert switched_off(courses._from_handout(handout), ("ch06",)) == {"ch06/H_jacobian_exact", "ch06/H3_jacobian_exact"}
 
 
 @pytest.mark.slow
 def test_grade_batch_honours_the_course_setting(tmp_path):
-    from grader.batch import run_batch
+    from grader.course.batch import run_batch
 
     submissions = tmp_path / "submissions"
     _numerical_submission(submissions / "ada")

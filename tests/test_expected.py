@@ -1,12 +1,12 @@
-"""Where expected values come from (grader.expected): the memo of the live references gives what the
+"""Where expected values come from (grader.judging.expected): the memo of the live references gives what the
 references give, run after run; a check that asks the reference outside its planning is refused."""
 
 from __future__ import annotations
 
 import pytest
 
-from grader import expected
 from grader.chapters import CHAPTERS
+from grader.judging import expected
 from tests.support import build_submission, grade_code, replace_function
 
 BUGGY = {"ch07_dynamics": replace_function("ch07_dynamics", "propagate_covariance", """

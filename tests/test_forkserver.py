@@ -159,7 +159,7 @@ def test_batch_hides_the_submissions_and_output_folders_wherever_they_are(tmp_pa
     """Outside /tmp (which the sandbox replaces anyway): a folder in the project itself."""
     import tempfile
 
-    from grader.batch import run_batch
+    from grader.course.batch import run_batch
     from tests.support import build_submission
 
     base = Path(tempfile.mkdtemp(prefix=".pytest-batch-", dir=Path(__file__).resolve().parents[1]))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from grader.chapters import CHAPTERS
-from grader.grading import DEFAULT_SEED
+from grader.core.grading import DEFAULT_SEED
 from grader.model import Status
 from tests.support import (
     grade_code,

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from grader import gradescope
+from grader.course import gradescope
 from grader.render import lms
 from tests.support import (
     REAL_BWRAP,

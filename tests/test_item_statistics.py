@@ -1,4 +1,4 @@
-"""Item statistics (grader.statistics) in summary.html and summary.json: on a generated class of learners of known
+"""Item statistics (grader.course.statistics) in summary.html and summary.json: on a generated class of learners of known
 ability, the bad question and the question that is harder for some learners' numbers are flagged, and no other."""
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from grader import batch, statistics
 from grader import checks as check_registry
 from grader.chapters import BY_ID
-from grader.history import History
+from grader.course import batch, statistics
+from grader.course.history import History
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
 from grader.render import lms

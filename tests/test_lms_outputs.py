@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from grader.course.staging import folder_name
 from grader.render import lms
-from grader.staging import folder_name
 from tests.support import (
     build_submission,
     hostile_module,

@@ -1,4 +1,4 @@
-"""What `grade` keeps between runs (grader.memo, grader.boundary.kept): the same answers get the same report as
+"""What `grade` keeps between runs (grader.core.memo, grader.boundary.kept): the same answers get the same report as
 when judged afresh, a changed function is judged again, nothing is reused without a wall around learner code,
 and the kept sandbox is the sandbox the door builds, with the same walls."""
 
@@ -16,7 +16,7 @@ import pytest
 
 from grader.boundary import kept
 from grader.boundary.spawn import INTERPRETER
-from grader.memo import Memo, _stamp_of
+from grader.core.memo import Memo, _stamp_of
 from tests.support import BWRAP, REPO, build_submission, replace_function, run_grade
 
 needs_bwrap = pytest.mark.skipif(BWRAP is None, reason="the memo is used only where bubblewrap walls learner code off")
@@ -61,7 +61,7 @@ def test_the_parent_imports_neither_numpy_nor_the_checks_when_the_answers_are_th
         assert done.returncode in (0, 1) and "ch06 total" in done.stdout, done.stderr[-3000:]
         imported.append({line.rsplit("|", 1)[1].strip() for line in done.stderr.splitlines() if "|" in line})
     assert {"numpy", "grader.checks", "yaml"} & imported[0] == {"numpy", "grader.checks", "yaml"}
-    assert not {"numpy", "grader.checks", "grader.planning", "grader.quiz"} & imported[1]
+    assert not {"numpy", "grader.checks", "grader.core.planning", "grader.quiz"} & imported[1]
 
 
 @needs_bwrap
@@ -191,7 +191,7 @@ def test_grade_starts_its_child_behind_the_kept_sandbox_and_grades_alike(tmp_pat
 # ------------------------------------------------------------------------------------------- a batch worker's memo
 
 def test_a_worker_memo_judges_a_chapter_answered_alike_once(tmp_path, monkeypatch):
-    from grader import grading
+    from grader.core import grading
     from tests.support import open_session
 
     planned = []
@@ -210,9 +210,9 @@ def test_a_worker_memo_judges_a_chapter_answered_alike_once(tmp_path, monkeypatc
 
 
 def test_a_worker_encodes_a_chapters_kept_calls_once_and_sends_each_child_what_it_still_owes(tmp_path, monkeypatch):
-    from grader import grading
     from grader.boundary import session as sessions
     from grader.boundary.wire import placed
+    from grader.core import grading
     from tests.support import open_session
 
     encoded = []

@@ -1,4 +1,4 @@
-"""Named mistakes that generalise (grader.mutants, grader.diagnose): slips nobody listed are named from the
+"""Named mistakes that generalise (grader.judging.mutants, grader.judging.diagnose): slips nobody listed are named from the
 reference's own single-slip variants, in one sentence of the lesson's language, kept apart from the message as
 the result's help; a mistake is named only when it explains every failing input of a check; a slip that equals
 the right answer at a check's inputs is never named; a handout names the same mistakes from recorded values;
@@ -12,12 +12,12 @@ import shutil
 import numpy as np
 import pytest
 
-from grader import expected, mutants
 from grader.chapters import CHAPTERS
 from grader.checks import load
-from grader.diagnose import Evidence, Mistake, explain, weigh
-from grader.grading import DEFAULT_SEED
-from grader.planning import ChapterPlan
+from grader.core.grading import DEFAULT_SEED
+from grader.core.planning import ChapterPlan
+from grader.judging import expected, mutants
+from grader.judging.diagnose import Evidence, Mistake, explain, weigh
 from grader.model import CheckResult, Report, Status
 from grader.render.html import render as render_html
 from grader.render.text import render_check
@@ -205,7 +205,7 @@ def test_a_handout_names_the_same_mistakes_from_recorded_values_and_holds_no_mut
 
 @pytest.mark.slow
 def test_the_secrecy_scan_finds_a_mutated_reference_in_a_handout(tmp_path):
-    from grader import release
+    from grader.course import release
 
     slip = next(m for m in mutants.mutants("ch02", "tangent_plane") if m.help.endswith("without its term f(a)."))
     (tmp_path / "notes.py").write_text(f"# what a right answer is not\n{slip.source}\n", encoding="utf-8")

@@ -31,7 +31,7 @@ import yaml
 
 from grader import checks as check_registry
 from grader.chapters import CHAPTERS
-from grader.expected import reference_function
+from grader.judging.expected import reference_function
 from tests.support import (
     REPO,
     run_grade,

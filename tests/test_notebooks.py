@@ -202,7 +202,7 @@ def test_ipython_lines_are_left_out_and_python_is_kept():
 
 @pytest.mark.slow
 def test_batch_grades_zipped_notebooks_as_their_py(tmp_path):
-    from grader.batch import run_batch
+    from grader.course.batch import run_batch
 
     submissions = tmp_path / "submissions"
     submissions.mkdir()
@@ -313,7 +313,7 @@ run("%load_ext grader")
 for step in json.loads(sys.argv[1]):
     value = run(step)
     if step.startswith("%grade"):
-        from grader import magic  # the resident grading process that answered
+        from grader.faces import magic  # the resident grading process that answered
         out.setdefault("grades", []).append({"score": value.score, "max_score": value.max_score, "text": value.text,
                                              "html": value._repr_html_(), "repr": repr(value),
                                              "server": magic._PROCESS.process.pid})
@@ -344,10 +344,10 @@ def test_percent_grade_shows_the_score_grade_shows(tmp_path):
 
 
 def test_the_notebook_grading_process_grades_the_cells_the_kernel_ran(tmp_path, monkeypatch):
-    """grader.notebook_server's Server, in this process, given what grader.magic gathers in a kernel (the functions
+    """grader.faces.notebook_server's Server, in this process, given what grader.faces.magic gathers in a kernel (the functions
     the notebook defined, the cells it ran): the references typed into cells get the marks the file gets. (The
     whole route, IPython and the resident process included: the two tests around this one.)"""
-    from grader import magic, notebook_server
+    from grader.faces import magic, notebook_server
 
     source = (REPO / "solutions" / "ch06_measurement.py").read_text(encoding="utf-8")
     cells = [part for part in SPLIT.split(source) if part.strip()]
@@ -401,7 +401,7 @@ def test_the_grade_command_never_imports_ipython_or_nbformat():
     imported = {line.split("|")[-1].strip() for line in done.stderr.splitlines() if "|" in line}
     assert "grader.submission" in imported and "grader.notebook" in imported
     assert not {m for m in imported if m.split(".")[0] in ("IPython", "nbformat", "ipykernel", "jupyter_client")
-                or m == "grader.magic"}
+                or m == "grader.faces.magic"}
 
 
 # ------------------------------------------------------------------------------ the notebook handout
@@ -416,7 +416,8 @@ def notebook_handout(tmp_path_factory):
 
 @pytest.mark.slow
 def test_the_notebook_handout_holds_notebooks_and_no_answer(notebook_handout):
-    from grader import checks, release
+    from grader import checks
+    from grader.course import release
 
     exercises = notebook_handout / "exercises"
     assert sorted(p.name for p in exercises.glob("ch*")) == sorted(f"{c.module}.ipynb" for c in CHAPTERS)
@@ -435,7 +436,7 @@ def test_the_notebook_handout_holds_notebooks_and_no_answer(notebook_handout):
 
 @pytest.mark.slow
 def test_the_scan_finds_a_reference_planted_in_a_notebook(notebook_handout, tmp_path):
-    from grader import release
+    from grader.course import release
 
     planted = tmp_path / "out"
     shutil.copytree(notebook_handout, planted)

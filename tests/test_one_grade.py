@@ -122,7 +122,7 @@ def test_a_late_archive_scores_on_gradescope_as_in_the_batch(graded, tmp_path):
     metadata = {"id": 777, "created_at": CLASS["bo"][1], "assignment": {"due_date": DEADLINE},
                 "users": [{"email": "bo", "id": 1, "name": "Bo"}]}
     (root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
-    done = subprocess.run([sys.executable, "-m", "grader.gradescope", "run", str(root)], cwd=REPO, capture_output=True,
+    done = subprocess.run([sys.executable, "-m", "grader.course.gradescope", "run", str(root)], cwd=REPO, capture_output=True,
                           text=True, encoding="utf-8", timeout=600)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-3000:]
     results = json.loads((root / "results" / "results.json").read_text(encoding="utf-8"))
@@ -186,10 +186,11 @@ def test_a_misspelled_hidden_check_is_refused_by_every_command_that_reads_the_co
 
 
 def test_the_notebook_handouts_readme_is_about_notebooks(tmp_path):
-    from grader import course, release
+    from grader import course_config
+    from grader.course import release
 
     for notebooks in (True, False):
-        release._write_readme(tmp_path, Path("grader.whl"), course.Course(), {}, notebooks)
+        release._write_readme(tmp_path, Path("grader.whl"), course_config.Course(), {}, notebooks)
         text = (tmp_path / "README.md").read_text(encoding="utf-8")
         assert ("%grade ch06" in text and ".ipynb" in text and "[notebook]" in text) == notebooks
         assert ("Fill in a function in `exercises/chNN_*.py`" in text) != notebooks

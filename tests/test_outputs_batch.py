@@ -19,7 +19,8 @@ from xml.etree import ElementTree
 
 import pytest
 
-from grader.staging import folder_name, id_problem
+from grader.course.staging import folder_name
+from grader.ids import id_problem
 from tests.support import REPO, build_submission, code_points, hostile_module
 
 RIGHT = ("gradebook.csv", "junit.xml", "zoë", "ann+cs101@uni.edu", "=1+2")

@@ -12,7 +12,7 @@ import pytest
 from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
-from grader.cli import main
+from grader.faces.cli import main
 from grader.model import Status, rounded_points
 from grader.quiz import bank
 from grader.quiz.judge import judge

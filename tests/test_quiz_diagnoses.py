@@ -1,5 +1,5 @@
 """A wrong quiz answer that matches a known transform of the key is named (CheckResult.mistake) in one
-sentence that says what to change: the generic slips of any vector or matrix (grader.diagnose.generic,
+sentence that says what to change: the generic slips of any vector or matrix (grader.judging.diagnose.generic,
 with the question's own entry names), a sign of any number, degrees for an angle, minus or a constant
 multiple of an expression, and each key's own named wrong answers. A diagnosis holds only when the
 answer equals that transform within the tolerance, and never for a right answer. Driven through real

@@ -16,7 +16,7 @@ import pytest
 from click.testing import CliRunner
 
 from grader.chapters import CHAPTERS
-from grader.cli import main
+from grader.faces.cli import main
 from grader.model import Status
 from grader.quiz import bank, learner_id, symbolic
 from grader.quiz.judge import judge

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from grader.chapters import CHAPTERS
-from grader.compare import tolerance_text
+from grader.judging.compare import tolerance_text
 from grader.quiz import bank, grade_quiz
 from grader.quiz.judge import judge, right_numbers
 from grader.quiz.templates import hint

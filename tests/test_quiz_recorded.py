@@ -10,7 +10,7 @@ import json
 import pytest
 import yaml
 
-from grader import expected
+from grader.judging import expected
 from grader.model import ChapterResult, Status
 from grader.quiz import RECORDED_MESSAGE, bank
 from grader.quiz.templates import template

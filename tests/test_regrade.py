@@ -68,8 +68,8 @@ def _regrade_rows(out: Path) -> list[dict]:
 
 
 def test_a_learners_comparison_names_each_check_that_moves_and_nothing_else():
+    from grader.course.regrade import compare
     from grader.model import ChapterResult, CheckResult, Report, Status
-    from grader.regrade import compare
 
     def report(status: Status, points: float, grader: str, extra: bool = False) -> Report:
         checks = [CheckResult("quiz_bearing_variance", "bearing_variance", "", status, points, 1, kind="quiz"),

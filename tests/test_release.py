@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from grader import release
+from grader.course import release
 from tests.support import (
     REPO,
     build_submission,

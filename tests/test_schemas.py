@@ -10,7 +10,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
-from grader.cli import main
+from grader.faces.cli import main
 from grader.render import lms
 
 jsonschema = pytest.importorskip("jsonschema")

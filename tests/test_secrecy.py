@@ -12,8 +12,8 @@ import shutil
 
 import pytest
 
-from grader.batch import run_batch
 from grader.boundary.sandbox import CHILD_MODULES
+from grader.course.batch import run_batch
 from tests.support import (
     BWRAP,
     REPO,

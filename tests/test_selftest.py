@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from grader import selftest
+from grader.course import selftest
 from grader.quiz import bank
 from tests.support import run_grade
 
@@ -95,7 +95,7 @@ def test_a_check_whose_random_points_repeat_one_point_fails_where_its_mistake_hi
 def test_a_check_draws_one_stream_of_random_inputs():
     from grader.checks import ch06
     from grader.checks.base import Context
-    from grader.expected import planning
+    from grader.judging.expected import planning
 
     context = Context(17, "ch06", "range_bearing_elevation_random_points")
     with planning("ch06", context.check_id, 17):

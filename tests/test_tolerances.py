@@ -6,10 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from grader import checks, expected
+from grader import checks
 from grader.chapters import CHAPTERS
 from grader.checks import derivatives
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, MIN_ENTRY, central_difference
+from grader.judging import expected
 
 for _info in CHAPTERS:
     checks.load(_info.id)
@@ -28,7 +29,7 @@ def _tolerance(value):
 
 @pytest.fixture(autouse=True)
 def live_reference():
-    """The references answer as they do while a check plans (grader.expected)."""
+    """The references answer as they do while a check plans (grader.judging.expected)."""
     with expected.using(expected.Live()), expected.planning("tests", "tolerances", 0):
         yield
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from grader import classroom
+from grader.course import classroom
 from tests.support import REPO
 
 CI = REPO / ".github" / "workflows" / "ci.yml"

@@ -78,7 +78,7 @@ class Boundary:
         """The isolation line: what holds for learner code here."""
         if self.sandbox is not None:
             return self.sandbox.describe()
-        from grader.course import in_handout
+        from grader.course_config import in_handout
 
         readable = ("this handout holds no answers" if in_handout()
                     else "answers included, wherever the references and keys are installed")

@@ -4,7 +4,7 @@ grader.boundary.door.choose decides how learner code runs, and grader.boundary.s
 allow-list from what is installed (the interpreter, its standard library, numpy, sympy, an autograd library
 with what it requires, the child's own modules): some 50 read-only binds, found by asking the import system
 and reading package metadata. That is the same command after command, so the one-off `grade` keeps the
-decision, with the allow-list, in the user's cache folder; the next command's launcher (grader.launch) reads it
+decision, with the allow-list, in the user's cache folder; the next command's launcher (grader.faces.launch) reads it
 with os alone and starts the child before anything else is imported.
 
 A kept decision holds only while what made it holds: the mode asked, the environment the door reads (the

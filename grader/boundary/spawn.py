@@ -8,7 +8,7 @@ Two kinds behind one call, `start_child`; grader.boundary.door.choose says which
   results come back on its stdout (the child moves learner output to a capture file it is given by name),
   and a timeout kills the process tree through a Windows job object where there is one, else the process.
 (grader.boundary.forkserver is the third: a resident interpreter that forks a child per session.)
-Only os and sys at import (subprocess where a child needs it): grader.launch starts the child before the heavy
+Only os and sys at import (subprocess where a child needs it): grader.faces.launch starts the child before the heavy
 imports (click, numpy); a sandboxed child is started with os.posix_spawn where the system has it, without
 subprocess (its import alone is 9 ms of the launcher's path).
 """

@@ -140,7 +140,7 @@ def show_argument(arg: object) -> str:
 
 class EncodedCalls(list):
     """A chapter's calls with the JSON text of them all, as a request sends them (grader.boundary.session): a batch
-    worker's kept calls (grader.memo) go to every learner's child alike, encoded once."""
+    worker's kept calls (grader.core.memo) go to every learner's child alike, encoded once."""
 
     def __init__(self, calls: list, text: str) -> None:
         super().__init__(calls)

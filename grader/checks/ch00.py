@@ -18,7 +18,7 @@ from grader.boundary.wire import call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
-from grader.compare import (
+from grader.judging.compare import (
     all_of,
     compare_arrays,
     exactly,
@@ -27,8 +27,8 @@ from grader.compare import (
     fmt,
     value_problem,
 )
-from grader.diagnose import Mistake
-from grader.expected import reference
+from grader.judging.diagnose import Mistake
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch00")
 CHECKS.uses("superposition_gap", "range_reading")

@@ -15,7 +15,7 @@ import numpy as np
 
 from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     all_of,
     expect,
@@ -25,8 +25,8 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Mistake
-from grader.expected import reference
+from grader.judging.diagnose import Mistake
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch01")
 REF = reference("ch01")

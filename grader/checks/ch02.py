@@ -22,7 +22,7 @@ from grader.checks.derivatives import (
     planar_point,
     vector_form,
 )
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     all_of,
     compare_arrays,
@@ -33,8 +33,8 @@ from grader.compare import (
     fmt_array,
     value_problem,
 )
-from grader.diagnose import Evidence, Mistake, generated, known
-from grader.expected import reference
+from grader.judging.diagnose import Evidence, Mistake, generated, known
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch02")
 CHECKS.uses("contour_direction", "bowl_gradient")

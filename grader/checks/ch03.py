@@ -21,7 +21,7 @@ from grader.checks.derivatives import (
     polar_point,
     wound,
 )
-from grader.compare import (
+from grader.judging.compare import (
     SINGLE_PRECISION,
     Entries,
     all_of,
@@ -31,8 +31,8 @@ from grader.compare import (
     fmt,
     value_problem,
 )
-from grader.diagnose import Mistake, known
-from grader.expected import reference
+from grader.judging.diagnose import Mistake, known
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch03")
 CHECKS.uses("area_scale", "polar_to_cartesian_jacobian")

@@ -24,7 +24,7 @@ from grader.checks.derivatives import (
     vector_form,
     wound,
 )
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     all_of,
     compare_arrays,
@@ -34,8 +34,8 @@ from grader.compare import (
     fmt_array,
     value_problem,
 )
-from grader.diagnose import known
-from grader.expected import reference
+from grader.judging.diagnose import known
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch04")
 CHECKS.uses("pipeline_jacobian", "polar_to_cartesian", "polar_to_cartesian_jacobian", "g_stage", "g_jacobian",

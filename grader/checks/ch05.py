@@ -2,7 +2,7 @@
 
 The scalar functions f are catalogue callables with known derivatives, so every difference
 quotient is judged against the exact derivative f'(x), within the interval its error must lie in
-for a right answer (derived in solutions/oracle/ch05.py, asked through grader.expected):
+for a right answer (derived in solutions/oracle/ch05.py, asked through grader.judging.expected):
 - central: |error| <= h^2/6 max |f^(3)| on [x-h, x+h] (plus rounding);
 - forward: error in h/2 [min f'', max f''] on [x, x+h] (plus rounding): two-sided, so a central
   difference (error ~ h^2) fails it as surely as a backward one (error -h/2 f'').
@@ -30,7 +30,7 @@ import numpy as np
 from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     Verdict,
     all_of,
@@ -40,9 +40,9 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.compare import expect as _expect
-from grader.diagnose import Evidence, Mistake, generated, weigh
-from grader.expected import reference
+from grader.judging.compare import expect as _expect
+from grader.judging.diagnose import Evidence, Mistake, generated, weigh
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch05")
 CHECKS.uses("max_jacobian_error", "jacobian_fd")
@@ -51,7 +51,7 @@ REF = reference("ch05")
 
 
 def expect(*args, **kwargs):
-    """grader.compare.expect, exact: step conventions differ by less than single-precision round-off."""
+    """grader.judging.compare.expect, exact: step conventions differ by less than single-precision round-off."""
     return _expect(*args, exact=True, **kwargs)
 
 SLOPE_STEPS = (0.1, 0.05, 0.025, 0.0125)

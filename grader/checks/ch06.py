@@ -16,7 +16,7 @@ from grader.checks.derivatives import (
     integer_point,
     planar_point,
 )
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     Verdict,
     all_of,
@@ -26,8 +26,8 @@ from grader.compare import (
     fmt,
     value_problem,
 )
-from grader.diagnose import Mistake, known
-from grader.expected import reference
+from grader.judging.diagnose import Mistake, known
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch06")
 CHECKS.uses("measurement_covariance", "H_jacobian")

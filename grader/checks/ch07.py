@@ -29,7 +29,7 @@ from grader.checks.derivatives import (
     vector_form,
     wound,
 )
-from grader.compare import (
+from grader.judging.compare import (
     SINGLE_PRECISION,
     Entries,
     all_of,
@@ -39,8 +39,8 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Mistake, known
-from grader.expected import reference
+from grader.judging.diagnose import Mistake, known
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch07")
 CHECKS.uses("bicycle_control_jacobian", "bicycle_model")

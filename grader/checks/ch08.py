@@ -18,7 +18,7 @@ Joseph forms differ by rounding). sample_covariance gets n as small as 2 and 5, 
 instead of n - 1 is off by 20% or more. ekf_update's P_new must be symmetric (to 2e-6 of max |P|,
 single-precision round-off: a P_new of entries near 1e-17 is symmetric enough) and P - P_new positive
 semi-definite (eigenvalues >= -2e-6 max |P|), both computed here from the learner's output. Every
-comparison allows at least single-precision round-off (grader.compare.compare_arrays).
+comparison allows at least single-precision round-off (grader.judging.compare.compare_arrays).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from grader.boundary.wire import Array, Rng, call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
 from grader.checks.sampling import same_seed_same_value
-from grader.compare import (
+from grader.judging.compare import (
     SINGLE_PRECISION,
     Entries,
     Verdict,
@@ -43,8 +43,8 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Evidence, Mistake, part_of
-from grader.expected import reference
+from grader.judging.diagnose import Evidence, Mistake, part_of
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch08")
 CHECKS.uses("linearized_measurement_cov", "H_jacobian")

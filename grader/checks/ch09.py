@@ -35,7 +35,7 @@ from grader.checks.derivatives import (
     planar_point,
     vector_form,
 )
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     Verdict,
     all_of,
@@ -46,8 +46,8 @@ from grader.compare import (
     passed,
     value_problem,
 )
-from grader.diagnose import Evidence, Mistake, generated, weigh_text
-from grader.expected import reference
+from grader.judging.diagnose import Evidence, Mistake, generated, weigh_text
+from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch09")
 CHECKS.uses("hessian_fd", "gradient_fd", "jacobian_fd")

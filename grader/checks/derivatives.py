@@ -36,7 +36,7 @@ import numpy as np
 
 from grader.boundary.wire import Array, Returned, call
 from grader.checks.base import ChapterChecks, Context, Skip
-from grader.compare import (
+from grader.judging.compare import (
     Entries,
     Label,
     Verdict,
@@ -46,7 +46,7 @@ from grader.compare import (
     fmt_array,
     value_problem,
 )
-from grader.diagnose import Evidence, Mistake
+from grader.judging.diagnose import Evidence, Mistake
 
 STEP = 1e-5
 FD_RTOL = 1e-6

@@ -1,6 +1,6 @@
 """What the HTML report plots, gathered from the learner's own functions (in the child, like checks).
 
-Each gatherer is planned like a check: it asks the reference (grader.expected) for the curves it
+Each gatherer is planned like a check: it asks the reference (grader.judging.expected) for the curves it
 draws beside the learner's, yields the learner calls, and returns plain data: the learner's values
 (None where a call gave no usable value) and the reference's, so the renderer can fall back to the
 reference and say so. In a handout the reference curves are replayed from the release's check data.
@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from grader.boundary.wire import Array, Fn, call
-from grader.compare import value_problem
-from grader.expected import reference
+from grader.judging.compare import value_problem
+from grader.judging.expected import reference
 
 
 def _value(returned, shape):

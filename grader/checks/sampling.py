@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from grader.boundary.wire import Returned
-from grader.compare import Verdict, fail, passed, value_problem
+from grader.judging.compare import Verdict, fail, passed, value_problem
 
 
 def same_seed_same_value(got: list[Returned], label: str, seed: int, other: int) -> Verdict:

@@ -14,12 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from grader.chapters import BY_ID
+from grader.ids import id_problem
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
 from grader.quiz.answers import LOADER, MAX_BYTES, TOO_LARGE, read
 from grader.quiz.symbolic import AnswerError
 from grader.safe_text import decode_saved_text
-from grader.staging import id_problem
 
 DEFAULT_LEARNER = "anonymous"
 

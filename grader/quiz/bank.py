@@ -6,7 +6,7 @@ enough, and what each wrong answer means. Parametrised questions draw their numb
 again where a question's `avoid` says the numbers make a known slip indistinguishable from the key
 (`grade selftest` finds such numbers);
 the key of a numeric one is computed by the reference implementation
-(grader.expected.reference_function, trusted code imported in the grading process), never stored;
+(grader.judging.expected.reference_function, trusted code imported in the grading process), never stored;
 that of a symbolic one (a derivation per learner: the map itself holds the numbers) is an
 expression in the question's symbols and parameters, each learner's numbers put in where it is
 judged. Neither ships with a handout. The options of a choice or multi question are shown to each
@@ -73,7 +73,7 @@ class Question:
     answer_format: str = ""
     domain: dict[str, tuple[float, float]] = field(default_factory=dict)  # symbolic: symbol -> range
     derived: dict[str, str] = field(default_factory=dict)  # symbolic: a symbol answers may use -> its definition
-    entries: dict = field(default_factory=dict)  # vector/matrix: symbol, rows, cols, derivative (grader.compare.Entries)
+    entries: dict = field(default_factory=dict)  # vector/matrix: symbol, rows, cols, derivative (grader.judging.compare.Entries)
     # numbers drawn again: expression in the params -> the size it must exceed (0: it must not be 0), e.g.
     # {"r - 1": 0} where r = 1 makes 1/r^2 equal its reciprocal, so that a learner's slip could not be told apart
     avoid: dict[str, float] = field(default_factory=dict)
@@ -147,10 +147,10 @@ class Key:
 
     def value_for(self, chapter: str, values: dict[str, float]) -> object:
         """The right answer: stored, or computed for `values` by the chapter's reference function
-        (grader.expected.reference_function); KeyUnavailable where the references are not installed."""
+        (grader.judging.expected.reference_function); KeyUnavailable where the references are not installed."""
         if self.compute is None:
             return self.answer
-        from grader.expected import ReferenceUnavailable, reference_function
+        from grader.judging.expected import ReferenceUnavailable, reference_function
 
         try:
             reference = reference_function(chapter, self.compute["function"])

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from grader.compare import tolerance_text
+from grader.judging.compare import tolerance_text
 from grader.quiz.bank import Key, Question
 from grader.quiz.mistakes import (
     expression_mistake,

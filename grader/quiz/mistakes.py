@@ -1,10 +1,10 @@
 """Name the mistake behind a wrong quiz answer: the answer compared with the known wrong versions of
-the right one, as grader.diagnose does for code.
+the right one, as grader.judging.diagnose does for code.
 
 Numbers, vectors and matrices (`numbers_mistake`): first the key's own wrong answers, in their order
 (`wrong:` entries: stored numbers, or expressions in the question's parameters evaluated for this
 learner, or a transform or factor of the key), then degrees for an angle key (`angle: true`), then
-the generic slips of any value (grader.diagnose.generic: transposed, every sign, one row's, one
+the generic slips of any value (grader.judging.diagnose.generic: transposed, every sign, one row's, one
 column's or one entry's sign, rows, columns or entries swapped), named with the question's own
 entry names (`entries:` in the bank). Expressions (`expression_mistake`): the key's own wrong
 answers (expressions in the question's symbols and, for a per-learner question, its parameters,
@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from grader.compare import Entries, fmt
-from grader.diagnose import Mistake, diagnose
+from grader.judging.compare import Entries, fmt
+from grader.judging.diagnose import Mistake, diagnose
 from grader.quiz.bank import Key, Question
 from grader.quiz.symbolic import (
     AnswerError,

@@ -1,6 +1,6 @@
 """The class summary's figure per chapter: each item's facility against its discrimination, items labelled (by their
 number in the chapter's table; a flagged one by its name too), the flagging rules as guide lines; drawn by matplotlib as the HTML report's figures are (grader.render.figures: an SVG
-data URI with a text alternative that says the same in numbers). It reads only the numbers grader.statistics
+data URI with a text alternative that says the same in numbers). It reads only the numbers grader.course.statistics
 computed."""
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ from xml.etree import ElementTree
 
 from grader import provenance
 from grader.chapters import BY_ID
-from grader.history import Result
+from grader.model import LearnerResult
 from grader.model import ChapterResult, CheckResult, Report, Status, points_text
 from grader.render import plural
 from grader.safe_text import for_csv, for_xml, json_for_terminal
@@ -104,7 +104,7 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     messages (a file that does not import) are tests of 0 points. `heading` and `notes` go before and after
     the score lines of the top-level output. No seed is in it (a course seed is the instructor's secret): its
     `extra_data.submission` is the Gradescope submission whose id, with the course seed and the learner, the seed
-    was drawn from (grader.gradescope.submission_seed), so a regrade draws it again."""
+    was drawn from (grader.course.gradescope.submission_seed), so a regrade draws it again."""
     tests = []
     for chapter_index, chapter in enumerate(report.chapters):
         number = int(chapter.chapter[2:]) if chapter.chapter[2:].isdigit() else chapter_index
@@ -308,7 +308,7 @@ def _suite(learner: str, report: Report, extra: dict) -> tuple[ElementTree.Eleme
 
 
 # ------------------------------------------------------------------------------------ gradebooks
-# Every gradebook is an export of grade batch's history (grader.history): one Result per learner.
+# Every gradebook is an export of grade batch's history (grader.course.history): one LearnerResult per learner.
 
 def _csv(rows: Iterable[list[str]]) -> str:
     buffer = io.StringIO()
@@ -325,7 +325,7 @@ def gradebook_header(chapters: list[str]) -> list[str]:
     return columns + ["total", "max_total", "status", "message", "adjustments", "grader", "handout", "seed"]
 
 
-def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
+def gradebook_row(result: LearnerResult, chapters: list[str]) -> list[str]:
     """The learner's row: their id as given (a spreadsheet formula neutralised), code and quiz score per
     chapter (overrides of a check included), the total (every override and penalty included), status, why
     it is not graded or what was flagged, the adjustments in words, and what graded it: the grader's
@@ -343,7 +343,7 @@ def gradebook_row(result: Result, chapters: list[str]) -> list[str]:
                   "" if result.seed is None else str(result.seed)]
 
 
-def gradebook_lines(results: Iterable[Result], chapters: list[str]) -> Iterator[str]:
+def gradebook_lines(results: Iterable[LearnerResult], chapters: list[str]) -> Iterator[str]:
     """gradebook.csv line by line (a cell may hold a line break: a line is a row as CSV writes it)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer)
@@ -354,7 +354,7 @@ def gradebook_lines(results: Iterable[Result], chapters: list[str]) -> Iterator[
         yield buffer.getvalue()
 
 
-def points_possible(results: list[Result], chapters: list[str]) -> dict[str, float]:
+def points_possible(results: list[LearnerResult], chapters: list[str]) -> dict[str, float]:
     """Per chapter, the points a graded learner could get (every learner is graded on the same checks)."""
     possible: dict[str, float] = {}
     for result in results:
@@ -369,7 +369,7 @@ def _column(chapter: str) -> str:
     return f"{chapter} {info.title}" if info else chapter
 
 
-def _score(result: Result, chapter: str) -> str:
+def _score(result: LearnerResult, chapter: str) -> str:
     scores = result.chapters.get(chapter)
     return "" if scores is None else points_text(scores["score"])
 
@@ -381,7 +381,7 @@ CANVAS_ID_COLUMNS = ["Student", "ID", "SIS User ID", "SIS Login ID", "Section"]
 BEYOND_CHAPTERS = "Late penalty and total overrides"
 
 
-def beyond_chapters(result: Result, chapters: list[str]) -> str:
+def beyond_chapters(result: LearnerResult, chapters: list[str]) -> str:
     """The cell of BEYOND_CHAPTERS: the learner's total less their chapter cells, in decimal as printed (so the
     printed cells add up to the printed total); "" for a learner not graded."""
     if result.score is None:
@@ -393,7 +393,7 @@ def beyond_chapters(result: Result, chapters: list[str]) -> str:
     return format(rest + 0, "f")  # + 0: no "-0"
 
 
-def canvas_gradebook(results: list[Result], chapters: list[str]) -> str:
+def canvas_gradebook(results: list[LearnerResult], chapters: list[str]) -> str:
     """Canvas' gradebook import: the columns Student, ID, SIS User ID, SIS Login ID and Section (the learner
     id in Student and SIS Login ID; Canvas matches a row by ID, SIS User ID or SIS Login ID), one column per
     chapter ("ch06 <title>", a new assignment on import; overrides of checks and chapters included), one for
@@ -410,7 +410,7 @@ def canvas_gradebook(results: list[Result], chapters: list[str]) -> str:
     return _csv(rows)
 
 
-def moodle_gradebook(results: list[Result], chapters: list[str]) -> str:
+def moodle_gradebook(results: list[LearnerResult], chapters: list[str]) -> str:
     """Moodle's "Import grades from CSV": a column identifying the learner ("Learner id": map it to the user
     field your ids are, ID number, email address or username), one grade column per chapter with the points
     possible in its name ("ch06 <title> (out of 25)": give the grade item that maximum, or map to an

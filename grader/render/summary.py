@@ -1,14 +1,14 @@
 """The class summary: what the class got wrong and what to re-teach, as summary.html and summary.json.
 
 From the per-learner reports of a batch: the score histogram; per check how many failed on their own
-and how many failed because a helper of theirs fails (grader.grading.point_upstream: blame once),
-worst first; per named mistake (grader.diagnose, the quiz keys' wrong answers) how many learners made
+and how many failed because a helper of theirs fails (grader.core.grading.point_upstream: blame once),
+worst first; per named mistake (grader.judging.diagnose, the quiz keys' wrong answers) how many learners made
 it; per choice question how many chose each option (letters are each learner's own, so counted by
 the option, not the letter); per symbolic question each answer form; the most common failure
 messages; quiz questions shown as templates, each per-learner number as its range; and who was
 flagged, not graded or skipped, whose score moved since the last run, the overrides that could not
-apply, and the pairs of learners whose code is most alike (grader.similarity, for a person to look
-at). With 5 or more learners, item statistics of every check and question (grader.statistics computes them; here
+apply, and the pairs of learners whose code is most alike (grader.course.similarity, for a person to look
+at). With 5 or more learners, item statistics of every check and question (grader.course.statistics computes them; here
 they are only shown): facility, discrimination, the options' shares, Cronbach's alpha per chapter, facility by
 parameter, what is flagged, and a figure per chapter (grader.render.item_plots). Self-contained HTML; learner
 text escaped.
@@ -59,8 +59,8 @@ class Summary:
     changes: list[tuple] = field(default_factory=list)  # (learner, before, after, delta, why)
     notes: list[str] = field(default_factory=list)  # for the instructor: overrides that could not apply, ...
     untimed: list[str] = field(default_factory=list)  # graded with a deadline but no trusted submission time
-    similar: list = field(default_factory=list)  # grader.similarity.Pair, most alike first
-    statistics: dict | None = None  # grader.statistics.compute's numbers (None: fewer than 5 learners)
+    similar: list = field(default_factory=list)  # grader.course.similarity.Pair, most alike first
+    statistics: dict | None = None  # grader.course.statistics.compute's numbers (None: fewer than 5 learners)
 
     @functools.cached_property
     def counts(self) -> dict:

@@ -104,7 +104,7 @@ def _changed(value: float, override: Override, high: float | None = None) -> flo
 
 def apply(report: Report, overrides: list[Override], late=None, submitted: datetime | None = None) -> list[str]:
     """Put on `report` the adjustments its `overrides` (this learner's rows) and the course's late penalty
-    (`late`, grader.course.Late, for a submission made at `submitted`) make, replacing any it had. Returns
+    (`late`, grader.course_config.Late, for a submission made at `submitted`) make, replacing any it had. Returns
     a message for each override that could not be applied (no such check or chapter here)."""
     for chapter in report.chapters:
         chapter.adjustments = []

@@ -8,7 +8,7 @@ wheel (references, oracle and quiz keys included: this zip is for Gradescope onl
 the course config (its secret course seed and hidden checks) and `autograder.json` (the settings this
 module reads back).
 
-Each run (`python -m grader.gradescope run /autograder`) grades /autograder/submission exactly as
+Each run (`python -m grader.course.gradescope run /autograder`) grades /autograder/submission exactly as
 `grade batch` grades one learner: staged the same way, at the course seed, hidden checks included, in
 bubblewrap where it starts (else, with --sandbox auto, without it, and the output says so), and always
 writes /autograder/results/results.json: a submission without chapter files gets score 0 and the reason;
@@ -38,7 +38,7 @@ SETTINGS_FILE = "autograder.json"
 COURSE_FILE = "course.yaml"
 LEARNER_FIELDS = ("email", "sid", "id", "name")
 SANDBOX_MODES = ("auto", "required", "none")
-PROJECT = Path(__file__).resolve().parent.parent
+PROJECT = Path(__file__).resolve().parents[2]
 
 
 class GradescopeError(RuntimeError):
@@ -91,7 +91,7 @@ if [ "$(id -u)" = 0 ] && ! id grader-learner >/dev/null 2>&1; then
 fi
 python3 -m venv "$SOURCE/venv"
 "$SOURCE/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$SOURCE/{wheel}"
-"$SOURCE/venv/bin/python" -m grader.gradescope check "$(dirname "$SOURCE")"
+"$SOURCE/venv/bin/python" -m grader.course.gradescope check "$(dirname "$SOURCE")"
 """
 
 RUN_AUTOGRADER = r"""#!/usr/bin/env bash
@@ -105,7 +105,7 @@ if [ ! -x "$PYTHON" ]; then
     echo "run_autograder: $PYTHON is missing: setup.sh failed; see the image build's log" >&2
     exit 1
 fi
-exec "$PYTHON" -m grader.gradescope run "$ROOT"
+exec "$PYTHON" -m grader.course.gradescope run "$ROOT"
 """
 
 README = """The Gradescope autograder of the course {course}, built by `grade gradescope` ({grader}).
@@ -139,7 +139,7 @@ def _project_root() -> Path:
 def build(out: Path, course, *, chapters: list[str], learner_field: str = "email", time_budget: float = 60.0,
           sandbox: str = "auto", force: bool = False) -> tuple[Path, Settings]:
     """Write the autograder zip to `out` (refused if it exists, unless `force`)."""
-    from grader.release import ReleaseError, _build_wheel
+    from grader.course.release import ReleaseError, _build_wheel
 
     if out.exists() and not force:
         raise GradescopeError(f"{out} exists; choose another name (or --force to replace it)")
@@ -208,8 +208,8 @@ class Metadata:
 
     @classmethod
     def read(cls, root: Path, learner_field: str) -> Metadata:
-        from grader.overrides import parse_time
-        from grader.staging import id_problem
+        from grader.course.overrides import parse_time
+        from grader.ids import id_problem
 
         path = root / "submission_metadata.json"
         try:
@@ -243,7 +243,7 @@ class Metadata:
         return found
 
     def deadline(self, late) -> object:
-        """The course's late penalty (grader.course.Late) with this submitter's extension: the course's deadline
+        """The course's late penalty (grader.course_config.Late) with this submitter's extension: the course's deadline
         moved by as much as Gradescope moved the submitter's own due date past the assignment's."""
         if late is None or self.due is None or self.own_due is None or self.own_due <= self.due:
             return late
@@ -322,7 +322,7 @@ def _sandbox_state(mode: str, hidden_paths: list[Path] = ()) -> tuple[bool, str,
 def _stage(root: Path, learner: str, staging: Path) -> Path:
     """The submission staged as grade batch stages one (chapter and answer files only); an upload that is
     one .zip is read from inside it. StagingError when there is nothing to grade."""
-    from grader.staging import Entry, StagingError, stage
+    from grader.course.staging import Entry, StagingError, stage
 
     submission = root / "submission"
     if not submission.is_dir():
@@ -366,11 +366,11 @@ def run(root: Path) -> int:
     isolation = ""
     try:
         settings = Settings.read(root / "source" / SETTINGS_FILE)
-        from grader import batch
-        from grader import overrides as adjusting
-        from grader.pipeline import instructor_course
+        from grader.core.pipeline import instructor_course
+        from grader.course import batch
+        from grader.course import overrides as adjusting
+        from grader.course.staging import StagingError
         from grader.render import lms
-        from grader.staging import StagingError
 
         course = instructor_course(str(root / "source" / COURSE_FILE))
         metadata = Metadata.read(root, settings.learner_field)
@@ -405,7 +405,7 @@ def run(root: Path) -> int:
             attempt = ("at a seed of this submission's own, drawn from the course seed" if seed != course.grading_seed
                        else "at the course seed")
             heading = [f"Graded as {learner} ({metadata.source}), {attempt}."]
-            from grader import submit
+            from grader.course import submit
 
             manifest, packed = submit.check(staged / "exercises", learner, course.id, course.current_handout)
             warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
@@ -460,7 +460,7 @@ def check(root: Path) -> int:
     try:
         settings = Settings.read(root / "source" / SETTINGS_FILE)
     except (OSError, ValueError, TypeError) as exc:
-        print(f"grader.gradescope check: {SETTINGS_FILE} cannot be read: {exc}", file=sys.stderr)
+        print(f"grader.course.gradescope check: {SETTINGS_FILE} cannot be read: {exc}", file=sys.stderr)
         return 1
     hidden_paths = secrets(root)
     if hasattr(os, "geteuid") and os.geteuid() == 0:
@@ -476,7 +476,7 @@ def check(root: Path) -> int:
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 2 or args[0] not in ("run", "check"):
-        print("usage: python -m grader.gradescope run|check AUTOGRADER_ROOT   (Gradescope's is /autograder)",
+        print("usage: python -m grader.course.gradescope run|check AUTOGRADER_ROOT   (Gradescope's is /autograder)",
               file=sys.stderr)
         return 2
     root = Path(args[1]).resolve()

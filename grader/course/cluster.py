@@ -1,10 +1,10 @@
 """`grade batch --scheduler`: the batch on a Dask cluster, the coordinator staging and writing, workers grading.
 
-The coordinator (grader.batch.run_batch with a ClusterPool) stages each submission into OUT/.staging as the
+The coordinator (grader.course.batch.run_batch with a ClusterPool) stages each submission into OUT/.staging as the
 local pool does and decides which are due (one whose files, grader, seed and settings hash as at its last
 grading is not graded again, so a coordinator killed mid-batch resumes with what is missing). Each due
 learner's staged files travel in a task keyed by the learner, its content hash and the grader's version. A
-worker grades it through the local pool's path (grader.batch.grade_staged: the one door, bubblewrap, a
+worker grades it through the local pool's path (grader.course.batch.grade_staged: the one door, bubblewrap, a
 resident fork server and every per-learner limit, on the worker's machine) and sends back plain data: the
 texts of the learner's files, with the worker's isolation line in its report.json. The coordinator alone
 writes into OUT, records the history and builds the class outputs (run_batch), so the outputs are those of a
@@ -15,7 +15,7 @@ that arrives twice is recorded once (run_batch); a worker on which learner code 
 not start, or it holds another grader version) answers so for that task, never with a grade, and the task
 is tried on another worker.
 
-The workers: `grade worker SCHEDULER` (or `dask worker SCHEDULER --preload grader.cluster --nthreads 1`)
+The workers: `grade worker SCHEDULER` (or `dask worker SCHEDULER --preload grader.course.cluster --nthreads 1`)
 checks on start that learner code starts here behind the sandbox and that this grader is the version of the
 coordinator using the scheduler (published on it by each coordinator while it runs), and refuses otherwise.
 The references and keys a worker grades with are those of the instructor's wheel installed with it: the
@@ -36,7 +36,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
-from grader import batch
+from grader.course import batch
 
 VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # scheduler metadata: the running coordinator's grader
 TRIES = 3  # workers a learner is tried on, where learner code cannot run on one
@@ -117,7 +117,7 @@ def version_check(published: str | None) -> None:
 
 
 async def dask_setup(worker) -> None:
-    """`dask worker --preload grader.cluster`: refuse to start where learner code cannot run here behind the
+    """`dask worker --preload grader.course.cluster`: refuse to start where learner code cannot run here behind the
     sandbox or where a running coordinator grades with another grader version. Dask only logs an exception of a
     preload and starts the worker all the same, so this process ends (status 2), having said why; its nanny then
     fails to start and `dask worker` ends too."""
@@ -146,7 +146,7 @@ def worker_facts(sandbox: str, dask_worker=None) -> dict:
 
 def grade_task(staged: batch.Staged, files: Mapping[str, bytes], grading: batch.Grading, version: str) -> dict:
     """One learner graded on this worker, from its staged `files` (relative path -> bytes), copied into a private
-    folder of this machine; returns plain data: {"graded": grader.batch.Graded's fields, "worker": its address},
+    folder of this machine; returns plain data: {"graded": grader.course.batch.Graded's fields, "worker": its address},
     or {"refused": why, "worker": ...} where this worker holds another grader `version` or learner code cannot
     run here (an infrastructure failure, never a grade: the coordinator tries another worker)."""
     from distributed import get_worker
@@ -190,7 +190,7 @@ def task_key(staged: batch.Staged, version: str, attempt: int = 1) -> str:
 def worker_command(scheduler: str, nworkers: int | None = None, dask_options: tuple[str, ...] = ()) -> list[str]:
     """The `dask worker` command `grade worker` becomes: worker processes of one thread each (a learner at a
     time, behind the process's resident sandbox), each checking itself on start (the preload, dask_setup)."""
-    return [sys.executable, "-m", "distributed.cli.dask_worker", scheduler, "--preload", "grader.cluster",
+    return [sys.executable, "-m", "distributed.cli.dask_worker", scheduler, "--preload", "grader.course.cluster",
             "--nthreads", "1", "--nworkers", str(nworkers or os.cpu_count() or 1), *dask_options]
 
 
@@ -227,7 +227,7 @@ def become(command: list[str]) -> None:
 # ------------------------------------------------------------------------------------ the coordinator's side
 
 class ClusterPool:
-    """The pool run_batch grades through on a Dask cluster (see grader.batch.LocalPool): connected to the
+    """The pool run_batch grades through on a Dask cluster (see grader.course.batch.LocalPool): connected to the
     scheduler at `scheduler` (or through `client`, a distributed.Client made elsewhere, e.g. by Dask Gateway).
     `say` is given what the instructor should read as it happens (a worker that cannot grade)."""
 

@@ -18,8 +18,8 @@ from typing import Callable
 
 from grader.boundary import Boundary, Limits
 from grader.chapters import BY_ID
+from grader.core.pipeline import Request, build_report
 from grader.model import Report, Status
-from grader.pipeline import Request, build_report
 from grader.submission import Submission
 
 POLL_SECONDS = 0.05

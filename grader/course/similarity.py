@@ -144,12 +144,12 @@ def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int
     """The `top` pairs of `learners` whose staged code (staging/<folder>/exercises/chNN_*.py, or the code cells
     of a chapter kept as a notebook) is most alike, and a sentence for each file that could not be compared (a
     hostile one: too deeply nested, too large to tokenize), which is left out, the others compared."""
-    from grader.staging import folder_name
+    from grader.course.staging import folder_name
 
     _, compare_files = _engine()
     if stubs is None:
         try:
-            from grader.release import ReleaseError, _project_exercises
+            from grader.course.release import ReleaseError, _project_exercises
 
             stubs = _project_exercises()
         except ReleaseError:

@@ -2,7 +2,7 @@
 
 The archive is exactly what `grade batch`, the Gradescope autograder and the GitHub Classroom workflow
 read: `exercises/` with the chapter files and `exercises/answers/` (the files grade batch stages,
-selected by the same rules, grader.staging.stage), plus `exercises/submission-manifest.json`:
+selected by the same rules, grader.course.staging.stage), plus `exercises/submission-manifest.json`:
 
     {"format": 1, "course": ..., "handout": ..., "handout_released": ..., "grader": ...,
      "learner": "ann", "packed": "2026-05-01T21:14:03+00:00",
@@ -30,7 +30,7 @@ import zipfile
 from datetime import datetime, timezone
 from pathlib import Path
 
-from grader.staging import MANIFEST
+from grader.course.staging import MANIFEST
 
 FORMAT = 1
 
@@ -111,9 +111,9 @@ def pack(folder: Path, learner: str, out: Path, chapters: tuple[str, ...] = ("al
     `learner` at `out`: staged as grade batch stages it, graded again from the archive in a fresh process,
     the manifest written into it last. Returns the manifest. SubmitError when nothing can be packed or the
     archive cannot be graded here."""
-    from grader import course as courses
+    from grader import course_config as courses
     from grader import provenance
-    from grader.staging import Entry, StagingError, stage
+    from grader.course.staging import Entry, StagingError, stage
 
     with tempfile.TemporaryDirectory(prefix="grade-submit-") as temporary:
         work = Path(temporary)

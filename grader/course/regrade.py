@@ -2,7 +2,7 @@
 grade would change, check by check, before anything changes.
 
 The stored submissions are the staged copies grade batch keeps (OUT/.staging/<folder>/exercises: exactly the files
-it graded). Each learner graded in the batch's last finished run (grader.history) is graded again at that run's
+it graded). Each learner graded in the batch's last finished run (grader.course.history) is graded again at that run's
 seed and chapters, behind the sandbox as a batch grades, with the overrides (OUT/overrides.csv) and the late
 penalty applied as a batch applies them, and compared with what that run recorded: the score (the gradebook's)
 and every check's verdict and points (its report.json). The learners that move are printed and written into
@@ -24,12 +24,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from grader.course.staging import STAGING, folder_name
 from grader.model import Report, points_text, rounded_points
 from grader.safe_text import for_csv, json_text
-from grader.staging import STAGING, folder_name
 
 if TYPE_CHECKING:
-    from grader.course import Course
+    from grader.course_config import Course
 
 CSV_NAME = "regrade.csv"
 COLUMNS = ("learner", "old_score", "new_score", "checks_changed", "why")
@@ -95,8 +95,8 @@ class _Task:
 def _grade(task: _Task) -> tuple[str, Report | None, str]:
     """(learner, their report graded again with overrides and late penalty applied, or None and why not), in a
     worker process: the learner's code behind the boundary grade batch grades behind."""
-    from grader import batch
-    from grader import overrides as adjusting
+    from grader.course import batch
+    from grader.course import overrides as adjusting
 
     report = batch._grade_report(Path(task.root), task.learner, list(task.chapters), task.seed, False,
                                  dict(task.limits), task.sandbox, task.course, other_ids=task.other_ids)
@@ -152,10 +152,11 @@ def regrade(out: Path, course: Course | None, *, jobs: int | None = None, sandbo
             progress: Callable[[int, int], None] | None = None) -> Regrade:
     """Grade every learner graded in OUT's last finished run again (today's grader, `course`), at its seed and
     chapters, with `overrides` (default OUT/overrides.csv) and the late penalty, and compare. Writes nothing.
-    RegradeError where OUT holds no finished run; grader.batch.InfrastructureError where learner code cannot
-    run here; grader.staging.RosterError for an overrides file that cannot be read."""
-    from grader import batch, provenance
-    from grader import history as histories
+    RegradeError where OUT holds no finished run; grader.course.batch.InfrastructureError where learner code cannot
+    run here; grader.course.staging.RosterError for an overrides file that cannot be read."""
+    from grader import provenance
+    from grader.course import batch
+    from grader.course import history as histories
 
     if not (out / histories.FILE_NAME).is_file():
         raise RegradeError(f"{out} holds no {histories.FILE_NAME}: regrade a folder `grade batch --out` wrote")
@@ -208,7 +209,7 @@ def csv_text(found: Regrade) -> str:
 
 
 def write_csv(out: Path, found: Regrade) -> Path:
-    from grader.batch import write_atomically
+    from grader.course.batch import write_atomically
 
     path = out / CSV_NAME
     write_atomically(path, csv_text(found))
@@ -219,8 +220,8 @@ def apply(out: Path, found: Regrade, course: Course | None, reason: str, overrid
     """Record the regrade as a run of the history with `reason`: the moved learners' report.json, results.json and
     report.html (where it was written) rewritten, every other learner of the regraded run kept as it was, and the
     class outputs rebuilt from the new run. Returns the run's id."""
-    from grader import batch
-    from grader import history as histories
+    from grader.course import batch
+    from grader.course import history as histories
     from grader.render import lms
 
     chapters = json.loads(found.run_info["chapters"])

@@ -13,14 +13,14 @@ from __future__ import annotations
 import hashlib
 import os
 import re
-import unicodedata
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from grader.ids import id_problem
 from grader.safe_text import unicode_clean
 
-MANIFEST = "submission-manifest.json"  # what grade submit writes into an archive (grader.submit)
+MANIFEST = "submission-manifest.json"  # what grade submit writes into an archive (grader.course.submit)
 CHAPTER_FILE = re.compile(r"^ch0[0-9]_[a-z_]+\.(py|ipynb)$")  # a chapter may be kept as a notebook
 ANSWER_FILE = re.compile(r"^(ch0[0-9]|learner)\.yaml$")
 MAX_FILE_BYTES = 1 << 20
@@ -32,7 +32,6 @@ CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas
                  "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
 _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
 _MAX_FOLDER = 160
-_BIDI = frozenset("\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 
 class StagingError(ValueError):
     """A submission that cannot be staged (the message says why)."""
@@ -75,21 +74,6 @@ def folder_name(learner: str) -> str:
         digest = hashlib.sha256(learner.encode("utf-8", "surrogatepass")).hexdigest()[:20]
         encoded = f"{encoded[:_MAX_FOLDER - 21]}~{digest}"
     return encoded
-
-
-def id_problem(learner: str) -> str | None:
-    """Why `learner` cannot be a learner id (empty, '.' or '..', a path separator, a control
-    character), or None. Any other text is an id, kept exactly as given."""
-    if not learner.strip():
-        return "is empty"
-    if learner in (".", ".."):
-        return f"is {learner!r}"
-    if "/" in learner or "\\" in learner:
-        return "contains a path separator (/ or \\)"
-    for ch in learner:
-        if ch in _BIDI or unicodedata.category(ch) in ("Cc", "Cs", "Zl", "Zp"):
-            return f"contains the control character U+{ord(ch):04X}"
-    return None
 
 
 def read_roster(roster: Path) -> dict[str, tuple[str, int, str]]:
@@ -167,7 +151,7 @@ def _wanted(relative: str) -> str | None:
         return name
     if ANSWER_FILE.match(name) and len(parts) >= 2 and parts[-2] == "answers":
         return f"answers/{name}"
-    if name == MANIFEST:  # written by grade submit (grader.submit): checked, never graded
+    if name == MANIFEST:  # written by grade submit (grader.course.submit): checked, never graded
         return name
     return None
 

@@ -3,7 +3,7 @@ IPython: the `grade` command in a cell, its result shown inline.
 
 The kernel never grades: `%grade` hands its arguments, the kernel's folder, the names of the functions
 the notebook defined itself and the cells the kernel ran (IPython's history, in order) to a resident
-grading process of its own (grader.notebook_server), which grades in sandboxed children as `grade chNN`
+grading process of its own (grader.faces.notebook_server), which grades in sandboxed children as `grade chNN`
 does. A chapter whose functions the notebook defines is graded from those cells (what the kernel ran,
 in the order it ran it: Colab, or a notebook outside any exercises/ folder); any other from its file.
 The result displays itself (IPython's rich display): the report's HTML fragment with plots in a
@@ -51,7 +51,7 @@ class GradeResult:
 
 
 class _Process:
-    """The resident grading process (grader.notebook_server) and its pipes; started again if it died."""
+    """The resident grading process (grader.faces.notebook_server) and its pipes; started again if it died."""
 
     def __init__(self) -> None:
         self.process: subprocess.Popen | None = None
@@ -60,7 +60,7 @@ class _Process:
     def start(self) -> None:
         if self.process is not None and self.process.poll() is None:
             return
-        grader_parent = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        grader_parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
         env = dict(os.environ)
         env["PYTHONPATH"] = os.pathsep.join(p for p in (grader_parent, env.get("PYTHONPATH", "")) if p)
         env.pop("MPLBACKEND", None)  # the kernel's inline backend is not the report's
@@ -68,7 +68,7 @@ class _Process:
 
         options: dict = {"start_new_session": True} if process_groups() else {
             "creationflags": getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0)}
-        self.process = subprocess.Popen([sys.executable, "-m", "grader.notebook_server", "--warm"],
+        self.process = subprocess.Popen([sys.executable, "-m", "grader.faces.notebook_server", "--warm"],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                         env=env, **options)
         from grader.system import StreamReader

@@ -65,10 +65,10 @@ def grader_stamp() -> str:
     installed (the course file with them), a handout's own file, the interpreter and numpy (found, not imported)."""
     import importlib.util
 
-    from grader import course, provenance
+    from grader import course_config, provenance
 
     folders = provenance.verdict_sources()
-    extra = [course.HANDOUT_FILE] if course.in_handout() else []  # the course file is among the references
+    extra = [course_config.HANDOUT_FILE] if course_config.in_handout() else []  # the course file is among the references
     numpy = importlib.util.find_spec("numpy")
     if numpy is not None and numpy.origin:
         extra.append(Path(numpy.origin).with_name("version.py"))

@@ -6,9 +6,9 @@ value a learner who makes it would return. Three kinds feed a diagnosis, in this
   their values asked of the reference while the check plans, like any expected value;
 - generic transforms of the right answer, which any vector or matrix can suffer (every sign, one
   row's or one column's or one entry's sign, transposed, rows or columns swapped), named with the
-  result's own entry names (grader.compare.Entries);
-- the mistakes generated from the reference (grader.mutants: every single slip of its code), their
-  values at the learner's own calls given by grader.expected (live in the project, recorded in a
+  result's own entry names (grader.judging.compare.Entries);
+- the mistakes generated from the reference (grader.judging.mutants: every single slip of its code), their
+  values at the learner's own calls given by grader.judging.expected (live in the project, recorded in a
   handout) through `judging`, while a check judges.
 
 Every comparison weighs every candidate (`weigh`): the learner's value equals it (matched), or the
@@ -34,7 +34,7 @@ class Mistake:
     name: str
     help: str
     value: object = None  # what a learner making this mistake returns (None: not known for this case)
-    origin: str = "known"  # "known" (the check's own), "generic" (a transform) or "generated" (grader.mutants)
+    origin: str = "known"  # "known" (the check's own), "generic" (a transform) or "generated" (grader.judging.mutants)
     key: str = ""  # what identifies it across a check's inputs, when its name does not (a mutant's key)
 
     @property
@@ -228,7 +228,7 @@ def explain(failing: list[Evidence | None], passing: Iterable[Evidence | None] =
     return None
 
 
-# What slips of one kind (grader.mutants) have in common, said when several such slips explain the values alike.
+# What slips of one kind (grader.judging.mutants) have in common, said when several such slips explain the values alike.
 OF_A_KIND = {
     "missing term": "your value misses one of its terms.",
     "missing factor": "your value misses one of its factors.",

@@ -1,7 +1,7 @@
 """One pipeline builds a report: `grade chNN`, `grade batch`, the release's checks and LMS runners all
 call `build_report`, so a submission gets the same verdicts wherever it is graded.
 
-Code checks run in the session's child (grader.grading), then the quiz answers are judged (no learner
+Code checks run in the session's child (grader.core.grading), then the quiz answers are judged (no learner
 code: YAML only), then what the course hides is accounted for: on the instructor's side hidden
 checks run like any other; in a handout they are not there, and each chapter says how many checks
 and points are graded on submission instead. A course that turns the exact-derivative checks off
@@ -14,12 +14,12 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from grader import course as courses
+from grader import course_config as courses
 from grader.model import Report
 
 if TYPE_CHECKING:
     from grader.boundary import Session
-    from grader.memo import Memo
+    from grader.core.memo import Memo
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,7 @@ class Request:
 
 def instructor_course(config: str | None = None) -> courses.Course:
     """The course every command that grades on the instructor's side reads (batch, Gradescope, release): the
-    course file (grader.course.current), its hidden check ids checked against the checks there are.
+    course file (grader.course_config.current), its hidden check ids checked against the checks there are.
     CourseError, with the file and line, for an id that names no check (and the one it may mean)."""
     import difflib
 
@@ -98,8 +98,8 @@ def build_report(session: Session, request: Request, course: courses.Course | No
                  memo: Memo | None = None) -> Report:
     """Grade `request.chapters` of the session's submission into one Report (closes the session), as `course`
     has it (default: a handout's own course; on the instructor's side every check runs). With `memo`
-    (grader.memo: `grade` on one submission, walled off), verdicts made from exactly the same answers are reused."""
-    from grader.grading import grade
+    (grader.core.memo: `grade` on one submission, walled off), verdicts made from exactly the same answers are reused."""
+    from grader.core.grading import grade
 
     course = course or courses.here()
     others, notes = other_functions(request)
@@ -179,7 +179,7 @@ def kept_quiz_report(session: Session, request: Request, course: courses.Course,
     """quiz_report, or with one learner's `memo` the quiz judged from exactly the same answer files before."""
     if memo is None or not memo.one_learner:
         return quiz_report(session, request, course, list(request.chapters))
-    from grader.memo import key_of
+    from grader.core.memo import key_of
 
     submission = session.submission
     answers = _answers(submission.root / submission.package / "answers")

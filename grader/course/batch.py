@@ -1,8 +1,8 @@
 """Batch grading of a folder of submissions: discover, stage, grade in parallel, write every output.
 
 Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied
-or safely extracted into OUT/.staging/<folder>/exercises/ (grader.staging) and graded by a worker process (of
-this machine's pool, LocalPool, or of a Dask cluster, grader.cluster), in a child forked by that worker's
+or safely extracted into OUT/.staging/<folder>/exercises/ (grader.course.staging) and graded by a worker process (of
+this machine's pool, LocalPool, or of a Dask cluster, grader.course.cluster), in a child forked by that worker's
 sandboxed fork server (grader.boundary.forkserver); the worker returns the texts of the learner's files
 (grade_staged) and this process alone writes them, atomically, into OUT/<folder>/ (write_graded), where
 <folder> is the learner's id kept as given where it is plain
@@ -35,9 +35,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from grader.chapters import CHAPTERS
-from grader.render import plural
-from grader.safe_text import json_text
-from grader.staging import (  # noqa: F401  (RosterError, StagingError: what run_batch raises and reports)
+from grader.course.staging import (  # noqa: F401  (RosterError, StagingError: what run_batch raises and reports)
     STAGING,
     Entry,
     RosterError,
@@ -47,9 +45,11 @@ from grader.staging import (  # noqa: F401  (RosterError, StagingError: what run
     stage,
     survey,
 )
+from grader.render import plural
+from grader.safe_text import json_text
 
 if TYPE_CHECKING:
-    from grader.course import Course
+    from grader.course_config import Course
 
 RETRY_PAUSE = 1.0  # seconds before a learner whose child could not start is tried again
 HELD_REPORTS = 32  # reports graded before their turn in the class outputs kept meanwhile; others are read again
@@ -150,12 +150,12 @@ def _drop_boundary() -> None:
 def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plots: bool, limits: dict,
                   sandbox: str, course: Course | None = None, other_ids: tuple[str, ...] = (),
                   secrets: tuple[str, ...] = ()):
-    """One learner's report, as `course` has it (grader.pipeline.build_report), its learner code behind the
+    """One learner's report, as `course` has it (grader.core.pipeline.build_report), its learner code behind the
     boundary `sandbox` asks (choose_boundary); tried a second time, with a new fork server, when the first attempt
     failed for a reason outside the learner's code (Report.infrastructure, or no process could be started at
     all: an OSError, raised again if the second attempt meets it too)."""
     from grader.boundary import Limits
-    from grader.pipeline import Request, build_report
+    from grader.core.pipeline import Request, build_report
     from grader.submission import Submission
 
     for attempt in (1, 2):
@@ -176,10 +176,10 @@ def _grade_report(root: Path, learner: str, chapters: list[str], seed: int, plot
 
 
 def _worker_memo():
-    """This worker's verdicts, kept across the learners it grades (grader.memo.Memo without a folder): a chapter
+    """This worker's verdicts, kept across the learners it grades (grader.core.memo.Memo without a folder): a chapter
     answered exactly as another learner's is judged once."""
     if "memo" not in _worker_state:
-        from grader.memo import Memo
+        from grader.core.memo import Memo
 
         _worker_state["memo"] = Memo(None, "this worker")
     return _worker_state["memo"]
@@ -265,8 +265,8 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = ()) 
     """Stage one submission into OUT/.staging and decide whether it is due: a Staged learner to grade, or its
     Graded outcome without grading (unreadable; unchanged: its staged files hash as at its last grading, with
     the same overrides, late penalty and current handout). The manifest of an archive made by `grade submit` is
-    checked (grader.submit.check) and what it says is flagged."""
-    from grader import submit
+    checked (grader.course.submit.check) and what it says is flagged."""
+    from grader.course import submit
 
     started = time.monotonic()
     learner = entry.learner
@@ -296,7 +296,7 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, bat
     rendered. One whose child could not start, twice, is `error`: its report.json keeps why (and no hash, so the
     next run grades it again), and its results.json and report.html are removed, so that nothing looks like a
     grade."""
-    from grader import overrides as adjusting
+    from grader.course import overrides as adjusting
     from grader.render import lms
 
     started = time.monotonic()
@@ -361,8 +361,8 @@ def submission_time(entry: Entry, manifest: dict | None, course: Course | None) 
     the roster's `submitted` column (the LMS's time). The time in the archive's manifest is written on the
     learner's own machine: it is used only where the course accepts it (`manifest_time: accept`), and never
     silently. An unparsable time is no time, and said."""
-    from grader import overrides as adjusting
-    from grader import submit
+    from grader.course import overrides as adjusting
+    from grader.course import submit
 
     flags = []
     if entry.submitted:
@@ -436,7 +436,7 @@ class LocalPool:
     """The embedded default pool: `jobs` worker processes on this machine (default: one per core), each staging
     and grading its learners behind its own resident boundary (a sandboxed fork server). A pool is what
     run_batch grades through: `isolation` proves learner code can run before anyone is graded, and `grade`
-    yields each learner's Graded outcome as it completes (grader.cluster.ClusterPool is the other, on Dask)."""
+    yields each learner's Graded outcome as it completes (grader.course.cluster.ClusterPool is the other, on Dask)."""
 
     def __init__(self, jobs: int | None = None) -> None:
         if jobs is not None and jobs < 1:
@@ -474,16 +474,16 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     child interpreter does not start here; RosterError for a roster or overrides file that cannot be read.
     `sandboxed=False` grades without bubblewrap (--no-sandbox); `hidden` are the course's hidden check ids
     (results.json shows them after grades are published); `lms_layouts` ("canvas", "moodle") adds those
-    gradebooks; `course` (grader.course.Course) leaves out the checks it switches off and gives the late
+    gradebooks; `course` (grader.course_config.Course) leaves out the checks it switches off and gives the late
     penalty and the current handout; `overrides` is the overrides file (default OUT/overrides.csv);
-    `similarity` ranks pairs of learners by the similarity of their code (grader.similarity); `announce` is
+    `similarity` ranks pairs of learners by the similarity of their code (grader.course.similarity); `announce` is
     given the isolation line once the boundary is chosen, before anyone is graded; `pool` grades the learners
-    (default: LocalPool(jobs), processes on this machine; grader.cluster.ClusterPool grades on a Dask cluster),
+    (default: LocalPool(jobs), processes on this machine; grader.course.cluster.ClusterPool grades on a Dask cluster),
     and whatever it grades on, this process alone writes into `out`.
-    Every learner's result goes into OUT/gradebook.db (grader.history) as soon as it is graded, once (a result
+    Every learner's result goes into OUT/gradebook.db (grader.course.history) as soon as it is graded, once (a result
     that arrives twice is recorded once)."""
-    from grader import history as histories
     from grader import provenance
+    from grader.course import history as histories
 
     chapters = chapters or [c.id for c in CHAPTERS]
     if jobs is not None and jobs < 1:
@@ -502,7 +502,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     # the class summary's figures, drawn at the end for a class large enough to have them: matplotlib's import
     # (about 0.4 s) runs meanwhile in a drawing process, forked now where that is safe (no thread yet: not beside a
     # cluster's client), at a low priority; numpy, which this process imports for the statistics, is shared with it
-    from grader import statistics
+    from grader.course import statistics
     from grader.render import drawer
 
     if len(entries) >= statistics.RELIABLE_LEARNERS:
@@ -556,7 +556,7 @@ def read_overrides(path: Path, learners: list[str], chapters: list[str]) -> tupl
     """The rows of overrides.csv that can apply in this batch, and a message (file and line) for each that
     cannot: an unknown learner, check or chapter. RosterError for a file that cannot be read at all."""
     from grader import checks as check_registry
-    from grader import overrides as adjusting
+    from grader.course import overrides as adjusting
 
     try:
         rows, problems = adjusting.read(path)
@@ -606,37 +606,37 @@ def _most_points(row, chapters: list[str]) -> float:
 
 
 def _learner_state(out: Path, learner: str, status: str, message: str):
-    """(its grader.history.Result, its report or None, its report.json's batch data) of one learner, from
+    """(its grader.course.history.Result, its report or None, its report.json's batch data) of one learner, from
     its report.json: a learner not graded (unreadable, an error, a report recording an infrastructure
     failure) has no scores and says why; a graded one's flags are what its report.json says to look at."""
-    from grader.history import Result
+    from grader.model import LearnerResult
 
     data = _load(out / folder_name(learner))
     batch = data.get("batch") if data is not None and isinstance(data.get("batch"), dict) else {}
     if data is not None and data.get("infrastructure"):
         reason = message if status == "error" else f"not graded: {data['infrastructure']}"
-        return Result(learner, "error", reason), None, batch
+        return LearnerResult(learner, "error", reason), None, batch
     if status in ("error", "unreadable"):
-        return Result(learner, status, message), None, batch
+        return LearnerResult(learner, status, message), None, batch
     report = _report(data)  # graded now, or unchanged since it was
     if report is None:
-        return Result(learner, "error", "no readable report.json"), None, batch
+        return LearnerResult(learner, "error", "no readable report.json"), None, batch
     manifest = batch.get("manifest") if isinstance(batch.get("manifest"), dict) else {}
-    return Result.of(learner, report, flags=[str(w) for w in batch.get("warnings") or []],
+    return LearnerResult.of(learner, report, flags=[str(w) for w in batch.get("warnings") or []],
                      files_hash=batch.get("files_hash"), content_hash=batch.get("hash"),
                      manifest_handout=manifest.get("handout"), submitted=batch.get("submitted")), report, batch
 
 
 class PackedResults(Mapping):
-    """grader.history.Result by learner, in the order added, each kept packed (marshal, the values' types kept:
+    """grader.course.history.Result by learner, in the order added, each kept packed (marshal, the values' types kept:
     5 is not 5.0; compressed where that pays: about 1 kB for a graded learner) and unpacked when read: a class's
     results in a fraction of the memory of the objects, and none of it scattered among the reports read meanwhile."""
 
     def __init__(self) -> None:
-        from grader.history import Result
+        from grader.model import LearnerResult
 
         self._packed: dict[str, bytes | object] = {}
-        self._fields = tuple(f.name for f in fields(Result))
+        self._fields = tuple(f.name for f in fields(LearnerResult))
 
     def add(self, result) -> None:
         try:
@@ -647,12 +647,12 @@ class PackedResults(Mapping):
         self._packed[result.learner] = b"z" + zlib.compress(data, 1) if len(data) > 512 else b"m" + data
 
     def __getitem__(self, learner: str):
-        from grader.history import Result
+        from grader.model import LearnerResult
 
         packed = self._packed[learner]
         if not isinstance(packed, bytes):
             return packed
-        return Result(*marshal.loads(zlib.decompress(packed[1:]) if packed[:1] == b"z" else packed[1:]))
+        return LearnerResult(*marshal.loads(zlib.decompress(packed[1:]) if packed[:1] == b"z" else packed[1:]))
 
     def __contains__(self, learner: object) -> bool:
         return learner in self._packed
@@ -668,14 +668,14 @@ class ClassOutputs:
     """What the class outputs need of every learner, taken in learner by learner in the batch's order (the
     order of `learners`) as each is graded: the report is counted into the summary (grader.render.summary.Tally)
     and its <testsuite> written into a scratch file for junit.xml (grader.render.lms.JUnit), then let go; what
-    stays per learner is small (its history Result, packed: PackedResults; its flags; whether it has a
+    stays per learner is small (its history LearnerResult, packed: PackedResults; its flags; whether it has a
     submission time). A learner graded before its turn waits with its report, at most HELD_REPORTS of them; the
     report of any other is read again from report.json when its turn comes. So the memory of a batch does not
     grow with its reports."""
 
     def __init__(self, out: Path, learners: list[str], statuses: dict, messages: dict,
                  chapters: list[str] = ()) -> None:
-        from grader import statistics
+        from grader.course import statistics
         from grader.quiz import class_questions
         from grader.render import lms, summary
 
@@ -683,7 +683,7 @@ class ClassOutputs:
         self.position = 0  # learners[:position] are taken in
         self.waiting: dict[str, tuple | None] = {}  # graded before their turn: the state, None to read again
         self.held: set[str] = set()  # those waiting with their report
-        self.results = PackedResults()  # grader.history.Result by learner, in order
+        self.results = PackedResults()  # grader.course.history.Result by learner, in order
         self.flagged: dict[str, list[str]] = {}
         self.not_graded: dict[str, str] = {}
         self.graded: list[str] = []
@@ -742,12 +742,12 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
             similarity: bool = False, deadline: bool = False) -> dict:
     """Close the run in the history and write every class output from it: gradebook.csv, changes.csv (and
     gradebook-canvas.csv, gradebook-moodle.csv as asked) as exports of the history; junit.xml, summary.html
-    and summary.json (with the item statistics, grader.statistics) from the per-learner reports. A gradebook.csv
+    and summary.json (with the item statistics, grader.course.statistics) from the per-learner reports. A gradebook.csv
     changed by hand since the last run is kept as gradebook.edited-<time>.csv (it is an export: changes belong
     in overrides.csv) and said so. `collected` (ClassOutputs) has taken in the learners graded so far; the
     others' report.json are read here. Returns what was flagged per learner, the changes, the similar pairs and notes for the instructor."""
-    from grader import history as histories
-    from grader import statistics
+    from grader.course import history as histories
+    from grader.course import statistics
     from grader.render import lms, summary
 
     collected.finish()
@@ -781,7 +781,7 @@ def rebuild(out: Path, history, run: int, chapters: list[str], collected: ClassO
     write_atomically_from(out / "junit.xml", collected.junit.write)  # the suites copied from the scratch file
     similar = []
     if similarity:
-        from grader import similarity as similarities
+        from grader.course import similarity as similarities
 
         try:
             similar, left_out = similarities.rank(out / STAGING, graded)

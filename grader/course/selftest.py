@@ -1,7 +1,7 @@
 """`grade selftest --seeds N`: the course checked at N seeds before learners meet it, not only at the public one.
 
 Code: the reference solutions are graded at each seed (through the boundary, as a learner's code is) and must get
-every check's points; while each check judges them, every comparison it makes is watched (grader.compare.observing):
+every check's points; while each check judges them, every comparison it makes is watched (grader.judging.compare.observing):
 each mistake it could name there (the check's own, the generic slips of the value, the slips generated from the
 reference) is told apart from the right value at the check's inputs when some comparison's value differs from the
 right one beyond the comparison's tolerance. A mistake a check tells apart at some seeds and not at another fails
@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from grader.course import Course
+    from grader.course_config import Course
 
 KAPPA_MAX = 100.0  # a key more sensitive than this to its numbers loses more than two of the learner's digits
 LEARNER_PREFIX = "selftest-"  # the learner id of a seed's quiz draw
@@ -65,7 +65,7 @@ class Outcome:
 
 def seeds_for(count: int, course: Course | None = None) -> list[int]:
     """`count` seeds: the public one, the course's, then 1, 2, 3 ... (the same list every time)."""
-    from grader.course import PUBLIC_SEED
+    from grader.course_config import PUBLIC_SEED
 
     chosen = list(dict.fromkeys([PUBLIC_SEED] + ([course.seed] if course is not None and course.seed else [])))
     candidate = 1
@@ -116,7 +116,7 @@ class Watch:
             name, origin = self.names[(item, identity)]
             hidden = hidden - apart  # told apart at another input of the same seed
             function = self.function.get(item, item)
-            if apart and hidden and origin == "generated":  # grader.mutants' slips: said, never a failure
+            if apart and hidden and origin == "generated":  # grader.judging.mutants' slips: said, never a failure
                 weak.setdefault("generated", []).append(f"{item} '{name}'")
             elif apart and hidden:
                 for seed in sorted(hidden, key=lambda s: position.get(s, len(order))):
@@ -135,7 +135,7 @@ class Watch:
         if report is None:
             for item, said in weak.items():
                 if item == "generated":
-                    notes.append(f"{len(said)} slips generated from the references (grader.mutants) are told apart at "
+                    notes.append(f"{len(said)} slips generated from the references (grader.judging.mutants) are told apart at "
                                  f"some seeds and not at others, e.g. {', '.join(said[:3])}")
                 else:
                     notes.append(f"{item} does not tell apart {', '.join(said[:3])}" + (" ..." if len(said) > 3 else "")
@@ -203,7 +203,7 @@ def _draw_problems(chapter: str, question, key, values: dict[str, float], seed: 
     """What is wrong with one learner's draw of one question; every mistake weighed into `watch`."""
     if question.kind == "symbolic":
         return _symbolic_problems(question, key, values, seed, watch, item)
-    from grader.diagnose import generic
+    from grader.judging.diagnose import generic
     from grader.quiz import bank
     from grader.quiz.judge import right_numbers
     from grader.quiz.mistakes import entries, known_mistakes
@@ -286,7 +286,7 @@ def _symbolic_problems(question, key, values: dict[str, float], seed: int, watch
 def check_reference_answers(chapters: list[str], watch: Watch, seed: int) -> int:
     """The reference answers (solutions/answers, for learner `reference`) get every question's points; returns
     the number of questions judged."""
-    from grader.expected import ReferenceUnavailable, reference_function
+    from grader.judging.expected import ReferenceUnavailable, reference_function
     from grader.model import Status
     from grader.quiz import grade_quiz
 
@@ -320,13 +320,14 @@ def check_code(chapters: list[str], seeds: list[int], watch: Watch, course: Cour
                sandbox: str = "auto", generated: bool = False,
                progress: Callable[[int, int], None] | None = None) -> dict[str, int]:
     """The reference solutions graded at every seed, every check's comparisons watched (see the module's
-    docstring; `generated`: also the slips grader.mutants generates, about four times the time); returns what was
+    docstring; `generated`: also the slips grader.judging.mutants generates, about four times the time); returns what was
     counted."""
-    from grader import boundary, planning
+    from grader import boundary
     from grader import checks as check_registry
     from grader.boundary import Limits
+    from grader.core import planning
+    from grader.core.pipeline import switched_off
     from grader.model import Status
-    from grader.pipeline import switched_off
     from grader.submission import locate
 
     submission = locate(None, True)
@@ -372,13 +373,13 @@ def check_code(chapters: list[str], seeds: list[int], watch: Watch, course: Cour
 
 class _Watched:
     """A check's generator whose judging (the values sent into it) is watched: every comparison it makes then is
-    kept in `seen` (grader.compare.observing)."""
+    kept in `seen` (grader.judging.compare.observing)."""
 
     def __init__(self, generator, seen: list, generated: bool = False) -> None:
         self.generator, self.seen, self.generated = generator, seen, generated
 
     def send(self, value: object) -> object:
-        from grader import compare
+        from grader.judging import compare
 
         with compare.observing(lambda comparison: self.seen.append(_weighed(comparison, self.generated))):
             return self.generator.send(value)
@@ -388,12 +389,12 @@ class _Watched:
 
 
 def _weighed(comparison, generated: bool = False) -> list[tuple[str, str, str, bool]]:
-    """Every mistake one comparison (grader.compare.Comparison) could name, as (identity, name, origin, told apart):
+    """Every mistake one comparison (grader.judging.compare.Comparison) could name, as (identity, name, origin, told apart):
     told apart where its value differs from the right one beyond the comparison's tolerance (as compare_arrays
     widens it) in some entry, or is not finite. Worked out while the check judges: the slips generated from the
-    reference at the learner's call are known only then (grader.diagnose.generated)."""
-    from grader import diagnose
-    from grader.compare import SINGLE_PRECISION
+    reference at the learner's call are known only then (grader.judging.diagnose.generated)."""
+    from grader.judging import diagnose
+    from grader.judging.compare import SINGLE_PRECISION
 
     expected = np.asarray(comparison.expected, dtype=float)
     rtol, atol = comparison.rtol, comparison.atol
@@ -404,7 +405,7 @@ def _weighed(comparison, generated: bool = False) -> list[tuple[str, str, str, b
     candidates = [("known", m) for m in comparison.mistakes]
     if comparison.entries is not None:
         candidates += [("generic", m) for m in diagnose.generic(expected, comparison.entries)]
-    slips = getattr(diagnose, "generated", None) if generated else None  # grader.mutants' slips, where asked for
+    slips = getattr(diagnose, "generated", None) if generated else None  # grader.judging.mutants' slips, where asked for
     if slips is not None and comparison.source is not None:
         candidates += [("generated", m) for m in slips(comparison.source)]
     out = []

@@ -22,7 +22,7 @@ Each mutant has a stable key, a kind (its name, as reports count it) and one sen
 language generated from the mutation (what the slip does, never the reference code or the right
 formula). Instructor side only: it reads the references, so it is never imported where learner code
 runs (pyproject's import contracts), and a handout holds only the values the mutants gave at the
-checks' inputs, recorded by grader.expected, never a mutated source (grader.release scans for them).
+checks' inputs, recorded by grader.judging.expected, never a mutated source (grader.course.release scans for them).
 """
 
 from __future__ import annotations
@@ -595,7 +595,7 @@ def mutants(chapter: str, function: str) -> tuple[Mutant, ...]:
 
 def every_source() -> Iterator[str]:
     """The source of every mutant of every public function of every chapter's reference solution: what a
-    handout must never hold (grader.release's scan looks for them)."""
+    handout must never hold (grader.course.release's scan looks for them)."""
     for chapter, info in BY_ID.items():
         try:
             module = importlib.import_module(f"solutions.{info.module}")

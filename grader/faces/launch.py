@@ -18,13 +18,13 @@ _OTHER_COMMANDS = {"list", "quiz", "batch", "worker", "release", "gradescope", "
 
 
 def _prestart(args: list[str]) -> None:
-    """Start the learner's child for a command that grades, held in grader.prestart: behind the sandbox the door
+    """Start the learner's child for a command that grades, held in grader.faces.prestart: behind the sandbox the door
     chose for the last such command (grader.boundary.kept), with nothing else imported, else as it decides now."""
     if not args or args[0] in _OTHER_COMMANDS or any(a in ("--help", "-h") for a in args):
         return
     mode = "off" if "--no-sandbox" in args else "auto"
-    from grader import prestart
     from grader.boundary import kept
+    from grader.faces import prestart
 
     try:
         started = kept.start(mode)
@@ -73,12 +73,12 @@ def main() -> None:
     _prestart(sys.argv[1:])
     # matplotlib's import, the report's longest step, starts next on a first run (in the drawing process, forked
     # once numpy is imported here); where figures are kept, the command decides once it knows whether any has to
-    # be drawn (grader.cli)
+    # be drawn (grader.faces.cli)
     if _draws_figures(sys.argv[1:]) and not _figures_kept(sys.argv[1:]):
         from grader.render import drawer
 
         drawer.start()
-    from grader.cli import main as cli_main
+    from grader.faces.cli import main as cli_main
 
     gc.freeze()
     gc.enable()
@@ -90,7 +90,7 @@ def main() -> None:
     except SystemExit as exc:
         code = exc.code
     finally:
-        from grader import prestart
+        from grader.faces import prestart
 
         prestart.take("", None)  # stops a prestarted child nobody took
         if "grader.render.drawer" in sys.modules:  # its drawing process: stopped if unused, else waited for

@@ -3,7 +3,7 @@
 OUT gets the stubs and answer templates (`exercises/`), the grader as a wheel and a README for
 learners. The wheel is the grader package as it is, minus nothing it needs and plus what replaces
 the references: the expected value of every question the checks (and the report's plots) ask,
-recorded at the public seed (grader/data/expected/chNN.json, see grader.expected), the question
+recorded at the public seed (grader/data/expected/chNN.json, see grader.judging.expected), the question
 banks, and the course's public settings (grader/data/handout.json: public seed, quiz feedback,
 which checks are hidden). Reference solutions, the oracle, quiz keys (but practice keys of an
 immediate-feedback course), reference answers and the course seed never enter it; `scan` checks
@@ -24,11 +24,11 @@ import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from grader import course as courses
-from grader import expected
+from grader import course_config as courses
 from grader.chapters import CHAPTERS
+from grader.judging import expected
 
-GRADER_DIR = Path(__file__).resolve().parent
+GRADER_DIR = Path(__file__).resolve().parents[1]
 DISTRIBUTION = "jacobians-grader"
 DEPENDENCIES = ["numpy>=1.24", "click>=8.1", "pyyaml>=6.0", "sympy>=1.12", "jinja2>=3.1", "matplotlib>=3.7"]
 
@@ -55,8 +55,8 @@ def record(course: courses.Course) -> expected.Recording:
     """Plan every public check and plot of every chapter at the public seed with the live references,
     keeping each expected value they ask for (no learner code runs: planning needs none)."""
     from grader import checks as check_registry
-    from grader.planning import ChapterPlan, plots_of
-    from grader.pipeline import switched_off
+    from grader.core.pipeline import switched_off
+    from grader.core.planning import ChapterPlan, plots_of
 
     recording = expected.Recording(seed=course.public_seed)
     broken = []
@@ -75,7 +75,7 @@ def record(course: courses.Course) -> expected.Recording:
 def _hidden_ids(course: courses.Course, chapter: str) -> list[str]:
     """The ids of `chapter`'s checks the course hides (a check it leaves out altogether is not hidden)."""
     from grader import checks as check_registry
-    from grader.pipeline import switched_off
+    from grader.core.pipeline import switched_off
 
     known = {c.id for c in check_registry.load(chapter).checks}
     return [h.split("/", 1)[1] for h in sorted(course.hidden - switched_off(course, (chapter,)))
@@ -86,7 +86,7 @@ def hidden_summary(course: courses.Course) -> dict:
     """Per chapter: how many checks and points the handout leaves to the submission, and their ids."""
     from grader import checks as check_registry
 
-    out = {}  # the course's file named existing checks only (grader.course validates it, for every command)
+    out = {}  # the course's file named existing checks only (grader.course_config validates it, for every command)
     for info in CHAPTERS:
         ids = _hidden_ids(course, info.id)
         if ids:
@@ -155,8 +155,8 @@ def _version(stage: Path) -> str:
 
 
 # The handout's packages: the grader's own, every one (the instructor's also has the references and the keys).
-HANDOUT_PACKAGES = ("grader", "grader.boundary", "grader.checks", "grader.quiz", "grader.render",
-                    "grader.render.compiled")
+HANDOUT_PACKAGES = tuple(sorted(".".join(("grader", *p.parent.relative_to(GRADER_DIR).parts))
+                                for p in GRADER_DIR.rglob("__init__.py") if "__pycache__" not in p.parts))
 _PYPROJECT = """[build-system]
 requires = ["setuptools>=61"]
 build-backend = "setuptools.build_meta"
@@ -173,7 +173,7 @@ dependencies = {dependencies}
 notebook = ["ipython>=8", "nbformat>=5"]
 
 [project.scripts]
-grade = "grader.launch:main"
+grade = "grader.faces.launch:main"
 
 [tool.setuptools]
 packages = {packages}
@@ -463,7 +463,7 @@ def reference_secrets(project: Path | None = None) -> Secrets:
                     # shorter lines are too generic to identify a reference: x = np.asarray(x, dtype=float)
                     if len(squeezed) >= 32 and not squeezed.startswith(("import", "from", "if", "for", "else")):
                         lines.add(squeezed)
-    from grader import mutants
+    from grader.judging import mutants
 
     for source in mutants.every_source():  # every slip of a reference is as secret as the reference
         for body in _bodies(ast.parse(source)):

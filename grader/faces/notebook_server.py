@@ -1,4 +1,4 @@
-"""The resident grading process behind `%grade` (grader.magic): a process of its own beside the IPython
+"""The resident grading process behind `%grade` (grader.faces.magic): a process of its own beside the IPython
 kernel, so that the kernel imports nothing of the grader but a small client and never runs a check.
 
 It reads one JSON request per line on stdin (the `%grade` arguments, the kernel's working folder, the
@@ -39,7 +39,7 @@ class Server:
 
         for info in CHAPTERS:
             checks.load(info.id)
-        import grader.pipeline  # noqa: F401
+        import grader.core.pipeline  # noqa: F401
         import grader.render.text  # noqa: F401
 
         self.boundary(True).warm_up()
@@ -52,7 +52,7 @@ class Server:
         """Grade as `grade run` would with request["args"]; {"error": why} for arguments it cannot take."""
         import click
 
-        from grader import cli
+        from grader.faces import cli
 
         os.chdir(request.get("cwd") or ".")
         args = [str(a) for a in request.get("args", [])]
@@ -68,8 +68,8 @@ class Server:
     def _grade(self, options: dict, request: dict) -> dict:
         import click
 
-        from grader import cli
-        from grader.pipeline import Request, build_report
+        from grader.core.pipeline import Request, build_report
+        from grader.faces import cli
         from grader.render import text
 
         if options["watch"]:
@@ -191,7 +191,7 @@ def _unsaved(submission, chapter: str) -> str:
 
 
 def cli_submission(options: dict):
-    from grader import cli
+    from grader.faces import cli
 
     return cli.find_submission(options["submission_dir"], options["use_solutions"])
 

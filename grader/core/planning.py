@@ -1,5 +1,5 @@
 """Plan every check of a chapter (its calls, chosen at the seed) and judge what came back, in this process:
-the checks, the references' expected values, numpy. grader.grading runs the plans' calls in one child."""
+the checks, the references' expected values, numpy. grader.core.grading runs the plans' calls in one child."""
 
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Generator
 
-from grader import diagnose, expected
 from grader.boundary import ChapterRequest, ChapterRun
 from grader.boundary.wire import NOT_IMPLEMENTED, Call, Returned
 from grader.checks.base import ChapterChecks, Check, Context, Skip
-from grader.compare import Verdict
+from grader.judging import diagnose, expected
+from grader.judging.compare import Verdict
 from grader.model import ChapterResult, CheckResult, Status
 
 
@@ -83,7 +83,7 @@ def _start(name: str, body, ctx: Context, calls: list[Call], function: str = "")
 
 
 def _slips_lookup(pending: _Pending, values: list[Returned]):
-    """For grader.diagnose while the check judges: the generated mistakes at the call that returned a value, of
+    """For grader.judging.diagnose while the check judges: the generated mistakes at the call that returned a value, of
     the keys asked for (each asked of the backend once, the first time a comparison needs it)."""
     numbers = {id(v): i for i, v in enumerate(values) if i in (pending.own or {})}
     found: dict[int, dict[str, diagnose.Mistake | None]] = {}  # per call: key -> its mistake (None: says nothing)

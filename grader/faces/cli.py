@@ -1,4 +1,4 @@
-"""The `grade` command: a thin click layer over grader.grading and the renderers.
+"""The `grade` command: a thin click layer over grader.core.grading and the renderers.
 
     grade ch06 | grade 6 | grade all       grade code (and quizzes) of chapters
     grade list                             chapters, functions and points
@@ -15,8 +15,8 @@ import sys
 
 import click
 
-from grader import prestart
 from grader.chapters import CHAPTERS, ChapterInfo, resolve
+from grader.faces import prestart
 from grader.render import plural
 from grader.submission import Submission, SubmissionNotFound, locate
 from grader.system import trace
@@ -209,8 +209,9 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     if watch:
         _watch(submission, [c.id for c in picked], seed, learner, no_quiz, no_sandbox, verbose, functions)
         return
-    # the child may already run (grader.launch); else start it now, to overlap our imports below
-    from grader import boundary, memo
+    # the child may already run (grader.faces.launch); else start it now, to overlap our imports below
+    from grader import boundary
+    from grader.core import memo
 
     sandbox = "off" if no_sandbox else "auto"
     door = boundary.choose(sandbox, remember=True)
@@ -220,8 +221,8 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     if html_path is not None and _figures_likely_drawn(session, [c.id for c in picked], verdicts):
         from grader.render import drawer
 
-        drawing = drawer.start()  # before any thread (grader.launch may have started it already)
-        # The quiz is judged while the child runs the calls (grader.pipeline); without a drawing process,
+        drawing = drawer.start()  # before any thread (grader.faces.launch may have started it already)
+        # The quiz is judged while the child runs the calls (grader.core.pipeline); without a drawing process,
         # matplotlib is imported in a thread, which makes progress while grading waits on the child.
         if not drawing:
             import threading
@@ -229,7 +230,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
             from grader.render.figures import preload
 
             threading.Thread(target=preload, daemon=True).start()
-    from grader.pipeline import Request, build_report
+    from grader.core.pipeline import Request, build_report
 
     session.meanwhile.append(lambda: _renderer(output_format))  # its imports, while the child runs the calls
     request = Request(tuple(c.id for c in picked), seed, learner=learner, quiz=not no_quiz,
@@ -273,7 +274,7 @@ def _figures_likely_drawn(session, chapters: list[str], verdicts) -> bool:
     folder = figure_cache.default_folder()
     if verdicts is None or folder is None:
         return True
-    from grader.memo import key_of
+    from grader.core.memo import key_of
 
     files = key_of(session.prepared.files)
     return not all(verdicts.seen(c, files) and (folder / f"{c}.json").is_file() for c in chapters)
@@ -282,14 +283,15 @@ def _figures_likely_drawn(session, chapters: list[str], verdicts) -> bool:
 def _watch(submission: Submission, chapters: list[str], seed: int, learner: str | None, no_quiz: bool,
            no_sandbox: bool, verbose: bool, functions: tuple[str, ...] = ()) -> None:
     """`--watch`: a resident fork server (where the system has one) grades each saved chapter again
-    (grader.watch)."""
+    (grader.faces.watch)."""
     import time
 
-    from grader import boundary, watch
-    from grader.pipeline import Request
+    from grader import boundary
+    from grader.core.pipeline import Request
+    from grader.faces import watch
     from grader.render import text
 
-    prestart.take("", None)  # stops a child grader.launch started: the watch's come from its own boundary
+    prestart.take("", None)  # stops a child grader.faces.launch started: the watch's come from its own boundary
     door = boundary.choose("off" if no_sandbox else "auto", resident=True)
     watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz,
                                                           functions=functions), door)
@@ -313,12 +315,12 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
 
 def _seed_here(seed: int | None) -> int:
     """The seed to grade at: the public one unless given; a handout has check data for that one only."""
-    from grader import course
+    from grader import course_config
 
-    public = course.PUBLIC_SEED
+    public = course_config.PUBLIC_SEED
     if seed is None or seed == public:
         return public
-    if course.in_handout():
+    if course_config.in_handout():
         raise click.BadParameter(f"this handout grades at its public seed ({public}) only: its expected "
                                  "values were recorded there; other seeds are used when your submission is graded",
                                  param_hint="--seed")
@@ -327,16 +329,16 @@ def _seed_here(seed: int | None) -> int:
 
 def _instructor_course(config: str | None, command: str):
     """The instructor's course configuration; a usage error in a handout or for a broken file."""
-    from grader import course
+    from grader import course_config
 
-    if course.in_handout():
+    if course_config.in_handout():
         raise click.UsageError(f"{command} runs on the instructor's side, with the references; this is a learner's "
                                "handout")
-    from grader.pipeline import instructor_course
+    from grader.core.pipeline import instructor_course
 
     try:
         return instructor_course(config)
-    except course.CourseError as exc:
+    except course_config.CourseError as exc:
         raise click.BadParameter(str(exc), param_hint="--course") from None
 
 
@@ -399,10 +401,10 @@ def _emit(report, output_format: str, verbose: bool, isolation: str = "", shown:
 @click.option("--checks", "show_checks", is_flag=True, help="Also every check's id, points and what it checks.")
 def list_command(show_checks: bool) -> None:
     """List the chapters, their functions and points."""
-    from grader import checks, course
-    from grader.pipeline import hidden_ids, switched_off
+    from grader import checks, course_config
+    from grader.core.pipeline import hidden_ids, switched_off
 
-    the_course = course.here()
+    the_course = course_config.here()
     for info in CHAPTERS:
         chapter = checks.load(info.id)
         hidden, off = hidden_ids(the_course, (info.id,)), switched_off(the_course, (info.id,))
@@ -439,11 +441,11 @@ def quiz_command(chapters: tuple[str, ...], submission_dir: str | None, use_solu
         return
     report, _ = quiz_report([c.id for c in picked], submission.root, submission.package,
                             str(submission.root), learner)
-    from grader import course, provenance
-    from grader.pipeline import practice
+    from grader import course_config, provenance
+    from grader.core.pipeline import practice
     from grader.quiz import answers_dir, learner_id
 
-    the_course = course.here()
+    the_course = course_config.here()
     for chapter in report.chapters:
         if the_course.practice(chapter.chapter):
             practice(chapter)
@@ -470,7 +472,7 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
     GitHub Classroom workflow; no reference solution, quiz key or reference answer in any of it."""
     from pathlib import Path
 
-    from grader import release
+    from grader.course import release
 
     the_course = _instructor_course(course_file, "grade release")
     try:
@@ -481,7 +483,7 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
         raise click.ClickException(str(exc)) from None
     click.echo(release.describe(built))
     if not no_classroom:
-        from grader import classroom
+        from grader.course import classroom
 
         path = classroom.write_template(Path(out), built.wheel.name)
         click.echo(f"GitHub Classroom: {path} runs `grade classroom all` on every push of a learner's repository "
@@ -502,11 +504,11 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
     It will not pack without your learner id: your quiz numbers are drawn from it."""
     from pathlib import Path
 
-    from grader import submit
+    from grader.course import submit
+    from grader.ids import id_problem
     from grader.quiz import answers_dir, learner_id
     from grader.render import text
     from grader.safe_text import for_terminal
-    from grader.staging import id_problem
 
     submission = find_submission(submission_dir, False)
     answers = answers_dir(submission.root, submission.package)
@@ -556,7 +558,7 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
 
 def _learner_id_typed(typed: str) -> str:
     """A learner id typed at grade submit's prompt, or the reason it is not one (click asks again)."""
-    from grader.staging import id_problem
+    from grader.ids import id_problem
 
     chosen = typed.strip()
     problem = id_problem(chosen)
@@ -607,7 +609,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     import dataclasses
     from pathlib import Path
 
-    from grader import batch
+    from grader.course import batch
     from grader.safe_text import for_terminal
 
     picked = chapters_from(tuple(chapter_list.split(",")))
@@ -615,7 +617,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     if handout is not None:
         the_course = dataclasses.replace(the_course, current_handout=_handout_id(handout))
     if similarity:
-        from grader import similarity as similarities
+        from grader.course import similarity as similarities
 
         try:
             similarities._engine()
@@ -637,7 +639,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     except batch.NoSubmissions as exc:
         raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="SUBMISSIONS") from None
     except batch.InfrastructureError as exc:
-        if pool is not None:  # the cluster cannot grade (grader.cluster.ClusterError): the message says why
+        if pool is not None:  # the cluster cannot grade (grader.course.cluster.ClusterError): the message says why
             click.echo(f"grade batch: no learner was graded: {for_terminal(str(exc), one_line=True)}", err=True)
             sys.exit(EXIT_USAGE)
         click.echo(f"grade batch: no learner was graded: learner code cannot run here. "
@@ -680,8 +682,8 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
 
 
 def _cluster_pool(option: str | None, the_course, jobs: int | None):
-    """The pool grade batch grades through: None (this machine's, grader.batch.LocalPool), or a
-    grader.cluster.ClusterPool on the scheduler that --scheduler, else $DASK_SCHEDULER_ADDRESS, else the course
+    """The pool grade batch grades through: None (this machine's, grader.course.batch.LocalPool), or a
+    grader.course.cluster.ClusterPool on the scheduler that --scheduler, else $DASK_SCHEDULER_ADDRESS, else the course
     file's `scheduler:` names (`local`: this machine's)."""
     for address, origin in ((option, "--scheduler"), (os.environ.get("DASK_SCHEDULER_ADDRESS"), "DASK_SCHEDULER_ADDRESS"),
                             (the_course.scheduler, the_course.where("scheduler"))):
@@ -692,7 +694,7 @@ def _cluster_pool(option: str | None, the_course, jobs: int | None):
     if jobs is not None:
         raise click.UsageError(f"--jobs sizes this machine's pool, but the learners are graded on the cluster at {address} "
                                f"({origin}); pass --scheduler local to grade here")
-    from grader import cluster
+    from grader.course import cluster
     from grader.safe_text import for_terminal
 
     return cluster.ClusterPool(address.strip(), say=lambda line: click.echo(f"  {for_terminal(line, one_line=True)}",
@@ -711,7 +713,7 @@ def worker_command(scheduler: str, nworkers: int | None, no_sandbox: bool, dask_
     """Grade for `grade batch --scheduler SCHEDULER` on this machine: join the Dask scheduler as worker processes
     (`dask worker`; further options, e.g. --memory-limit 4GB, go to it). Refuses to start where learner code
     cannot run behind the sandbox or where this grader is not the running coordinator's version."""
-    from grader import cluster
+    from grader.course import cluster
     from grader.safe_text import for_terminal
 
     try:
@@ -746,7 +748,7 @@ def gradescope_command(out: str, course_file: str | None, chapter_list: str, lea
     results.json. It holds the references and keys: upload it to Gradescope, never hand it out."""
     from pathlib import Path
 
-    from grader import gradescope
+    from grader.course import gradescope
 
     picked = chapters_from(tuple(chapter_list.split(",")))
     the_course = _instructor_course(course_file, "grade gradescope")
@@ -777,7 +779,7 @@ def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use
     """Grade CHAPTER... for GitHub Classroom: every judged check with its own points, in the format its
     autograding reporter reads (the text report goes to standard error). Exits 0 whenever the results
     are written, whatever they say: the reporter gives the points."""
-    from grader import classroom
+    from grader.course import classroom
     from grader.render import lms, text
 
     picked = chapters_from(chapters)
@@ -790,7 +792,7 @@ def classroom_command(chapters: tuple[str, ...], submission_dir: str | None, use
     except BoundaryUnavailable as exc:
         raise click.UsageError(f"the sandbox is required and does not start here: {exc}") from None
     session = door.open_session(submission)
-    from grader.pipeline import Request, build_report
+    from grader.core.pipeline import Request, build_report
 
     try:
         report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=learner))
@@ -833,7 +835,7 @@ def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: s
     import json
     from pathlib import Path
 
-    from grader import batch, regrade
+    from grader.course import batch, regrade
     from grader.safe_text import for_terminal
 
     if apply_it and not (reason or "").strip():
@@ -894,7 +896,7 @@ def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: s
 @click.option("--quizzes", "quiz_dir", type=click.Path(exists=True, file_okay=False), default=None,
               help="Question banks and their keys to check, laid out as quizzes/ is (default: the grader's own).")
 @click.option("--no-code", is_flag=True, help="Check the quiz only (no reference code runs).")
-@click.option("--generated", is_flag=True, help="Also weigh the slips generated from the references (grader.mutants; "
+@click.option("--generated", is_flag=True, help="Also weigh the slips generated from the references (grader.judging.mutants; "
               "about four times the time): those told apart at some seeds only are listed as notes.")
 @click.option("--no-sandbox", is_flag=True, help="Run the reference code without bubblewrap even where it is installed.")
 def selftest_command(count: int | None, only: int | None, chapter_list: str, course_file: str | None,
@@ -908,7 +910,7 @@ def selftest_command(count: int | None, only: int | None, chapter_list: str, cou
     import time
     from pathlib import Path
 
-    from grader import selftest
+    from grader.course import selftest
     from grader.safe_text import for_terminal
 
     picked = [c.id for c in chapters_from(tuple(chapter_list.split(",")))]

@@ -1,5 +1,5 @@
-"""Grade chapters: plan every check's calls (grader.planning), run them in one child session, judge in this
-process; with a memo (grader.memo), a chapter whose child answered exactly as in a kept run is not planned or
+"""Grade chapters: plan every check's calls (grader.core.planning), run them in one child session, judge in this
+process; with a memo (grader.core.memo), a chapter whose child answered exactly as in a kept run is not planned or
 judged again, and neither the checks nor numpy are imported for it."""
 
 from __future__ import annotations
@@ -9,13 +9,13 @@ from typing import TYPE_CHECKING
 
 from grader.boundary import ChapterRequest, ChapterRun, Session
 from grader.chapters import BY_ID
-from grader.course import PUBLIC_SEED
+from grader.course_config import PUBLIC_SEED
 from grader.model import ChapterResult, Report, Status
 from grader.notebook import KERNEL, relocate
 
 if TYPE_CHECKING:
-    from grader.memo import Memo
-    from grader.planning import ChapterPlan
+    from grader.core.memo import Memo
+    from grader.core.planning import ChapterPlan
 
 DEFAULT_SEED = PUBLIC_SEED
 
@@ -49,7 +49,7 @@ def point_upstream(report: Report, builds_on: dict[str, dict]) -> None:
 
 def _plan(chapter_id: str, seed: int, with_plots: bool, exclude: frozenset[str]) -> ChapterPlan:
     from grader import checks as check_registry
-    from grader.planning import ChapterPlan, plots_of
+    from grader.core.planning import ChapterPlan, plots_of
 
     return ChapterPlan(check_registry.load(chapter_id), seed, plots_of(chapter_id) if with_plots else None, exclude)
 
@@ -74,7 +74,7 @@ def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
     """Grade `chapter_ids` of the session's submission, but the checks in `exclude` ("chNN/check_id");
     learner code runs only in the session's child. With `memo`, kept plans and verdicts (with their plot data)
     are reused where they were made from exactly this."""
-    from grader.memo import key_of
+    from grader.core.memo import key_of
 
     plans: dict[str, ChapterPlan] = {}
     plan_keys: dict[str, str | None] = {}

@@ -62,7 +62,7 @@ class Course:
     # whether a submission time in the learner's own archive manifest may decide a late penalty where the roster
     # gives none (`manifest_time: accept`; by default it may not: the learner's machine wrote it)
     accepts_manifest_time: bool = False
-    scheduler: str | None = None  # instructor side: the Dask scheduler grade batch grades on (grader.cluster)
+    scheduler: str | None = None  # instructor side: the Dask scheduler grade batch grades on (grader.course.cluster)
     lines: dict | None = field(default=None, compare=False, hash=False)  # setting -> the line of its file it is on
 
     def where(self, setting: str) -> str:

@@ -12,7 +12,7 @@ asks depends only on the seed and never on what a learner returned. Three backen
 Values come back in one normal form whatever the backend (floats, float64 arrays, tuples, lists,
 strings), so a check judges the same in the project and in a handout.
 
-The mistakes generated from the reference (grader.mutants) travel the same way: the values every
+The mistakes generated from the reference (grader.judging.mutants) travel the same way: the values every
 single slip of the reference gives at each call a check makes of its own function. Live computes them
 when a failing comparison first asks (once per call, kept in the memo), a recording computes them all
 while each check plans and writes them beside the expected values (grader/data/expected/chNN.mutants.json:
@@ -34,7 +34,7 @@ from typing import Callable, Iterator
 from grader.boundary.wire import Call
 from grader.chapters import BY_ID
 
-DATA_DIR = Path(__file__).resolve().parent / "data" / "expected"
+DATA_DIR = Path(__file__).resolve().parents[1] / "data" / "expected"
 ARG_RTOL, ARG_ATOL = 1e-9, 1e-12  # recorded arguments match despite last-bit differences of libm
 
 
@@ -309,7 +309,7 @@ _BACKEND: contextvars.ContextVar[object | None] = contextvars.ContextVar("backen
 
 def default_backend() -> Live | Replay:
     """The handout's replay in a handout, else the live references (the instructor's side)."""
-    from grader.course import in_handout
+    from grader.course_config import in_handout
 
     return Replay() if in_handout() else Live(memo=True)
 
@@ -367,16 +367,16 @@ def _default() -> Live | Replay:
 # ------------------------------------------------------------------------------ generated slips
 
 def slips_at(chapter: str, asked: Call, keys: set[str] | None = None) -> list[dict]:
-    """Every slip grader.mutants makes of the reference of `asked.function` (of `keys` only, if given), evaluated
+    """Every slip grader.judging.mutants makes of the reference of `asked.function` (of `keys` only, if given), evaluated
     at the call's own arguments (decoded as the learner's function gets them): [{key, name, help, value}] where
     the value differs from the reference's ([] where the references are not installed)."""
-    from grader import mutants
+    from grader.judging import mutants
 
     try:
         _, found = mutants.at_call(chapter, asked.function, mutants.arguments_of(asked), keys)
     except mutants.Unavailable:
         return []
-    from grader.diagnose import SKETCHED, Sketch
+    from grader.judging.diagnose import SKETCHED, Sketch
 
     out = []
     for mutant, value in found:
@@ -391,13 +391,13 @@ def slips_at(chapter: str, asked: Call, keys: set[str] | None = None) -> list[di
 
 
 def _encode_slip(value: object) -> object:
-    from grader.diagnose import Sketch
+    from grader.judging.diagnose import Sketch
 
     return encode(["$sketch", list(value.shape), list(value.values)] if isinstance(value, Sketch) else value)
 
 
 def _decode_slip(data: object) -> object:
-    from grader.diagnose import Sketch
+    from grader.judging.diagnose import Sketch
 
     value = decode(data)
     if isinstance(value, list) and len(value) == 3 and value[0] == "$sketch":

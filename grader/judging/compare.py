@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from grader.boundary.wire import RAISED, Returned
-from grader.diagnose import (
+from grader.judging.diagnose import (
     SMALL,
     Evidence,
     Mistake,
@@ -43,9 +43,9 @@ class Verdict:
     expected: object = None
     got: object = None
     details: dict = field(default_factory=dict)
-    mistake: Mistake | None = None  # the known mistake the wrong value matches (grader.diagnose)
+    mistake: Mistake | None = None  # the known mistake the wrong value matches (grader.judging.diagnose)
     help: str = ""  # what to change (the named mistake's sentence), apart from the message, which says what is wrong
-    # what this comparison says of each candidate mistake (grader.diagnose), worked out only when a check's failure
+    # what this comparison says of each candidate mistake (grader.judging.diagnose), worked out only when a check's failure
     # asks: evidence(None) of every candidate, evidence(ids) of those candidates only (the others not evaluated)
     evidence: Callable[[set[str] | None], Evidence] | None = field(default=None, repr=False, compare=False)
     explained: bool = field(default=False, init=False, repr=False, compare=False)  # its mistake is decided
@@ -85,7 +85,7 @@ class Verdict:
         self.mistake, self.help, self.explained = mistake, mistake.help if mistake is not None else "", True
 
     def explain(self) -> Verdict:
-        """Name what this failure is, if not done yet: the mistake its comparison explains (grader.diagnose)."""
+        """Name what this failure is, if not done yet: the mistake its comparison explains (grader.judging.diagnose)."""
         if not self.passed and not self.explained:
             self.name(explain([self.weigh()]))
         return self
@@ -115,7 +115,7 @@ class Entries:
 
 @dataclass(frozen=True)
 class Comparison:
-    """One comparison of values as a check made it, for whoever watches (grade selftest, grader.selftest): the right
+    """One comparison of values as a check made it, for whoever watches (grade selftest, grader.course.selftest): the right
     value, the tolerance as the check gave it and whether it is exact, the check's own mistakes, the names of the
     entries where the generic slips apply (None where the value is compared with something other than the expected
     value), and the learner's Returned whose value was compared (None where not known)."""
@@ -232,7 +232,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
                    expected_name: str = "expected", mistakes: tuple | list = (), exact: bool = False,
                    digits: int = 6, source: Returned | None = None) -> Verdict:
     """Values of two float arrays of the same shape, with the worst entries named (to `digits` significant
-    digits), and the mistake the wrong value matches (grader.diagnose) as the verdict's help. Any real dtype
+    digits), and the mistake the wrong value matches (grader.judging.diagnose) as the verdict's help. Any real dtype
     is a right answer (the contract): unless `exact` (a check telling apart values closer than that, e.g.
     finite-difference conventions), the tolerance is at least single-precision round-off relative to the
     result's scale, so that float32 (jax's and torch's default), there or anywhere upstream, is right.

@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 
+from grader.model import LearnerResult
+
 FILE_NAME = "gradebook.db"
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
@@ -40,38 +42,6 @@ CREATE TABLE IF NOT EXISTS changes (
     run INTEGER NOT NULL REFERENCES runs(id), learner TEXT NOT NULL, before REAL, after REAL, delta REAL,
     why TEXT NOT NULL, PRIMARY KEY (run, learner));
 """
-
-
-@dataclass
-class Result:
-    """One learner's line in a run: what the gradebooks export, and what changes.csv compares."""
-
-    learner: str
-    status: str  # graded, unreadable, error
-    message: str = ""
-    files_hash: str | None = None
-    content_hash: str | None = None
-    manifest_handout: str | None = None
-    submitted: str | None = None
-    grader: str | None = None
-    seed: int | None = None
-    raw_score: float | None = None
-    score: float | None = None
-    max_score: float | None = None
-    chapters: dict = field(default_factory=dict)  # chNN -> {"code", "quiz", "score", "max"}
-    adjustments: list = field(default_factory=list)  # Adjustment.to_dict()s
-    flags: list = field(default_factory=list)  # what an instructor should look at
-
-    @classmethod
-    def of(cls, learner: str, report, status: str = "graded", message: str = "", **extra) -> Result:
-        """The result of `report` (None: not graded) as the gradebooks show it."""
-        if report is None:
-            return cls(learner, status, message, **extra)
-        chapters = {c.chapter: {"code": c.score_of("code"), "quiz": c.score_of("quiz"), "score": c.score,
-                                "max": c.max_score} for c in report.chapters}
-        return cls(learner, status, message, grader=report.grader, seed=report.seed, raw_score=report.raw_score,
-                   score=report.score, max_score=report.max_score, chapters=chapters,
-                   adjustments=[a.to_dict() for a in report.all_adjustments()], **extra)
 
 
 def now() -> str:
@@ -106,12 +76,12 @@ class History:
                                                                       json.dumps(chapters), reason))
         return int(cursor.lastrowid)
 
-    def record(self, run: int, result: Result) -> None:
+    def record(self, run: int, result: LearnerResult) -> None:
         """Write (or rewrite) one learner's result of `run`, in a transaction of its own."""
         with self.db:
             self.record_in_transaction(run, result)
 
-    def results(self, run: int) -> dict[str, Result]:
+    def results(self, run: int) -> dict[str, LearnerResult]:
         rows = self.db.execute("SELECT * FROM results WHERE run = ?", (run,)).fetchall()
         out = {}
         for row in rows:
@@ -119,7 +89,7 @@ class History:
             data.pop("run")
             for key in ("chapters", "adjustments", "flags"):
                 data[key] = json.loads(data[key])
-            out[row["learner"]] = Result(**data)
+            out[row["learner"]] = LearnerResult(**data)
         return out
 
     def last_finished(self) -> int | None:
@@ -134,7 +104,7 @@ class History:
     def run_info(self, run: int) -> dict:
         return dict(self.db.execute("SELECT * FROM runs WHERE id = ?", (run,)).fetchone())
 
-    def finish(self, run: int, results: list[Result], overrides: list[tuple], changes: list[tuple],
+    def finish(self, run: int, results: list[LearnerResult], overrides: list[tuple], changes: list[tuple],
                gradebook_sha: str | None = None) -> None:
         """Close `run` in one transaction: every learner's final result, the overrides in force (each a tuple
         learner, target, points, factor, reason, who, source, what it changed), the changes, and the hash of
@@ -148,7 +118,7 @@ class History:
                                 [(run, *row) for row in changes])
             self.db.execute("UPDATE runs SET finished = ?, gradebook_sha = ? WHERE id = ?", (now(), gradebook_sha, run))
 
-    def record_in_transaction(self, run: int, result: Result) -> None:
+    def record_in_transaction(self, run: int, result: LearnerResult) -> None:
         self.db.execute(
             "INSERT OR REPLACE INTO results (run, learner, status, message, files_hash, content_hash, "
             "manifest_handout, submitted, grader, seed, raw_score, score, max_score, chapters, adjustments, flags) "
@@ -159,7 +129,7 @@ class History:
              json.dumps(result.flags)))
 
 
-def why_moved(before: Result, after: Result, before_run: dict, run: dict) -> str:
+def why_moved(before: LearnerResult, after: LearnerResult, before_run: dict, run: dict) -> str:
     """Why a learner's score moved between two runs: a regrade (its reason), a resubmission, the grader or
     handout, the seed or chapters, the overrides, the late penalty; each that differs, in words."""
     reasons = [f"regrade ({run['reason']})"] if run.get("reason") else []
@@ -190,7 +160,7 @@ def why_moved(before: Result, after: Result, before_run: dict, run: dict) -> str
     return "; ".join(reasons) or "graded again with the same files, grader and seed (a timeout or the machine's load?)"
 
 
-def changes(history: History, run: int, results: dict[str, Result]) -> list[tuple]:
+def changes(history: History, run: int, results: dict[str, LearnerResult]) -> list[tuple]:
     """(learner, before, after, delta, why) of each learner whose score moved since the last finished run
     (a learner first graded, or no longer graded, moved too)."""
     previous = history.previous(run)

@@ -1,5 +1,5 @@
-"""The learner's child that `grade` starts first (grader.launch), held until the command that grades with it takes
-it (grader.cli), or stopped."""
+"""The learner's child that `grade` starts first (grader.faces.launch), held until the command that grades with it takes
+it (grader.faces.cli), or stopped."""
 
 from __future__ import annotations
 
