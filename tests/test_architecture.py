@@ -122,3 +122,26 @@ def test_every_package_of_the_grader_is_installed_and_released():
     listed = set(tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["packages"])
     assert packages <= listed, sorted(packages - listed)
     assert packages - {"grader.quizzes", "grader.quizzes.keys"} == set(release.HANDOUT_PACKAGES)
+
+
+# Tests of the project as a whole, not of one module: its contracts, its platforms, the workflows it ships, the
+# JSON schemas (grader/schemas/, data) and the benchmarks.
+WHOLE_PROJECT_TESTS = {"test_architecture", "test_platforms", "test_workflows", "test_schemas", "test_benchmarks"}
+
+
+def test_the_tests_mirror_the_package_so_a_modules_tests_are_found_from_its_name():
+    """tests/<package>/test_<module>[_<topic>].py for grader/<package>/<module>.py (test_<package>... for the package
+    itself), tests/test_<module>[_<topic>].py for a module at grader's top: a module's tests are where its name says."""
+    misplaced = []
+    for path in sorted((REPO / "tests").rglob("test_*.py")):
+        folder = path.parent.relative_to(REPO / "tests")
+        package = REPO / "grader" / folder
+        if not (package / "__init__.py").is_file():
+            misplaced.append(f"{path.relative_to(REPO)}: grader/{folder.as_posix()} is no package")
+            continue
+        if folder == Path(".") and path.stem in WHOLE_PROJECT_TESTS:
+            continue
+        modules = {p.stem for p in package.glob("*.py") if p.stem != "__init__"} | {package.name}
+        if not any(path.stem == f"test_{m}" or path.stem.startswith(f"test_{m}_") for m in modules):
+            misplaced.append(f"{path.relative_to(REPO)}: names no module of grader/{folder.as_posix()}")
+    assert not misplaced, misplaced

@@ -13,7 +13,7 @@ r >= 0.5 and |p| <= 6, so <= 6e-8) plus eps * max|f| / h (rounding, about 3e-10)
 1e-7. FD_ATOL + FD_RTOL * |expected| = 1e-6 + 1e-6*|.| leaves a margin of 10x. A sign slip,
 transpose or missing term moves an entry by at least its own size, and the point generators keep
 every nonzero entry of every derivative above MIN_ENTRY = 1e-3 in size (and a square
-Jacobian that far from symmetric) (tests/test_tolerances.py checks both bounds
+Jacobian that far from symmetric) (tests/checks/test_derivatives_tolerances.py checks both bounds
 on every derivative and on such mutants), so no such error can hide under the tolerance.
 
 The exact derivative (add_exact_check). Where the chapter's point is the derivative, one check asks
@@ -58,7 +58,7 @@ SINGLE_PRECISION_ERROR = 1e-5  # at most this far off (relatively) and in float3
 SINGLE_PRECISION_TRACE = 1e-9  # at least this far off: float32 arithmetic somewhere upstream is possible too
 ROUNDED_DIGITS = 1e-3  # at most this far off (relatively): right to some digits only, as a finite difference is
 
-REGISTERED: list = []  # every Derivative given to add_derivative_checks (tests/test_tolerances.py)
+REGISTERED: list = []  # every Derivative given to add_derivative_checks (tests/checks/test_derivatives_tolerances.py)
 
 Case = tuple  # (point: np.ndarray of the differentiation variables, extra: tuple of other arguments)
 

@@ -12,7 +12,7 @@ between the bins beyond chance (a chi-square test of homogeneity, Fisher's exact
 bin would expect fewer than 5 learners in a cell; Holm's correction over every parameter tested in the
 class). The two tests are written out here (closed forms, exact for the tables they meet: a k x 2 table has
 k - 1 <= 3 degrees of freedom) instead of imported from scipy.stats, whose import alone takes seconds per batch;
-tests/test_item_statistics.py checks them against scipy.stats on random tables.
+tests/course/test_statistics.py checks them against scipy.stats on random tables.
 
 Computed for a class of MIN_LEARNERS or more; below RELIABLE_LEARNERS the numbers are rough and nothing is
 flagged. The rules that flag an item are the constants below, stated in the README. Reads only judged

@@ -3,7 +3,7 @@ the questions of `grade quiz chNN --show` with one learner's numbers and option 
 from the keys, the reference answers in solutions/answers/ (learner 'reference').
 
 Format hints show the syntax of an answer with examples in backticks; no example is a right or a
-known wrong answer of its question (tests/test_quiz_hints.py), and letter answers have no example
+known wrong answer of its question (tests/quiz/test_templates_hints.py), and letter answers have no example
 at all, since every letter is right for some learner.
 """
 

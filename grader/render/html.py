@@ -5,7 +5,7 @@ the child, grader/checks/plots.py), drawn elsewhere meanwhile where possible (gr
 from the figure cache (grader.render.figure_cache). jinja2 loads only here.
 
 `render_fragment` gives the same report for a notebook's output: a <div> with its own scoped style.
-Page and fragment meet WCAG 2.1 AA (tests/test_accessibility.py runs axe-core on them in chromium):
+Page and fragment meet WCAG 2.1 AA (tests/render/test_html_accessibility.py runs axe-core on them in chromium):
 contrast of 6.4:1 or more, verdicts as words and marks, and plots whose series differ by marker or
 line style and whose text alternative says in numbers what the learner's functions gave.
 """

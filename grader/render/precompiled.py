@@ -5,7 +5,7 @@ module (its bytecode kept by Python, about 1 ms) instead of compiling the page's
 
 A shipped module is used only if it was compiled from exactly this template's text, with these options and this
 jinja2 version (its DIGEST says so); otherwise the template is compiled in this process, as without it. After a
-template changes, `python -m grader.render.html` writes the modules again (tests/test_report.py fails until then)."""
+template changes, `python -m grader.render.html` writes the modules again (tests/render/test_html.py fails until then)."""
 
 from __future__ import annotations
 

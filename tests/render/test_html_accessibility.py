@@ -3,7 +3,7 @@ violation in the report file of the untouched stubs, of a right and of a partly 
 in the fragment a notebook shows inline (in a light and in a dark notebook page).
 
 axe-core comes from the `axe-playwright-python` wheel (the test extra), which ships axe.min.js; the
-browser is driven by playwright, as in tests/test_report.py.
+browser is driven by playwright, as in tests/render/test_html.py.
 """
 
 from __future__ import annotations

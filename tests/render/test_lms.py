@@ -28,7 +28,7 @@ jsonschema = pytest.importorskip("jsonschema")
 pandas = pytest.importorskip("pandas")
 etree = pytest.importorskip("lxml.etree")
 
-XSD = Path(__file__).resolve().parent / "fixtures" / "junit-10.xsd"
+XSD = Path(__file__).resolve().parents[1] / "fixtures" / "junit-10.xsd"
 HIDDEN = "ch06/H_rows_orthogonal"
 COURSE = f"course: lms-test\nseed: 5550123\nquiz_feedback: recorded\nhidden: [{HIDDEN}]\n"
 # submission folder -> learner id, as the roster gives them: formulas, Unicode, quotes, separators, and

@@ -132,7 +132,7 @@ def test_files_a_run_leaves_in_tmp_are_gone_for_the_next(server, submission_fact
 def test_learner_code_of_a_forked_run_has_the_collector_on_and_the_servers_objects_frozen(server, submission_factory):
     """The server imports with the collector off and freezes what it made before it forks; each run's child turns
     the collector on for learner code."""
-    from tests.test_process_boundary import GC_STATE
+    from tests.boundary.test_session import GC_STATE
 
     checks = grade_checks(submission_factory({"ch06_measurement": GC_STATE}), "ch06", seed=3, limits=LIMITS,
                           boundary=server)
@@ -162,7 +162,7 @@ def test_batch_hides_the_submissions_and_output_folders_wherever_they_are(tmp_pa
     from grader.course.batch import run_batch
     from tests.support import build_submission
 
-    base = Path(tempfile.mkdtemp(prefix=".pytest-batch-", dir=Path(__file__).resolve().parents[1]))
+    base = Path(tempfile.mkdtemp(prefix=".pytest-batch-", dir=Path(__file__).resolve().parents[2]))
     base.chmod(0o755)  # readable to anyone: only the sandbox's hiding can stop the thief
     try:
         submissions, out = base / "submissions", base / "out"

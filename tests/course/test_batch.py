@@ -211,7 +211,7 @@ def test_a_killed_run_loses_nothing_graded_and_never_leaves_half_files(submissio
         build_submission(submissions / f"extra{i}")
     proc = subprocess.Popen([sys.executable, "-m", "grader", "batch", str(submissions), "--out", str(out),
                              "--chapters", CHAPTERS, "--jobs", "1", "--no-html"],
-                            cwd=Path(__file__).resolve().parents[1], start_new_session=True,
+                            cwd=Path(__file__).resolve().parents[2], start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and len(list(out.glob("*/report.json"))) < 2:
@@ -329,7 +329,7 @@ def test_restaging_drops_files_the_learner_no_longer_submits(tmp_path):
 def test_on_a_terminal_the_batch_shows_a_progress_bar_with_eta(submissions, tmp_path):
     returncode, text = run_on_terminal([sys.executable, "-m", "grader", "batch", str(submissions), "--out",
                                         str(tmp_path / "out"), "--chapters", CHAPTERS, "--no-html", "--jobs", "1"],
-                                       Path(__file__).resolve().parents[1])
+                                       Path(__file__).resolve().parents[2])
     assert returncode in (0, 1), text
     assert "] 1/4" in text and "] 4/4" in text and "ETA" in text and "/s" in text, text
 

@@ -27,7 +27,7 @@ import pytest
 
 from tests.support import FakeBwrap, build_submission, hostile_module, replace_function
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 CHAPTERS = "ch03,ch05,ch06,ch07"
 COUNT = 60
 VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # grader.course.cluster.VERSION_KEY, as the scheduler keeps it

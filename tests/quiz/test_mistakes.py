@@ -194,7 +194,7 @@ def test_the_quiz_path_imports_no_sympy_for_diagnoses(tmp_path):
     code = ("import sys; from pathlib import Path; from grader.quiz import grade_quiz; "
             "names = [r.mistake for c in ('ch06', 'ch09') for r in grade_quiz(c, Path(sys.argv[1]), 'alice', 'x')[0] "
             "if r.got]; print(names, 'sympy' in sys.modules)")
-    repo = Path(__file__).resolve().parents[1]
+    repo = Path(__file__).resolve().parents[2]
     done = subprocess.run([sys.executable, "-c", code, str(folder)], capture_output=True, text=True, cwd=repo,
                           timeout=60)
     assert done.stdout.strip() == "['bearing over r', 'constant factor'] False", done.stderr[-2000:]
