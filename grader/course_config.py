@@ -168,13 +168,22 @@ def _key_lines(text: str) -> dict[str, int]:
 
 
 def _from_yaml(path: Path) -> Course:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CourseError(f"{path}: cannot be read ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise CourseError(f"{path}: not UTF-8 text ({exc})") from None
+    return from_text(text, str(path))
+
+
+def from_text(text: str, path: str) -> Course:
+    """The course file whose text is `text`, read from `path` (which messages name). CourseError for what cannot
+    be a course file."""
     import yaml
 
     try:
-        text = path.read_text(encoding="utf-8")
         data = yaml.safe_load(text) or {}
-    except OSError as exc:
-        raise CourseError(f"{path}: cannot be read ({exc.strerror})") from None
     except yaml.MarkedYAMLError as exc:
         line = exc.problem_mark.line + 1 if exc.problem_mark else "?"
         raise CourseError(f"{path}, line {line}: not valid YAML ({exc.problem})") from None

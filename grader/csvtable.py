@@ -14,11 +14,12 @@ class TableError(ValueError):
     """A file that cannot be read as the table it should be (the message names the file and line)."""
 
 
-def read_table(path: Path, required: tuple[str, ...]) -> list[tuple[int, dict[str, str]]]:
+def read_table(path: Path, required: tuple[str, ...], text: str | None = None) -> list[tuple[int, dict[str, str]]]:
     """(line, {column: cell}) of every row with something in it; the columns lower-cased and stripped, the
-    cells stripped. TableError when the file cannot be read or its header lacks a `required` column."""
+    cells stripped (`text`: the file's text as read before, e.g. as a run of the history kept it). TableError when
+    the file cannot be read or its header lacks a `required` column."""
     try:
-        text = path.read_bytes().decode("utf-8-sig")
+        text = path.read_bytes().decode("utf-8-sig") if text is None else text.removeprefix("\ufeff")
     except UnicodeDecodeError as exc:
         raise TableError(f"{path}: not UTF-8 text (byte {exc.start}); save it as CSV in UTF-8") from None
     except OSError as exc:

@@ -274,17 +274,37 @@ class Report:
         report = cls(data.get("submission", ""), chapters, seed=data.get("seed"), learner=data.get("learner"),
                      infrastructure=data.get("infrastructure") or "", grader=made.get("grader") or "",
                      handout=made.get("handout"), course=made.get("course"), learner_id=made.get("learner"))
-        by_id = {c.chapter: c for c in chapters}
-        for item in data.get("adjustments") or []:
+        report.attach(data.get("adjustments") or [])
+        return report
+
+    def attach(self, adjustments: list[dict]) -> None:
+        """Put adjustments (Adjustment.to_dict()s, as report.json and the history keep them) where they belong: on
+        their chapter (a check's or a chapter's), else on the total."""
+        by_id = {c.chapter: c for c in self.chapters}
+        for item in adjustments:
             adjustment = Adjustment(**item)
             chapter = by_id.get(adjustment.chapter or "")
             if chapter is None:
-                report.adjustments.append(adjustment)
+                self.adjustments.append(adjustment)
                 continue
             if adjustment.on_check:
                 check_id = adjustment.target.split("/", 1)[1]
                 adjustment.check_kind = next((c.kind for c in chapter.checks if c.id == check_id), "code")
             chapter.adjustments.append(adjustment)
+
+    def to_kept(self) -> dict:
+        """The report as judged, to be made again by from_kept (grader.core.memo, the history): to_dict() without
+        the adjustments, with each check's details, the plot data, what learner code printed and the flags."""
+        return dict(self.to_dict(), adjustments=[], chapters=[c.to_kept() for c in self.chapters],
+                    learner_output=self.learner_output, flags=list(self.flags), learner_unset=self.learner_unset)
+
+    @classmethod
+    def from_kept(cls, data: dict) -> Report:
+        """The report a to_kept() made."""
+        report = cls.from_dict(data)
+        report.learner_output = str(data.get("learner_output") or "")
+        report.flags = [str(f) for f in data.get("flags") or []]
+        report.learner_unset = bool(data.get("learner_unset"))
         return report
 
     def to_dict(self) -> dict:
@@ -324,6 +344,10 @@ class LearnerResult:
     chapters: dict = field(default_factory=dict)  # chNN -> {"code", "quiz", "score", "max"}
     adjustments: list = field(default_factory=list)  # Adjustment.to_dict()s
     flags: list = field(default_factory=list)  # what an instructor should look at
+    time_from: str | None = None  # where `submitted` came from: "roster" or "manifest" (None: no time used)
+    seconds: float = 0.0  # how long staging and grading took
+    manifest: dict | None = None  # what the archive's `grade submit` manifest said (grader.course.batch)
+    report: str | None = None  # the report as judged, by its hash in the history's reports
 
     @classmethod
     def of(cls, learner: str, report, status: str = "graded", message: str = "", **extra) -> LearnerResult:

@@ -97,18 +97,23 @@ def stamp(report, the_course=None, learner_id: str | None = None, version: str |
         report.learner_id = learner_id
 
 
-def footer(report, learner_sees: bool = False) -> str:
-    """The one line every text output ends with: what graded this, at which seed, for whom. Where the
-    learner sees it (`learner_sees`: Gradescope's output), a seed other than the public one is not shown: it is
-    the instructor's secret, or drawn from it."""
+def shown_seed(report, learner_sees: bool = False) -> str:
+    """The seed as an output shows it: where the learner sees it, a seed other than the public one is not shown (it
+    is the instructor's secret, or drawn from it)."""
     from grader.course_config import PUBLIC_SEED
 
+    if report.seed is None:
+        return "none"
+    if learner_sees and report.seed != PUBLIC_SEED:
+        return "not shown (the course's, or drawn from it)"
+    return str(report.seed)
+
+
+def footer(report, learner_sees: bool = False) -> str:
+    """The one line every text output ends with: what graded this, at which seed (shown_seed), for whom."""
     parts = [f"grader {report.grader or 'unknown'}", f"handout {report.handout or 'none'}"]
     if report.course:
         parts.append(f"course {report.course}")
-    seed = "none" if report.seed is None else report.seed
-    if learner_sees and report.seed not in (None, PUBLIC_SEED):
-        seed = "not shown (the course's, or drawn from it)"
-    parts.append(f"seed {seed}")
+    parts.append(f"seed {shown_seed(report, learner_sees)}")
     parts.append(f"learner {report.learner_id or 'not set'}")
     return "Graded by " + ", ".join(parts) + "."

@@ -300,7 +300,7 @@ def test_batch_with_two_workers_gives_linuxs_gradebook(route, submissions, batch
 
 def test_gradescope_says_who_learner_code_runs_as_without_uids(tmp_path):
     """Windows has no uids: the Gradescope runner neither asks for one nor grades without a barrier; it says why."""
-    code = "from grader.course import gradescope\nprint(gradescope._sandbox_state('auto')[1])\n"
+    code = "from grader.course import gradescope\nprint(gradescope._door('barrier')[1])\n"
     done = subprocess.run(python_code("windows", code), cwd=REPO, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr[-3000:]
     assert "no barrier stands here" in done.stdout and "no user ids" in done.stdout, done.stdout

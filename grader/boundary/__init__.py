@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from grader.boundary.door import (
         SANDBOX_MODES,
         Boundary,
+        SandboxMode,
         BoundaryUnavailable,
         Launch,
         choose,
@@ -30,7 +31,7 @@ if TYPE_CHECKING:
     from grader.boundary.session import ChapterRequest, ChapterRun, Limits, Session
 
 __all__ = ["SANDBOX_MODES", "Boundary", "BoundaryUnavailable", "ChapterRequest", "ChapterRun", "Launch", "Limits",
-           "Session", "choose", "first_child", "open_session"]
+           "SandboxMode", "Session", "choose", "first_child", "open_session"]
 _IN_SESSION = ("ChapterRequest", "ChapterRun", "Limits", "Session")  # the others are in door
 
 

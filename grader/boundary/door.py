@@ -26,9 +26,18 @@ from grader.boundary.session import ChildHandle, Limits, Session
 from grader.boundary.spawn import start_child
 from grader.system import fork_is_safe, process_groups
 
-# required: bubblewrap or nothing; barrier: bubblewrap, else a dropped uid, else nothing; auto: the best there is,
-# none included (the isolation line says so); off: none
-SANDBOX_MODES = ("auto", "barrier", "required", "off")
+
+class SandboxMode(str, enum.Enum):
+    """What a face asks of the barrier between learner code and the answers: the one vocabulary of every face and
+    every option (`grade --no-sandbox`, `grade batch`, `grade classroom --sandbox`, `grade gradescope --sandbox`)."""
+
+    AUTO = "auto"  # bubblewrap where it starts, else none (the isolation line says so): a learner's own machine
+    BARRIER = "barrier"  # bubblewrap, else, as root, a dropped uid that cannot read the answers, else nothing
+    REQUIRED = "required"  # bubblewrap, else nothing
+    OFF = "off"  # none, as the person grading asked
+
+
+SANDBOX_MODES = tuple(mode.value for mode in SandboxMode)
 
 
 class Launch(enum.Enum):
@@ -153,6 +162,7 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
     sandbox's command line for the next command's launcher, and uses the one kept (grader.boundary.kept)."""
     if sandbox not in SANDBOX_MODES:
         raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
+    sandbox = SandboxMode(sandbox).value
     forced = os.environ.get("GRADER_LAUNCHER", "")
     portable = forced == "portable" or not process_groups()
     if portable:

@@ -188,9 +188,7 @@ def kept_quiz_report(session: Session, request: Request, course: courses.Course,
     kept = memo.verdict("quiz", key)
     if kept is not None:
         try:
-            report = Report.from_dict(kept["report"])
-            report.flags, report.learner_unset = [str(f) for f in kept["flags"]], bool(kept["learner_unset"])
-            return report
+            return Report.from_kept(kept)
         except (KeyError, TypeError, ValueError):
             pass
     report = quiz_report(session, request, course, list(request.chapters))
@@ -199,8 +197,7 @@ def kept_quiz_report(session: Session, request: Request, course: courses.Course,
 
     if not any(c.message.startswith(OUT_OF_TIME) or UNDECIDED in c.message for ch in report.chapters
                for c in ch.checks):  # what time decided is judged again
-        kept = dict(report.to_dict(), chapters=[c.to_kept() for c in report.chapters])
-        memo.keep_verdict("quiz", key, {"report": kept, "flags": report.flags, "learner_unset": report.learner_unset})
+        memo.keep_verdict("quiz", key, report.to_kept())
     return report
 
 

@@ -22,7 +22,6 @@ from pathlib import Path
 
 WORKFLOW = Path(".github") / "workflows" / "classroom.yml"
 PYTHON_VERSION = "3.12"
-SANDBOX_MODES = ("auto", "required", "off")
 
 _TEMPLATE = """\
 # GitHub Classroom autograding for the lesson "Jacobians & Linearization", written by `grade release`.
@@ -89,18 +88,19 @@ def github_output_line(results_json: str) -> str:
 
 
 def sandbox_for(mode: str):
-    """(the grader.boundary.Boundary to grade in, the isolation line, why there is no sandbox or ""), after
-    starting one interpreter the way grading will (grader.boundary.choose with probe); BoundaryUnavailable
-    where `mode` is "required" and the sandbox does not start."""
-    from grader import boundary
+    """(the grader.core.transaction.Door to grade behind, the isolation line, why there is no sandbox or ""), after
+    starting one interpreter the way grading will (grader.boundary.choose with probe); BoundaryUnavailable where
+    `mode` is "required" and the sandbox does not start."""
+    from grader.core.transaction import Door
 
-    chosen = boundary.choose(mode, probe=True)
+    door = Door(mode, probe=True)
+    chosen = door.boundary
     if chosen.sandboxed:
-        return chosen, chosen.isolation, ""
+        return door, chosen.isolation, ""
     if chosen.turned_off:
-        return chosen, "isolation: no sandbox (turned off): learner code runs as you, with resource limits only", \
+        return door, "isolation: no sandbox (turned off): learner code runs as you, with resource limits only", \
             "turned off"
-    return chosen, (f"isolation: no sandbox: bubblewrap cannot run here ({chosen.why_not}); learner code runs as you, "
-                    "with resource limits only (on GitHub's runners: allow user namespaces, "
-                    "`sudo sysctl -w kernel.apparmor_restrict_unprivileged_userns=0`, as the release's workflow "
-                    "does)"), chosen.why_not
+    return door, (f"isolation: no sandbox: bubblewrap cannot run here ({chosen.why_not}); learner code runs as you, "
+                  "with resource limits only (on GitHub's runners: allow user namespaces, "
+                  "`sudo sysctl -w kernel.apparmor_restrict_unprivileged_userns=0`, as the release's workflow "
+                  "does)"), chosen.why_not

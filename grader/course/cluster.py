@@ -4,7 +4,7 @@ The coordinator (grader.course.batch.run_batch with a ClusterPool) stages each s
 local pool does and decides which are due (one whose files, grader, seed and settings hash as at its last
 grading is not graded again, so a coordinator killed mid-batch resumes with what is missing). Each due
 learner's staged files travel in a task keyed by the learner, its content hash and the grader's version. A
-worker grades it through the local pool's path (grader.course.batch.grade_staged: the one door, bubblewrap, a
+worker grades it through the local pool's path (grader.course.workers.grade_staged: the one transaction, bubblewrap, a
 resident fork server and every per-learner limit, on the worker's machine) and sends back plain data: the
 texts of the learner's files, with the worker's isolation line in its report.json. The coordinator alone
 writes into OUT, records the history and builds the class outputs (run_batch), so the outputs are those of a
@@ -26,7 +26,6 @@ Dask (the [cluster] extra: dask[distributed]) is imported here only, and this mo
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import socket
 import sys
@@ -36,7 +35,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
-from grader.course import batch
+from grader.course import workers
 
 VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # scheduler metadata: the running coordinator's grader
 TRIES = 3  # workers a learner is tried on, where learner code cannot run on one
@@ -46,7 +45,7 @@ INSTALL_HINT = "pip install 'jacobians-grader[cluster]' (Dask's distributed sche
 START_WITHOUT_SANDBOX = "GRADER_WORKER_WITHOUT_SANDBOX"
 
 
-class ClusterError(batch.InfrastructureError):
+class ClusterError(workers.InfrastructureError):
     """The cluster cannot grade (no scheduler answers, no worker joins, or none can run learner code): nobody is
     graded; the message says why and what to do."""
 
@@ -97,8 +96,8 @@ def sandbox_check(sandbox: str = "required") -> str:
     _as_a_local_worker()
     if sandbox not in _started:
         try:
-            _started[sandbox] = batch.choose_boundary(sandbox, probe=True).isolation
-        except batch.InfrastructureError as exc:
+            _started[sandbox] = workers.probe(sandbox)
+        except workers.InfrastructureError as exc:
             raise WorkerRefused(f"learner code cannot run on {socket.gethostname()}: {exc}. Install bubblewrap "
                                 "(`bwrap --version` must work, with user namespaces), or start the worker with "
                                 "--no-sandbox: it then grades only for `grade batch --no-sandbox`, learner code "
@@ -144,9 +143,9 @@ def worker_facts(sandbox: str, dask_worker=None) -> dict:
     return facts
 
 
-def grade_task(staged: batch.Staged, files: Mapping[str, bytes], grading: batch.Grading, version: str) -> dict:
+def grade_task(staged: workers.Staged, files: Mapping[str, bytes], grading: workers.Grading, version: str) -> dict:
     """One learner graded on this worker, from its staged `files` (relative path -> bytes), copied into a private
-    folder of this machine; returns plain data: {"graded": grader.course.batch.Graded's fields, "worker": its address},
+    folder of this machine; returns plain data: {"graded": grader.course.workers.Outcome, "worker": its address},
     or {"refused": why, "worker": ...} where this worker holds another grader `version` or learner code cannot
     run here (an infrastructure failure, never a grade: the coordinator tries another worker)."""
     from distributed import get_worker
@@ -158,8 +157,8 @@ def grade_task(staged: batch.Staged, files: Mapping[str, bytes], grading: batch.
     with _lock:
         _as_a_local_worker()
         try:
-            line = batch.worker_isolation(grading.sandbox)
-        except batch.InfrastructureError as exc:
+            line = workers.worker_isolation(grading.sandbox)
+        except workers.InfrastructureError as exc:
             return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
         with tempfile.TemporaryDirectory(prefix="grade-task-") as scratch:
             package = Path(scratch) / "exercises"
@@ -171,14 +170,14 @@ def grade_task(staged: batch.Staged, files: Mapping[str, bytes], grading: batch.
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_bytes(data)
             try:
-                graded = batch.grade_staged(staged, grading, root=Path(scratch),
-                                            batch_extra={"isolation": {"line": line, "worker": worker}})
-            except (OSError, batch.InfrastructureError) as exc:  # no child process starts here at all
+                graded = workers.grade_staged(staged, grading, root=Path(scratch),
+                                              extra={"isolation": {"line": line, "worker": worker}})
+            except (OSError, workers.InfrastructureError) as exc:  # no child process starts here at all
                 return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
-    return {"graded": dataclasses.asdict(graded), "worker": worker}
+    return {"graded": graded, "worker": worker}
 
 
-def task_key(staged: batch.Staged, version: str, attempt: int = 1) -> str:
+def task_key(staged: workers.Staged, version: str, attempt: int = 1) -> str:
     """The task's key: the learner, its content hash and the grader version (two coordinators asking for one
     grading at once share one task), and the try where learner code could not run on the worker of the last."""
     import hashlib
@@ -227,7 +226,7 @@ def become(command: list[str]) -> None:
 # ------------------------------------------------------------------------------------ the coordinator's side
 
 class ClusterPool:
-    """The pool run_batch grades through on a Dask cluster (see grader.course.batch.LocalPool): connected to the
+    """The pool run_batch grades through on a Dask cluster (see grader.course.workers.LocalPool): connected to the
     scheduler at `scheduler` (or through `client`, a distributed.Client made elsewhere, e.g. by Dask Gateway).
     `say` is given what the instructor should read as it happens (a worker that cannot grade)."""
 
@@ -298,17 +297,17 @@ class ClusterPool:
             return next(iter(lines))
         return "; ".join(f"on {', '.join(addresses)}: {line}" for line, addresses in sorted(lines.items()))
 
-    def grade(self, entries: list, out: Path, grading: batch.Grading,
-              overrides: Mapping[str, tuple]) -> Iterator[batch.Graded]:
+    def grade(self, entries: list, out: Path, grading: workers.Grading, overrides: Mapping[str, tuple],
+              previous: Mapping[str, str] = {}, force: bool = False) -> Iterator[workers.Outcome]:  # noqa: B006
         """Stage each learner here, send the due ones to the workers (a bounded number in flight, so that memory
         does not grow with the class) and yield each learner's outcome as it completes."""
         try:
-            yield from self._grade(entries, out, grading, overrides)
+            yield from self._grade(entries, out, grading, overrides, previous, force)
         finally:
             self.close()
 
-    def _grade(self, entries: list, out: Path, grading: batch.Grading,
-               overrides: Mapping[str, tuple]) -> Iterator[batch.Graded]:
+    def _grade(self, entries: list, out: Path, grading: workers.Grading, overrides: Mapping[str, tuple],
+               previous: Mapping[str, str], force: bool) -> Iterator[workers.Outcome]:
         distributed = _distributed()
         client = self.client or self._connect()
         flying: dict = {}  # future -> (staged, its files, attempt, the workers it could not run on)
@@ -324,7 +323,7 @@ class ClusterPool:
                 limit, counted = max(8, 4 * sum(client.nthreads().values())), time.monotonic()
             return limit
 
-        def send(staged: batch.Staged, files: dict, attempt: int, avoid: tuple[str, ...]) -> None:
+        def send(staged: workers.Staged, files: dict, attempt: int, avoid: tuple[str, ...]) -> None:
             others = [w for w in client.scheduler_info(n_workers=-1)["workers"] if w not in avoid] if avoid else None
             future = client.submit(grade_task, staged, files, grading, self.version, key=task_key(staged, self.version,
                                                                                                    attempt),
@@ -338,8 +337,9 @@ class ClusterPool:
                     entry = next(waiting, None)
                     if entry is None:
                         break
-                    staged = batch.stage_one(entry, out, grading, tuple(overrides.get(entry.learner, ())))
-                    if isinstance(staged, batch.Graded):
+                    staged = entry if isinstance(entry, workers.Staged) else workers.stage_one(
+                        entry, out, grading, tuple(overrides.get(entry.learner, ())), previous.get(entry.learner), force)
+                    if isinstance(staged, workers.Outcome):
                         yield staged
                     else:
                         send(staged, staged.files(), 1, ())
@@ -350,12 +350,12 @@ class ClusterPool:
                 try:
                     outcome = future.result()
                 except Exception as exc:  # noqa: BLE001  a lost task is that learner's error, never the batch's
-                    yield batch.Graded(staged.learner, "error", f"not graded on the cluster ({type(exc).__name__}: "
-                                                               f"{exc}); the next run grades it again")
+                    yield workers.Outcome(staged.learner, "error", f"not graded on the cluster ({type(exc).__name__}: "
+                                                                 f"{exc}); the next run grades it again", staged)
                     continue
                 finally:
                     future.release()
-                graded = batch.Graded(**outcome["graded"]) if "graded" in outcome else None
+                graded = outcome.get("graded")
                 why = outcome.get("refused") or (graded.infrastructure if graded else "")
                 if why and attempt < TRIES:
                     if outcome["worker"] not in told:
@@ -364,9 +364,9 @@ class ClusterPool:
                     send(staged, files, attempt + 1, (*avoid, outcome["worker"]))
                     continue
                 if graded is None:
-                    graded = batch.Graded(staged.learner, "error", f"not graded, on {attempt} workers, for a reason "
-                                                                   f"outside the learner's code: {why}; the next run "
-                                                                   "grades it again", infrastructure=why)
+                    graded = workers.Outcome(staged.learner, "error", f"not graded, on {attempt} workers, for a reason "
+                                                                     f"outside the learner's code: {why}; the next run "
+                                                                     "grades it again", staged, infrastructure=why)
                 yield graded
         finally:
             for future in flying:

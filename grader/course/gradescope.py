@@ -10,7 +10,7 @@ module reads back).
 
 Each run (`python -m grader.course.gradescope run /autograder`) grades /autograder/submission exactly as
 `grade batch` grades one learner: staged the same way, at the course seed, hidden checks included, in
-bubblewrap where it starts (else, with --sandbox auto, without it, and the output says so), and always
+bubblewrap where it starts (else, with --sandbox barrier, as an unprivileged user; the output says which), and always
 writes /autograder/results/results.json: a submission without chapter files gets score 0 and the reason;
 a failure outside the learner's code gets score 0 with "NOT GRADED", the reason, and a non-zero exit so
 the instructor sees the run failed. The learner id (their quiz numbers) comes from
@@ -37,7 +37,7 @@ from pathlib import Path
 SETTINGS_FILE = "autograder.json"
 COURSE_FILE = "course.yaml"
 LEARNER_FIELDS = ("email", "sid", "id", "name")
-SANDBOX_MODES = ("auto", "required", "none")
+SANDBOX_MODES = ("barrier", "required", "off")  # grader.boundary.SandboxMode: never a silent "auto" here
 PROJECT = Path(__file__).resolve().parents[2]
 
 
@@ -53,7 +53,7 @@ class Settings:
     chapters: list[str]
     learner_field: str = "email"
     time_budget: float = 60.0
-    sandbox: str = "auto"  # "auto": bubblewrap, else a dropped uid, else not graded; "required": bubblewrap; "none"
+    sandbox: str = "barrier"  # "barrier": bubblewrap, else a dropped uid, else not graded; "required": bubblewrap; "off"
     grader: str = ""  # the wheel's file name
     hidden: list[str] = field(default_factory=list)  # for the instructor's eyes; the run reads course.yaml
 
@@ -137,7 +137,7 @@ def _project_root() -> Path:
 
 
 def build(out: Path, course, *, chapters: list[str], learner_field: str = "email", time_budget: float = 60.0,
-          sandbox: str = "auto", force: bool = False) -> tuple[Path, Settings]:
+          sandbox: str = "barrier", force: bool = False) -> tuple[Path, Settings]:
     """Write the autograder zip to `out` (refused if it exists, unless `force`)."""
     from grader.course.release import ReleaseError, _build_wheel
 
@@ -158,11 +158,12 @@ def build(out: Path, course, *, chapters: list[str], learner_field: str = "email
         settings = Settings(course=course.id, chapters=list(chapters), learner_field=learner_field,
                             time_budget=float(time_budget), sandbox=sandbox, grader=wheel.name,
                             hidden=sorted(course.hidden))
-        described = {"auto": "bubblewrap where it starts on Gradescope's image, else learner code as an unprivileged "
-                             "user that cannot read the references, keys or course file, else nothing is graded",
+        described = {"barrier": "bubblewrap where it starts on Gradescope's image, else learner code as an "
+                                "unprivileged user that cannot read the references, keys or course file, else nothing "
+                                "is graded",
                      "required": "required: where bubblewrap does not start, nothing is graded",
-                     "none": "none: learner code runs without a barrier and can read the references and the course "
-                             "seed"}[sandbox]
+                     "off": "off: learner code runs without a barrier and can read the references and the course "
+                            "seed"}[sandbox]
         out.parent.mkdir(parents=True, exist_ok=True)
         partial = out.with_name(f".{out.name}.{os.getpid()}.tmp")
         with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as archive:
@@ -208,7 +209,7 @@ class Metadata:
 
     @classmethod
     def read(cls, root: Path, learner_field: str) -> Metadata:
-        from grader.course.overrides import parse_time
+        from grader.core.policy import parse_time
         from grader.ids import id_problem
 
         path = root / "submission_metadata.json"
@@ -296,27 +297,24 @@ def root_only(paths: list[Path], root: Path) -> None:
                 place.chmod(stat.S_IMODE(place.stat().st_mode) & ~0o077)
 
 
-_DOOR_MODES = {"auto": "barrier", "required": "required", "none": "off"}
+def _door(mode: str, hidden_paths: list[Path] = ()):
+    """(the door to grade behind or None, the isolation line, why not): "barrier" grades behind bubblewrap or, as root
+    where bubblewrap cannot start, as an unprivileged user that cannot read `hidden_paths`, and refuses to grade with
+    neither; "required" only behind bubblewrap; "off" without a barrier, as the instructor chose."""
+    from grader.boundary import BoundaryUnavailable
+    from grader.core.transaction import Door
 
-
-def _sandbox_state(mode: str, hidden_paths: list[Path] = ()) -> tuple[bool, str, str]:
-    """(whether to grade, the isolation line, why not): "auto" grades behind bubblewrap or, as root where
-    bubblewrap cannot start, as an unprivileged user that cannot read `hidden_paths`, and refuses to grade
-    with neither; "required" only behind bubblewrap; "none" without a barrier, as the instructor chose."""
-    from grader import boundary
-
+    door = Door(mode, probe=True, turned_off="by the autograder's settings (grade gradescope --sandbox off)",
+                secrets=tuple(str(p) for p in hidden_paths))
     try:
-        chosen = boundary.choose(_DOOR_MODES.get(mode, "barrier"), probe=True,
-                                 turned_off="by the autograder's settings (grade gradescope --sandbox none)",
-                                 secrets=tuple(str(p) for p in hidden_paths))
-    except boundary.BoundaryUnavailable as exc:
+        return door, door.isolation, ""
+    except BoundaryUnavailable as exc:
         reason = " ".join(str(exc).split())[:600]
-        fix = ("build the autograder with --sandbox auto, to grade as an unprivileged user where bubblewrap does not "
-               "start" if mode == "required" else "use an image where bubblewrap starts (user namespaces) and "
+        fix = ("build the autograder with --sandbox barrier, to grade as an unprivileged user where bubblewrap does "
+               "not start" if mode == "required" else "use an image where bubblewrap starts (user namespaces) and "
                "run the autograder as root, or, knowing that learner code can then read the references, build the "
-               "autograder with --sandbox none")
-        return False, f"isolation: no barrier stands here ({reason}); nothing is graded: {fix}", reason
-    return True, chosen.isolation, ""
+               "autograder with --sandbox off")
+        return None, f"isolation: no barrier stands here ({reason}); nothing is graded: {fix}", reason
 
 
 def _stage(root: Path, learner: str, staging: Path) -> Path:
@@ -367,8 +365,6 @@ def run(root: Path) -> int:
     try:
         settings = Settings.read(root / "source" / SETTINGS_FILE)
         from grader.core.pipeline import instructor_course
-        from grader.course import batch
-        from grader.course import overrides as adjusting
         from grader.course.staging import StagingError
         from grader.render import lms
 
@@ -377,9 +373,9 @@ def run(root: Path) -> int:
         hidden_paths = secrets(root)
         if hasattr(os, "geteuid") and os.geteuid() == 0:
             root_only(hidden_paths, root)  # before any learner code runs: readable by root only
-        grading, isolation, reason = _sandbox_state(settings.sandbox, hidden_paths)
+        door, isolation, reason = _door(settings.sandbox, hidden_paths)
         print(isolation, flush=True)
-        if not grading:
+        if door is None:
             _write(results, _not_graded(f"no barrier between learner code and the answers here: {reason}", started,
                                         heading, isolation))
             print(f"NOT GRADED: {for_terminal(isolation)}", flush=True)
@@ -405,25 +401,31 @@ def run(root: Path) -> int:
             attempt = ("at a seed of this submission's own, drawn from the course seed" if seed != course.grading_seed
                        else "at the course seed")
             heading = [f"Graded as {learner} ({metadata.source}), {attempt}."]
+            from grader.boundary import Limits
+            from grader.core.pipeline import Request
+            from grader.core.policy import Policy
+            from grader.core.transaction import grade_submission
             from grader.course import submit
+            from grader.course.workers import learner_yaml_warnings
+            from grader.submission import Submission
 
             manifest, packed = submit.check(staged / "exercises", learner, course.id, course.current_handout)
-            warnings = batch.learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
+            warnings = learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
+            late = metadata.deadline(course.late)
+            request = Request(tuple(settings.chapters), seed, learner=learner, label=learner,
+                              other_ids=(str(manifest.get("learner")),) if manifest else ())
             try:
-                report = batch._grade_report(staged, learner, list(settings.chapters), seed, False,
-                                             {"learner_seconds": settings.time_budget},
-                                             _DOOR_MODES.get(settings.sandbox, "barrier"), course,
-                                             other_ids=(str(manifest.get("learner")),) if manifest else (),
-                                             secrets=tuple(str(p) for p in hidden_paths))
+                graded = grade_submission(Submission(staged, "exercises"), request, door,
+                                          Policy((), late, metadata.created),
+                                          limits=Limits(learner_seconds=settings.time_budget), course=course)
             finally:
-                batch._drop_boundary()
+                door.close()
+            report = graded.report
             warnings += report.flags
         if report.infrastructure:
             _write(results, _not_graded(report.infrastructure, started, heading, isolation))
             print(f"NOT GRADED: {for_terminal(report.infrastructure)}", flush=True)
             return 1
-        late = metadata.deadline(course.late)
-        warnings += adjusting.apply(report, [], late, metadata.created)
         warnings += _late_notes(course.late, late, metadata)
         _write(results, lms.gradescope(report, hidden=course.hidden, execution_time=time.monotonic() - started,
                                        heading=heading, notes=warnings, isolation=isolation,
@@ -465,9 +467,11 @@ def check(root: Path) -> int:
     hidden_paths = secrets(root)
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         root_only(hidden_paths, root)
-    grading, isolation, _ = _sandbox_state(settings.sandbox, hidden_paths)
+    door, isolation, _ = _door(settings.sandbox, hidden_paths)
     print(isolation)
-    if not grading:
+    if door is not None:
+        door.close()
+    else:
         print("WARNING: no barrier between learner code and the answers stands on this image: no submission will be "
               "graded (every run says NOT GRADED, and why).")
     return 0

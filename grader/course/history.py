@@ -1,40 +1,47 @@
-"""The course's history: a SQLite gradebook (OUT/gradebook.db) of every `grade batch` run.
+"""The course's history: a SQLite gradebook (OUT/gradebook.db) of every run that recorded grades, from which every
+class output is rebuilt (grader.course.outputs).
 
 Tables:
-- runs: one per `grade batch` (and per `grade regrade --apply`, with its reason): when it started and
-  finished, the grader's version, the course's current handout, the course, the seed and the chapters.
-- results: per run and learner: status, message, the submission's hash (its files only) and the
-  content hash (files, grader, seed), the handout and time in its manifest, the score as graded, the
-  score with overrides and penalties, the adjustments, the flags, and the scores per chapter that
-  the gradebooks export.
-- overrides: per run, every row of overrides.csv in force, with what it changed.
+- runs: one per `grade batch` (and per `grade regrade --apply`, with its reason): when it started and finished,
+  the grader's version, the course's current handout, the course, the seed, the chapters, and everything it ran
+  with (grader.course.settings.RunSettings: the course file's and the overrides' text among them).
+- results: per run and learner: status, message, the submission's hash (its files only) and the content hash
+  (files, grader, seed, what judging depends on), the handout and time in its manifest and where the time came
+  from, the score as graded, the score with overrides and penalties, the adjustments, the flags, the scores per
+  chapter that the gradebooks export, and the report as judged (its hash in `reports`).
+- reports: each report as judged (grader.model.Report.to_kept, compressed), by its hash: a learner graded once
+  and unchanged since is kept once, whatever the runs.
+- overrides: per run, every row of overrides.csv in force, with what it did.
 - changes: per run, each learner whose score moved since the last finished run, by how much, and why.
 
-Every learner's result is written in its own transaction as soon as it is graded (an interrupted run
-keeps what it graded; its run stays unfinished, and the next run compares with the last finished one).
-gradebook.csv, changes.csv and the LMS gradebooks are exports of the run's results.
+Every learner's result is written in its own transaction as soon as it is graded (an interrupted run keeps what it
+graded; its run stays unfinished, and the next run compares with the last finished one, but reuses what was graded).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sqlite3
-from dataclasses import dataclass, field
+import zlib
+from dataclasses import fields
 from datetime import datetime, timezone
 from pathlib import Path
 
-from grader.model import LearnerResult
+from grader.course.settings import RunSettings
+from grader.model import LearnerResult, Report
 
 FILE_NAME = "gradebook.db"
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
     id INTEGER PRIMARY KEY, started TEXT NOT NULL, finished TEXT, grader TEXT NOT NULL, handout TEXT,
-    course TEXT, seed INTEGER, chapters TEXT NOT NULL, gradebook_sha TEXT, reason TEXT);
+    course TEXT, seed INTEGER, chapters TEXT NOT NULL, gradebook_sha TEXT, reason TEXT, settings TEXT);
 CREATE TABLE IF NOT EXISTS results (
     run INTEGER NOT NULL REFERENCES runs(id), learner TEXT NOT NULL, status TEXT NOT NULL, message TEXT NOT NULL,
     files_hash TEXT, content_hash TEXT, manifest_handout TEXT, submitted TEXT, grader TEXT, seed INTEGER,
     raw_score REAL, score REAL, max_score REAL, chapters TEXT NOT NULL, adjustments TEXT NOT NULL,
-    flags TEXT NOT NULL, PRIMARY KEY (run, learner));
+    flags TEXT NOT NULL, time_from TEXT, seconds REAL, manifest TEXT, report TEXT, PRIMARY KEY (run, learner));
+CREATE TABLE IF NOT EXISTS reports (sha TEXT PRIMARY KEY, data BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS overrides (
     run INTEGER NOT NULL REFERENCES runs(id), learner TEXT NOT NULL, target TEXT NOT NULL, points REAL, factor REAL,
     reason TEXT NOT NULL, who TEXT NOT NULL, source TEXT NOT NULL, applied TEXT NOT NULL);
@@ -42,10 +49,21 @@ CREATE TABLE IF NOT EXISTS changes (
     run INTEGER NOT NULL REFERENCES runs(id), learner TEXT NOT NULL, before REAL, after REAL, delta REAL,
     why TEXT NOT NULL, PRIMARY KEY (run, learner));
 """
+# columns a history written by an earlier grader lacks, added when it is opened
+_ADDED = {"runs": {"reason": "TEXT", "settings": "TEXT"},
+          "results": {"time_from": "TEXT", "seconds": "REAL", "manifest": "TEXT", "report": "TEXT"}}
+_JSON = ("chapters", "adjustments", "flags", "manifest")
+_COLUMNS = tuple(f.name for f in fields(LearnerResult))
 
 
 def now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def kept_report(report: Report) -> tuple[str, bytes]:
+    """(the hash, the compressed data) the history keeps `report` as judged by: Report.to_kept, without adjustments."""
+    text = json.dumps(report.to_kept(), sort_keys=True, ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
+    return hashlib.sha256(text).hexdigest(), zlib.compress(text, 1)
 
 
 class History:
@@ -56,41 +74,37 @@ class History:
         self.db = sqlite3.connect(path, timeout=30)
         self.db.row_factory = sqlite3.Row
         # write-ahead log: a commit survives the grader being killed without waiting for the disk each time
-        # (only a power cut may lose the last commits; report.json has them too)
+        # (only a power cut may lose the last commits)
         self.db.execute("PRAGMA journal_mode=WAL")
         self.db.execute("PRAGMA synchronous=NORMAL")
         with self.db:
             self.db.executescript(SCHEMA)
-            if "reason" not in {row["name"] for row in self.db.execute("PRAGMA table_info(runs)")}:
-                self.db.execute("ALTER TABLE runs ADD COLUMN reason TEXT")  # a history from before regrades
+            for table, columns in _ADDED.items():
+                have = {row["name"] for row in self.db.execute(f"PRAGMA table_info({table})")}
+                for name, kind in columns.items():
+                    if name not in have:
+                        self.db.execute(f"ALTER TABLE {table} ADD COLUMN {name} {kind}")
 
     def close(self) -> None:
         self.db.close()
 
-    def start(self, grader: str, handout: str | None, course: str | None, seed: int, chapters: list[str],
-              reason: str | None = None) -> int:
-        """A new run (its id); `reason`: why it was made, where it is no batch (`grade regrade --apply`)."""
+    def __enter__(self) -> History:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------------------------ runs
+
+    def start(self, settings: RunSettings, course: str | None = None, reason: str | None = None) -> int:
+        """A new run (its id) graded with `settings`; `reason`: why it was made, where it is no batch (`grade regrade
+        --apply`)."""
         with self.db:
-            cursor = self.db.execute("INSERT INTO runs (started, grader, handout, course, seed, chapters, reason) "
-                                     "VALUES (?, ?, ?, ?, ?, ?, ?)", (now(), grader, handout, course, seed,
-                                                                      json.dumps(chapters), reason))
+            cursor = self.db.execute(
+                "INSERT INTO runs (started, grader, handout, course, seed, chapters, reason, settings) "
+                "VALUES (?, ?, ?, ?, ?, ?, ?, ?)", (now(), settings.grader, settings.handout, course, settings.seed,
+                                                    json.dumps(list(settings.chapters)), reason, settings.to_json()))
         return int(cursor.lastrowid)
-
-    def record(self, run: int, result: LearnerResult) -> None:
-        """Write (or rewrite) one learner's result of `run`, in a transaction of its own."""
-        with self.db:
-            self.record_in_transaction(run, result)
-
-    def results(self, run: int) -> dict[str, LearnerResult]:
-        rows = self.db.execute("SELECT * FROM results WHERE run = ?", (run,)).fetchall()
-        out = {}
-        for row in rows:
-            data = dict(row)
-            data.pop("run")
-            for key in ("chapters", "adjustments", "flags"):
-                data[key] = json.loads(data[key])
-            out[row["learner"]] = LearnerResult(**data)
-        return out
 
     def last_finished(self) -> int | None:
         """The last finished run, or None."""
@@ -98,35 +112,89 @@ class History:
 
     def previous(self, run: int) -> int | None:
         """The last finished run before `run`."""
-        row = self.db.execute("SELECT max(id) FROM runs WHERE id < ? AND finished IS NOT NULL", (run,)).fetchone()
-        return row[0]
+        return self.db.execute("SELECT max(id) FROM runs WHERE id < ? AND finished IS NOT NULL", (run,)).fetchone()[0]
 
     def run_info(self, run: int) -> dict:
         return dict(self.db.execute("SELECT * FROM runs WHERE id = ?", (run,)).fetchone())
 
+    def settings(self, run: int) -> RunSettings | None:
+        """What `run` graded with (None for a run of a history from before settings were kept)."""
+        return RunSettings.from_json(self.run_info(run).get("settings"))
+
     def finish(self, run: int, results: list[LearnerResult], overrides: list[tuple], changes: list[tuple],
                gradebook_sha: str | None = None) -> None:
         """Close `run` in one transaction: every learner's final result, the overrides in force (each a tuple
-        learner, target, points, factor, reason, who, source, what it changed), the changes, and the hash of
-        the gradebook.csv exported from it (a later hand edit of that file is noticed)."""
+        learner, target, points, factor, reason, who, source, what it did), the changes, and the hash of the
+        gradebook.csv exported from it (a later hand edit of that file is noticed)."""
         with self.db:
             for result in results:
-                self.record_in_transaction(run, result)
+                self._write(run, result)
+            self.db.execute("DELETE FROM overrides WHERE run = ?", (run,))
             self.db.executemany("INSERT INTO overrides VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
                                 [(run, *row) for row in overrides])
             self.db.executemany("INSERT OR REPLACE INTO changes VALUES (?, ?, ?, ?, ?, ?)",
                                 [(run, *row) for row in changes])
             self.db.execute("UPDATE runs SET finished = ?, gradebook_sha = ? WHERE id = ?", (now(), gradebook_sha, run))
 
-    def record_in_transaction(self, run: int, result: LearnerResult) -> None:
-        self.db.execute(
-            "INSERT OR REPLACE INTO results (run, learner, status, message, files_hash, content_hash, "
-            "manifest_handout, submitted, grader, seed, raw_score, score, max_score, chapters, adjustments, flags) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-            (run, result.learner, result.status, result.message, result.files_hash, result.content_hash,
-             result.manifest_handout, result.submitted, result.grader, result.seed, result.raw_score,
-             result.score, result.max_score, json.dumps(result.chapters), json.dumps(result.adjustments),
-             json.dumps(result.flags)))
+    # ------------------------------------------------------------------------------------ results
+
+    def record(self, run: int, result: LearnerResult, judged: Report | None = None, kept: tuple | None = None) -> None:
+        """Write (or rewrite) one learner's result of `run`, in a transaction of its own, with the report as judged
+        (`judged`, or `kept`: its kept_report already made) where there is one."""
+        if judged is not None and kept is None:
+            kept = kept_report(judged)
+        with self.db:
+            if kept is not None:
+                result.report = kept[0]
+                self.db.execute("INSERT OR IGNORE INTO reports VALUES (?, ?)", kept)
+            self._write(run, result)
+
+    def _write(self, run: int, result: LearnerResult) -> None:
+        values = [getattr(result, name) for name in _COLUMNS]
+        values = [json.dumps(v) if name in _JSON else v for name, v in zip(_COLUMNS, values)]
+        self.db.execute(f"INSERT OR REPLACE INTO results (run, {', '.join(_COLUMNS)}) VALUES "
+                        f"(?, {', '.join('?' * len(_COLUMNS))})", (run, *values))
+
+    def results(self, run: int) -> dict[str, LearnerResult]:
+        """Every learner's result of `run`, in the order they were recorded."""
+        rows = self.db.execute("SELECT * FROM results WHERE run = ? ORDER BY rowid", (run,)).fetchall()
+        return {row["learner"]: _result(row) for row in rows}
+
+    def judged(self, sha: str | None) -> Report | None:
+        """The report as judged that the history keeps by `sha` (None for none)."""
+        if not sha:
+            return None
+        row = self.db.execute("SELECT data FROM reports WHERE sha = ?", (sha,)).fetchone()
+        if row is None:
+            return None
+        return Report.from_kept(json.loads(zlib.decompress(row["data"]).decode("utf-8", "surrogatepass")))
+
+    def report(self, result: LearnerResult) -> Report | None:
+        """`result`'s report as every output shows it: as judged, with its adjustments (None: not graded)."""
+        report = self.judged(result.report) if result.status == "graded" else None
+        if report is not None:
+            report.attach(result.adjustments)
+        return report
+
+    def before(self) -> tuple[dict[str, LearnerResult], dict[str, LearnerResult]]:
+        """Of every learner any run recorded (an interrupted one too): (their latest result with a report, which a new
+        run need not grade again where the content hash is the same; their latest result of all, which their files
+        show)."""
+        kept, latest = {}, {}
+        for row in self.db.execute("SELECT * FROM results ORDER BY run"):
+            result = latest[row["learner"]] = _result(row)
+            if result.status == "graded" and result.report and result.content_hash:
+                kept[row["learner"]] = result
+        return kept, latest
+
+
+def _result(row: sqlite3.Row) -> LearnerResult:
+    data = {name: row[name] for name in _COLUMNS}
+    for name in _JSON:
+        data[name] = json.loads(data[name]) if data[name] is not None else ({} if name == "chapters" else None if
+                                                                             name == "manifest" else [])
+    data["seconds"] = data["seconds"] or 0.0
+    return LearnerResult(**data)
 
 
 def why_moved(before: LearnerResult, after: LearnerResult, before_run: dict, run: dict) -> str:
@@ -154,7 +222,7 @@ def why_moved(before: LearnerResult, after: LearnerResult, before_run: dict, run
         reasons.append("; ".join(said) or "overrides changed")
     late = [[a for a in result.adjustments if a["kind"] == "late"] for result in (before, after)]
     if late[0] != late[1]:
-        reasons.append("late penalty: " + (late[1][0]["reason"] if late[1] else "none now"))
+        reasons.append("late penalty: " + ("; ".join(a["reason"] for a in late[1]) if late[1] else "none now"))
     if before.status != after.status:
         reasons.append(f"{before.status} -> {after.status}" + (f" ({after.message})" if after.message else ""))
     return "; ".join(reasons) or "graded again with the same files, grader and seed (a timeout or the machine's load?)"

@@ -1,7 +1,8 @@
-"""Overrides and late penalties: what changes a learner's points after grading, and why.
+"""overrides.csv: what an instructor changes of a learner's points after grading, and why. Read here; applied by
+grader.core.policy.apply_policy, the one place overrides and the late penalty are applied.
 
-`overrides.csv` (beside grade batch's outputs, or --overrides FILE) has one row per change, with the
-columns `learner`, `target`, `points` or `factor`, `reason` and `who`:
+`overrides.csv` (beside grade batch's outputs, or --overrides FILE) has one row per change, with the columns
+`learner`, `target`, `points` or `factor`, `reason` and `who`:
 
     learner,target,points,factor,reason,who
     ann,ch06/H_worked_example,2,,regrade request: the sign convention was ambiguous,bo
@@ -9,59 +10,34 @@ columns `learner`, `target`, `points` or `factor`, `reason` and `who`:
     dee,late,,0,accommodation: extension to Friday,the instructor
     eve,total,-3,,penalty agreed with the learner,bo
 
-`target` is a check (chNN/check_id, its stable id as every output shows it), a chapter (chNN), the
-total (`total` or empty), or `late` (the late penalty). `points` are added (negative ones taken
-away); a `factor` multiplies (the late penalty's share, for `late`: 0 waives it). A check stays within
-0 and its maximum, a chapter and the total at 0 or more. Rows apply in file order, checks first, then
-chapters, the total, and the late penalty last. A row that cannot be applied is reported with its
-file and line, and the others still apply. The file is read on every `grade batch`, so an override
-stays until its row is removed, and grade batch's history (gradebook.db) keeps every one it applied.
+`target` is a check (chNN/check_id, its stable id as every output shows it), a chapter (chNN), the total (`total`
+or empty), or `late` (the late penalty). A row that cannot be applied is reported with its file and line, and the
+others still apply. The file is read on every `grade batch`, so an override stays until its row is removed, and
+the history (gradebook.db) keeps every one with what it did.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from datetime import datetime, timezone
 from pathlib import Path
 
+from grader.core.policy import Override
 from grader.csvtable import TableError, read_table
-from grader.model import Adjustment, Report
 
 COLUMNS = ("learner", "target", "points", "factor", "reason", "who")
-_ORDER = {"check": 0, "chapter": 1, "total": 2, "late": 3}
 
 
-@dataclass(frozen=True)
-class Override:
-    learner: str
-    target: str  # "ch06/H_worked_example", "ch06", "total" or "late"
-    points: float | None
-    factor: float | None
-    reason: str
-    who: str
-    source: str  # "overrides.csv, line 3"
-
-    @property
-    def level(self) -> str:
-        if self.target == "late":
-            return "late"
-        if "/" in self.target:
-            return "check"
-        return "chapter" if self.target.startswith("ch") else "total"
-
-    def key(self) -> tuple:
-        """What identifies it in the history: who it is for, what it changes, how and why."""
-        return (self.learner, self.target, self.points, self.factor, self.reason, self.who)
+class OverridesError(ValueError):
+    """An overrides file that cannot be read at all (its header, its encoding); the message names the file."""
 
 
-def read(path: Path) -> tuple[list[Override], list[str]]:
-    """The overrides in `path` and a message (file and line) for every row that cannot be one; no file:
-    nothing. TableError for a file that cannot be read at all (its header, its encoding)."""
-    if not path.is_file():
+def read(path: Path, text: str | None = None) -> tuple[list[Override], list[str]]:
+    """The overrides in `path` (or in `text`, the file as a run read it) and a message (file and line) for every row
+    that cannot be one; no file: nothing. TableError for a file that cannot be read at all."""
+    if text is None and not path.is_file():
         return [], []
     overrides, problems = [], []
-    for line, row in read_table(path, ("learner", "reason")):
+    for line, row in read_table(path, ("learner", "reason"), text):
         where = f"{path.name}, line {line}"
         target = row.get("target", "").strip() or "total"
         points, factor = row.get("points", ""), row.get("factor", "")
@@ -95,72 +71,66 @@ def read(path: Path) -> tuple[list[Override], list[str]]:
     return overrides, problems
 
 
-def _changed(value: float, override: Override, high: float | None = None) -> float:
-    """The change `override` makes to `value`, kept within 0 and `high`."""
-    new = value * override.factor if override.factor is not None else value + override.points
-    new = max(0.0, new if high is None else min(high, new))
-    return new - value
+def in_force(path: Path, learners: list[str], chapters: list[str], text: str | None = None) -> tuple[list[Override],
+                                                                                                   list[str]]:
+    """The rows of the overrides file at `path` (or its `text`, as a run read it) that can apply to these `learners`
+    graded on these `chapters`, and a message (file and line) for each that cannot: an unknown learner, check or
+    chapter, more points than its target holds. OverridesError for a file that cannot be read at all."""
+    from grader import checks as check_registry
 
-
-def apply(report: Report, overrides: list[Override], late=None, submitted: datetime | None = None) -> list[str]:
-    """Put on `report` the adjustments its `overrides` (this learner's rows) and the course's late penalty
-    (`late`, grader.course_config.Late, for a submission made at `submitted`) make, replacing any it had. Returns
-    a message for each override that could not be applied (no such check or chapter here)."""
-    for chapter in report.chapters:
-        chapter.adjustments = []
-    report.adjustments = []
-    problems = []
-    chapters = {c.chapter: c for c in report.chapters}
-    late_factor = 1.0
-    for override in sorted(overrides, key=lambda o: _ORDER[o.level]):
-        adjustment = dict(reason=override.reason, who=override.who, source=override.source, target=override.target)
-        if override.level == "late":
-            late_factor *= override.factor
-            continue
-        if override.level == "check":
-            chapter_id, check_id = override.target.split("/", 1)
-            chapter = chapters.get(chapter_id)
-            check = next((c for c in chapter.checks if c.id == check_id), None) if chapter else None
-            if check is None:
-                problems.append(f"{override.source}: {override.target} is not a check graded for {override.learner} "
-                                "(`grade list --checks` shows the ids); row not applied")
-                continue
-            current = check.points + sum(a.points for a in chapter.adjustments if a.target == override.target)
-            chapter.adjustments.append(Adjustment(points=_changed(current, override, check.max_points),
-                                                  check_kind=check.kind, **adjustment))
-        elif override.level == "chapter":
-            chapter = chapters.get(override.target)
-            if chapter is None:
-                problems.append(f"{override.source}: {override.target} is not a chapter graded here; row not applied")
-                continue
-            chapter.adjustments.append(Adjustment(points=_changed(chapter.score, override), **adjustment))
-        else:
-            report.adjustments.append(Adjustment(points=_changed(report.score, override), **adjustment))
-    if late is not None and submitted is not None:
-        share, days = late.fraction(submitted)
-        share *= late_factor
-        if share > 0:
-            waived = "" if late_factor == 1 else f", {late_factor:g} of it by override"
-            report.adjustments.append(Adjustment(
-                target="total", points=-share * report.score, kind="late", source="the course config",
-                reason=(f"{days} day{'s' * (days != 1)} late (submitted {_shown(submitted)}, deadline "
-                        f"{_shown(late.deadline)}): -{100 * share:g}%{waived}")))
-    return problems
-
-
-def _shown(moment: datetime) -> str:
-    return moment.astimezone(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-
-
-def parse_time(text: str) -> datetime | None:
-    """A submission time as rosters and manifests write it (ISO 8601; without a zone, UTC), or None."""
-    if not text:
-        return None
     try:
-        moment = datetime.fromisoformat(text.strip().replace("Z", "+00:00"))
-    except ValueError:
-        return None
-    return moment if moment.tzinfo else moment.replace(tzinfo=timezone.utc)
+        rows, problems = read(path, text)
+    except TableError as exc:
+        raise OverridesError(str(exc)) from None
+    known = set(learners)
+    usable = []
+    for row in rows:
+        chapter = row.target.split("/", 1)[0]
+        if row.learner not in known:
+            problems.append(f"{row.source}: no learner {row.learner!r} in this batch; row not applied")
+        elif row.level in ("check", "chapter") and chapter not in chapters:
+            problems.append(f"{row.source}: {chapter} is not graded in this batch (--chapters); row not applied")
+        elif row.level == "check" and row.target.split("/", 1)[1] not in {c.id for c in
+                                                                          check_registry.load(chapter).checks}:
+            problems.append(f"{row.source}: {row.target} is not a check of {chapter} (`grade list --checks` shows "
+                            "the ids; a quiz question is quiz_<its id>); row not applied")
+        elif row.points is not None and abs(row.points) > _most_points(row, chapters):
+            problems.append(f"{row.source}: {row.points:g} points is more than {row.target} can move "
+                            f"(at most {_most_points(row, chapters):g}); row not applied")
+        else:
+            usable.append(row)
+    return usable, problems
 
 
-__all__ = ["Override", "TableError", "apply", "read", "parse_time", "COLUMNS"]
+def by_learner(rows: list[Override]) -> dict[str, tuple[Override, ...]]:
+    """Each learner's rows, in the file's order."""
+    found: dict[str, list[Override]] = {}
+    for row in rows:
+        found.setdefault(row.learner, []).append(row)
+    return {learner: tuple(rows) for learner, rows in found.items()}
+
+
+def _most_points(row: Override, chapters: list[str]) -> float:
+    """The most points an override of `row.target` can add or take: its check's, its chapter's code (the quiz's
+    questions are not known here: an override of a chapter may also move its quiz, so its quiz's too, at most the
+    whole course), or the whole batch's."""
+    from grader import checks as check_registry
+    from grader.quiz import bank
+
+    def quiz(chapter: str) -> float:
+        try:
+            return sum(q.points for q in bank.questions(chapter))
+        except (OSError, ValueError):
+            return 0.0
+
+    if row.level == "check":
+        chapter, check_id = row.target.split("/", 1)
+        if check_id.startswith("quiz_"):
+            return next((q.points for q in bank.questions(chapter) if f"quiz_{q.id}" == check_id), 0.0)
+        return next(c.points for c in check_registry.load(chapter).checks if c.id == check_id)
+    if row.level == "chapter":
+        return check_registry.load(row.target).max_score + quiz(row.target)
+    return sum(check_registry.load(c).max_score + quiz(c) for c in chapters)
+
+
+__all__ = ["COLUMNS", "Override", "OverridesError", "TableError", "by_learner", "in_force", "read"]

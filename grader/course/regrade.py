@@ -1,15 +1,16 @@
-"""`grade regrade OUT`: grade a batch's stored submissions again with today's grader and course file, and say whose
-grade would change, check by check, before anything changes.
+"""`grade regrade OUT`: grade a batch's stored submissions again with today's grader, and say whose grade would change,
+check by check, before anything changes.
 
 The stored submissions are the staged copies grade batch keeps (OUT/.staging/<folder>/exercises: exactly the files
-it graded). Each learner graded in the batch's last finished run (grader.course.history) is graded again at that run's
-seed and chapters, behind the sandbox as a batch grades, with the overrides (OUT/overrides.csv) and the late
-penalty applied as a batch applies them, and compared with what that run recorded: the score (the gradebook's)
-and every check's verdict and points (its report.json). The learners that move are printed and written into
-OUT/regrade.csv (learner, old_score, new_score, checks_changed, why); nothing else is written. With `apply`
-(and a reason) the new grades become a run of the history that carries the reason, the moved learners'
-report.json, results.json and report.html are rewritten, and the class outputs are rebuilt from it (grade batch's
-rebuild: gradebook.csv, changes.csv, which says "regrade (the reason)", junit.xml, the summary).
+it graded). Each learner graded in the batch's last finished run (grader.course.history) is graded again through
+the one transaction, behind the sandbox as a batch grades, with what that run graded with (its settings: the course
+file's and the overrides' text as read then, its seed and chapters) unless another course file or overrides file is
+named (--course, --overrides: each difference is listed), and compared with what that run recorded: the score, the
+adjustments and every check's verdict and points. The learners that move are printed and written into
+OUT/regrade.csv (learner, old_score, new_score, checks_changed, why); nothing else is written. With `apply` (and a
+reason) the new grades become a run of the history that carries the reason and the settings it graded with, the
+moved learners' files are written again, and every class output is rebuilt from the history
+(grader.course.outputs.rebuild).
 """
 
 from __future__ import annotations
@@ -17,16 +18,21 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
+import zlib
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from grader.course.staging import STAGING, folder_name
+from grader.boundary import SandboxMode
+from grader.course import history as histories
+from grader.course import outputs
+from grader.course.overrides import by_learner, in_force
+from grader.course.settings import RunSettings, Source, differences
+from grader.course.workers import Grading, LocalPool, Outcome, staged_again
+from grader.files import write_atomically
 from grader.model import Report, points_text, rounded_points
-from grader.safe_text import for_csv, json_text
+from grader.safe_text import for_csv
 
 if TYPE_CHECKING:
     from grader.course_config import Course
@@ -42,77 +48,49 @@ class RegradeError(ValueError):
 @dataclass
 class Moved:
     """One learner compared: their score as the run recorded it and as graded today, the checks whose verdict or
-    points changed (in words), and why in one line. `new_score` None: could not be graded again."""
+    points changed (in words), whether the adjustments changed, and why in one line. `new_score` None: could not be
+    graded again."""
 
     learner: str
     old_score: float | None
     new_score: float | None
     checks: list[str] = field(default_factory=list)  # stable ids
     why: str = ""
+    adjusted: bool = False  # the overrides or the late penalty made other adjustments
 
     @property
     def moves(self) -> bool:
-        return self.new_score is None or self.new_score != self.old_score or bool(self.checks)
+        return self.new_score is None or self.new_score != self.old_score or bool(self.checks) or self.adjusted
 
 
 @dataclass
 class Regrade:
-    """What a regrade found: the run it regraded (its id and data), every learner compared, the learners it could
-    not regrade (no stored submission), the overrides that could not apply, today's grader version, and (after
+    """What a regrade found: the run it regraded (its id and data), the settings it graded with and how they differ
+    from the run's, every learner compared, the learners it could not regrade (no stored submission), the overrides
+    that could not apply, notes, today's grader version and the isolation line; each learner's outcome; and (after
     apply) the run that recorded it."""
 
     run: int
     run_info: dict
+    settings: RunSettings
+    differences: list[str]
     compared: list[Moved]
     left_out: dict[str, str]
     override_problems: list[str]
-    grader: str
+    notes: list[str]
     isolation: str
-    reports: dict[str, Report] = field(default_factory=dict, repr=False)
+    outcomes: dict[str, Outcome] = field(default_factory=dict, repr=False)
+    rows: list = field(default_factory=list, repr=False)
+    course: Course | None = None
     recorded: int | None = None
 
     @property
     def moved(self) -> list[Moved]:
         return [m for m in self.compared if m.moves]
 
-
-@dataclass(frozen=True)
-class _Task:
-    """One learner to grade again (plain data: it travels to a worker process)."""
-
-    learner: str
-    root: str
-    chapters: tuple[str, ...]
-    seed: int
-    limits: dict
-    sandbox: str
-    course: Course | None
-    overrides: tuple
-    submitted: str
-    other_ids: tuple[str, ...]
-
-
-def _grade(task: _Task) -> tuple[str, Report | None, str]:
-    """(learner, their report graded again with overrides and late penalty applied, or None and why not), in a
-    worker process: the learner's code behind the boundary grade batch grades behind."""
-    from grader.course import batch
-    from grader.course import overrides as adjusting
-
-    report = batch._grade_report(Path(task.root), task.learner, list(task.chapters), task.seed, False,
-                                 dict(task.limits), task.sandbox, task.course, other_ids=task.other_ids)
-    if report.infrastructure:
-        return task.learner, None, f"not graded, twice, for a reason outside the learner's code: {report.infrastructure}"
-    adjusting.apply(report, list(task.overrides), task.course.late if task.course else None,
-                    adjusting.parse_time(task.submitted))
-    return task.learner, report, ""
-
-
-def _report_json(out: Path, learner: str) -> dict | None:
-    try:
-        data = json.loads((out / folder_name(learner) / "report.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
+    @property
+    def grader(self) -> str:
+        return self.settings.grader
 
 
 def _verdicts(report: Report) -> dict[str, tuple[str, float]]:
@@ -141,64 +119,91 @@ def compare(learner: str, old_score: float | None, old: Report | None, new: Repo
             said.append(f"{key} {verdict} ({has - had:+g})")
     if old is not None and old.grader != new.grader and (changed or new.score != old_score):
         said.append(f"grader {old.grader or 'unknown'} -> {new.grader}")
-    if old is not None and [a.to_dict() for a in old.all_adjustments()] != [a.to_dict() for a in new.all_adjustments()]:
+    adjusted = old is not None and ([a.to_dict() for a in old.all_adjustments()]
+                                    != [a.to_dict() for a in new.all_adjustments()])
+    if adjusted:
         said.append("overrides or late penalty changed: " + ("; ".join(a.describe() for a in new.all_adjustments())
                                                              or "none now"))
-    return Moved(learner, old_score, new.score, changed, "; ".join(said))
+    return Moved(learner, old_score, new.score, changed, "; ".join(said), adjusted)
 
 
-def regrade(out: Path, course: Course | None, *, jobs: int | None = None, sandboxed: bool = True,
-            overrides: Path | None = None, limits: dict | None = None,
-            progress: Callable[[int, int], None] | None = None) -> Regrade:
-    """Grade every learner graded in OUT's last finished run again (today's grader, `course`), at its seed and
-    chapters, with `overrides` (default OUT/overrides.csv) and the late penalty, and compare. Writes nothing.
-    RegradeError where OUT holds no finished run; grader.course.batch.InfrastructureError where learner code cannot
-    run here; grader.course.staging.RosterError for an overrides file that cannot be read."""
+def regrade(out: Path, course: Course | None = None, *, overrides: Path | None = None, jobs: int | None = None,
+            sandboxed: bool = True, time_budget: float | None = None,
+            progress: Callable[[int, int], None] | None = None, pool=None) -> Regrade:
+    """Grade every learner graded in OUT's last finished run again (today's grader), with that run's settings but
+    for a course file (`course`) or an overrides file (`overrides`) named here, and compare. Writes nothing.
+    RegradeError where OUT holds no finished run; grader.course.workers.InfrastructureError where learner code
+    cannot run here; grader.course.overrides.OverridesError for an overrides file that cannot be read."""
     from grader import provenance
-    from grader.course import batch
-    from grader.course import history as histories
+    from grader.course_config import CourseError
 
     if not (out / histories.FILE_NAME).is_file():
         raise RegradeError(f"{out} holds no {histories.FILE_NAME}: regrade a folder `grade batch --out` wrote")
-    history = histories.History(out / histories.FILE_NAME)
-    try:
+    with histories.History(out / histories.FILE_NAME) as history:
         run = history.last_finished()
         if run is None:
             raise RegradeError(f"{out / histories.FILE_NAME} has no finished run yet: let `grade batch` finish first")
-        info, results = history.run_info(run), history.results(run)
-    finally:
-        history.close()
-    chapters = json.loads(info["chapters"])
-    graded = sorted(learner for learner, result in results.items() if result.status == "graded")
-    rows, problems = batch.read_overrides(overrides or out / "overrides.csv", graded, chapters)
-    isolation = batch.choose_boundary("required" if sandboxed else "off", probe=True).isolation
-    tasks, left_out, old = [], {}, {}
+        info, results, before = history.run_info(run), history.results(run), history.settings(run)
+        old = {learner: history.report(result) for learner, result in results.items() if result.status == "graded"}
+    notes = []
+    if before is None:  # a history from a grader that kept no settings: the course file and overrides of today
+        notes.append(f"run {run} kept no record of what it graded with (an earlier grader's history): graded with "
+                     "the course file and the overrides file as they are now")
+        before = RunSettings(tuple(json.loads(info["chapters"])), int(info["seed"]), "the run",
+                             Source.read(Path(course.source)) if course and course.source else Source(),
+                             Source.read(out / "overrides.csv"), handout=info["handout"], grader=info["grader"])
+    overrides_path = overrides or Path(before.overrides.path or out / "overrides.csv")
+    settings = before.with_(
+        course=Source.read(Path(course.source)) if course is not None and course.source else before.course,
+        overrides=Source.read(overrides) if overrides is not None else before.overrides,
+        handout=course.current_handout if course is not None else before.handout,
+        time_budget=time_budget if time_budget is not None else before.time_budget,
+        sandbox=(SandboxMode.REQUIRED if sandboxed else SandboxMode.OFF).value, grader=provenance.grader_version())
+    if overrides is None and (out / "overrides.csv").is_file() and not before.overrides.path:
+        notes.append(f"{out / 'overrides.csv'} is there, but run {run} read no overrides: `--overrides "
+                     f"{out / 'overrides.csv'}` grades with it")
+    elif overrides is None and before.overrides.path and Source.read(Path(before.overrides.path)) != before.overrides:
+        notes.append(f"{before.overrides.path} changed since run {run} read it: graded with the rows as run {run} read "
+                     f"them; `--overrides {before.overrides.path}` grades with the file as it is now")
+    try:
+        the_course = course if course is not None else settings.course_file()
+    except CourseError as exc:
+        raise RegradeError(f"run {run}'s course file cannot be read again ({exc}): name one with --course") from None
+    chapters = list(settings.chapters)
+    graded = [learner for learner, result in results.items() if result.status == "graded"]
+    rows, problems = (in_force(overrides_path, graded, chapters, text=settings.overrides.text)
+                      if settings.overrides.text is not None else ([], []))
+    rows_of = by_learner(rows)
+    tasks, left_out = [], {}
     for learner in graded:
-        root = out / STAGING / folder_name(learner)
-        data = _report_json(out, learner)
-        if not (root / "exercises").is_dir() or data is None:
-            left_out[learner] = ("its stored submission is gone (OUT/.staging)" if data is not None
-                                 else "its report.json cannot be read")
-            continue
-        old[learner] = Report.from_dict(data)
-        manifest = (data.get("batch") or {}).get("manifest") or {}
-        tasks.append(_Task(learner, str(root), tuple(chapters), int(info["seed"]), dict(limits or {}),
-                           "required" if sandboxed else "off", course,
-                           tuple(r for r in rows if r.learner == learner), results[learner].submitted or "",
-                           (str(manifest["learner"]),) if manifest.get("learner") else ()))
-    compared, reports = [], {}
-    with ProcessPoolExecutor(max_workers=max(1, min(jobs or os.cpu_count() or 1, len(tasks) or 1))) as pool:
-        for done, (learner, report, why_not) in enumerate(pool.map(_grade, tasks), 1):
-            compared.append(compare(learner, results[learner].score, old[learner], report, why_not))
-            if report is not None:
-                reports[learner] = report
-            if progress is not None:
-                progress(done, len(tasks))
-    return Regrade(run, info, compared, left_out, problems, provenance.grader_version(), isolation, reports)
+        staged = staged_again(out, learner, results[learner], the_course, rows_of.get(learner, ()))
+        if staged is None:
+            left_out[learner] = "its stored submission is gone (OUT/.staging)"
+        else:
+            tasks.append(staged)
+    grading = Grading(tuple(chapters), settings.seed, settings.html, settings.plots,
+                      {"learner_seconds": settings.time_budget}, settings.sandbox,
+                      frozenset(the_course.hidden) if the_course else frozenset(), the_course, render=False)
+    pool = pool or LocalPool(jobs)
+    isolation = pool.isolation(settings.sandbox)
+    compared, found = [], {}
+    for done, outcome in enumerate(pool.grade(tasks, out, grading, rows_of, force=True), 1):
+        new = None
+        if outcome.status == "graded":
+            new = Report.from_kept(json.loads(zlib.decompress(outcome.kept[1]).decode("utf-8", "surrogatepass")))
+            new.attach(outcome.adjustments)
+        learner = outcome.learner
+        found[learner] = outcome
+        compared.append(compare(learner, results[learner].score, old.get(learner), new, outcome.message))
+        if progress is not None:
+            progress(done, len(tasks))
+    compared.sort(key=lambda m: graded.index(m.learner))
+    return Regrade(run, info, settings, differences(before, settings), compared, left_out, problems, notes, isolation,
+                   found, rows, the_course)
 
 
 def csv_text(found: Regrade) -> str:
-    """regrade.csv: a row per learner whose grade or any check's verdict would move."""
+    """regrade.csv: a row per learner whose grade, any check's verdict or adjustments would move."""
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     writer.writerow(COLUMNS)
@@ -209,53 +214,37 @@ def csv_text(found: Regrade) -> str:
 
 
 def write_csv(out: Path, found: Regrade) -> Path:
-    from grader.course.batch import write_atomically
-
     path = out / CSV_NAME
     write_atomically(path, csv_text(found))
     return path
 
 
-def apply(out: Path, found: Regrade, course: Course | None, reason: str, overrides: Path | None = None) -> int:
-    """Record the regrade as a run of the history with `reason`: the moved learners' report.json, results.json and
-    report.html (where it was written) rewritten, every other learner of the regraded run kept as it was, and the
-    class outputs rebuilt from the new run. Returns the run's id."""
-    from grader.course import batch
-    from grader.course import history as histories
-    from grader.render import lms
+def apply(out: Path, found: Regrade, reason: str) -> int:
+    """Record the regrade as a run of the history with `reason` and the settings it graded with: the moved
+    learners' new results (their files written again), every other learner of the regraded run kept as it was,
+    and every class output rebuilt from the new run. Returns the run's id."""
+    from grader.course.batch import Recorder
 
-    chapters = json.loads(found.run_info["chapters"])
-    for moved in found.moved:
-        report = found.reports.get(moved.learner)
-        if report is None:  # could not be graded again: its last grade stays
-            continue
-        folder = out / folder_name(moved.learner)
-        kept = (_report_json(out, moved.learner) or {}).get("batch") or {}
-        kept.pop("hash", None)  # the next grade batch grades it again, with whatever grader it has then
-        data = {**report.to_dict(), "batch": kept}
-        batch.write_atomically(folder / "results.json", lms.gradescope(
-            report, hidden=course.hidden if course else frozenset(), heading=[f"Graded as {moved.learner}."],
-            notes=[str(w) for w in kept.get("warnings") or []]))
-        if (folder / "report.html").is_file():
-            from grader.render import html as html_renderer
-
-            batch.write_atomically(folder / "report.html", html_renderer.render(report, draw_here=True))
-        batch.write_atomically(folder / "report.json", json_text(data) + "\n")
-    history = histories.History(out / histories.FILE_NAME)
-    before = history.results(found.run)
-    learners = list(before)
-    statuses = {learner: result.status for learner, result in before.items()}
-    messages = {learner: result.message for learner, result in before.items()}
-    collected = batch.ClassOutputs(out, learners, statuses, messages, chapters)
-    rows, problems = batch.read_overrides(overrides or out / "overrides.csv", learners, chapters)
-    try:
-        run = history.start(found.grader, course.current_handout if course else found.run_info["handout"],
-                            course.id if course else found.run_info["course"], int(found.run_info["seed"]),
-                            chapters, reason=reason)
-        batch.rebuild(out, history, run, chapters, collected, isolation=found.isolation, overrides=rows,
-                      override_problems=problems, deadline=bool(course and course.late))
-    finally:
-        collected.close()
-        history.close()
+    moved = {m.learner for m in found.moved if m.new_score is not None}
+    with histories.History(out / histories.FILE_NAME) as history:
+        before = history.results(found.run)
+        kept, latest = history.before()
+        run = history.start(found.settings, found.course.id if found.course else found.run_info["course"],
+                            reason=reason)
+        grading = Grading(tuple(found.settings.chapters), found.settings.seed, found.settings.html,
+                          found.settings.plots, {}, found.settings.sandbox,
+                          frozenset(found.course.hidden) if found.course else frozenset(), found.course)
+        recorder = Recorder(out, history, run, grading, kept, latest)
+        for learner, result in before.items():
+            if learner in moved:
+                recorder.record(found.outcomes[learner])
+            else:
+                history.record(run, result)
+        said = {(learner, source): text for learner, outcome in found.outcomes.items() if learner not in moved
+                for source, _, text in outcome.outcomes}
+        said.update(recorder.outcomes)
+        graded = {learner for learner, result in before.items() if result.status == "graded"}
+        outputs.rebuild(out, history, run, found.settings, overrides=outputs.override_rows(found.rows, said, graded),
+                        notes=found.override_problems + found.notes, isolation=found.isolation)
     found.recorded = run
     return run

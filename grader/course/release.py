@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 import hashlib
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -298,15 +299,30 @@ def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict, 
 
 
 def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: bool = False,
-          pip_source: str | None = None) -> Release:
-    """Build the handout into `out` (which must be empty or new, or is cleared with force); with `notebooks`,
-    each chapter's stub is a notebook (write_notebooks) whose first cell installs the grader from
-    `pip_source` (default: the wheel beside exercises/)."""
-    if out.exists() and any(out.iterdir()):
-        if not force:
-            raise OutNotEmpty(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
-        shutil.rmtree(out)
-    out.mkdir(parents=True, exist_ok=True)
+          pip_source: str | None = None, classroom: bool = True) -> Release:
+    """Build the handout into `out` (which must be empty or new, or is replaced with force): with `notebooks`, each
+    chapter's stub is a notebook (write_notebooks) whose first cell installs the grader from `pip_source` (default:
+    the wheel beside exercises/); with `classroom`, the GitHub Classroom workflow (grader.course.classroom). The
+    handout is built in a folder beside `out` and moved into place only once it passes its checks (no answer in
+    any file or wheel member): a release refused leaves `out` as it was."""
+    if out.exists() and any(out.iterdir()) and not force:
+        raise OutNotEmpty(f"{out} is not empty; choose a new folder (or --force to replace its contents)")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    building = Path(tempfile.mkdtemp(prefix=f".{out.name}.building-", dir=out.parent))
+    mask = os.umask(0)
+    os.umask(mask)
+    building.chmod(0o777 & ~mask)  # as a folder made here would be (mkdtemp's is private)
+    try:
+        built = _build_into(building, course, notebooks, pip_source, classroom)
+        _move_into_place(building, out)
+    finally:
+        shutil.rmtree(building, ignore_errors=True)
+    return Release(out, out / built.wheel.name, built.version, built.hidden)
+
+
+def _build_into(folder: Path, course: courses.Course, notebooks: bool, pip_source: str | None,
+                classroom: bool) -> Release:
+    """The whole handout in `folder`, checked (ReleaseError where it would hold an answer)."""
     hidden = hidden_summary(course)
     recording = record(course)
     with tempfile.TemporaryDirectory(prefix="handout-") as temporary:
@@ -321,20 +337,41 @@ def build(out: Path, course: courses.Course, *, force: bool = False, notebooks: 
                    "exact_derivatives": course.exact_derivatives, "hidden": hidden, "released": _now()}
         (data / "handout.json").write_text(json.dumps(handout, indent=1), encoding="utf-8")
         # the same public settings beside the handout, for the instructor: `grade batch --handout OUT` reads it
-        (out / "handout.json").write_text(json.dumps(handout, indent=1) + "\n", encoding="utf-8")
+        (folder / "handout.json").write_text(json.dumps(handout, indent=1) + "\n", encoding="utf-8")
         (stage / "README.md").write_text(f"The handout grader of the course {course.id}.\n", encoding="utf-8")
         (stage / "pyproject.toml").write_text(_PYPROJECT.format(
             name=DISTRIBUTION, version=version, dependencies=json.dumps(DEPENDENCIES),
             packages=json.dumps(list(HANDOUT_PACKAGES))), encoding="utf-8")
-        wheel = _build_wheel(stage, out)
-    _copy_exercises(out)
+        wheel = _build_wheel(stage, folder)
+    _copy_exercises(folder)
     if notebooks:
-        write_notebooks(out / "exercises", pip_source or f"../{wheel.name}")
-    _write_readme(out, wheel, course, hidden, notebooks)
-    leaks = scan(out)
+        write_notebooks(folder / "exercises", pip_source or f"../{wheel.name}")
+    _write_readme(folder, wheel, course, hidden, notebooks)
+    if classroom:
+        from grader.course import classroom as workflows
+
+        workflows.write_template(folder, wheel.name)
+    leaks = scan(folder)
     if leaks:
-        raise ReleaseError("the handout would hold answers; nothing should be handed out:\n  " + "\n  ".join(leaks[:20]))
-    return Release(out, wheel, version, hidden)
+        raise ReleaseError("the handout would hold answers; nothing is handed out:\n  " + "\n  ".join(leaks[:20]))
+    return Release(folder, wheel, version, hidden)
+
+
+def _move_into_place(built: Path, out: Path) -> None:
+    """Put the folder `built` where `out` is, in renames on one file system: what `out` held is moved aside first,
+    and removed only once the new handout is in place."""
+    aside = None
+    if out.exists():
+        aside = out.with_name(f".{out.name}.replaced-{os.getpid()}")
+        os.replace(out, aside)
+    try:
+        os.replace(built, out)
+    except OSError:
+        if aside is not None:
+            os.replace(aside, out)
+        raise
+    if aside is not None:
+        shutil.rmtree(aside, ignore_errors=True)
 
 
 # ------------------------------------------------------------------------------ the notebook handout

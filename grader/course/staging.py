@@ -28,6 +28,7 @@ MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged wit
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
+MAX_SUGGESTIONS = 250_000  # pairs of unmatched rows and submissions compared for a did-you-mean
 CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
                  "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
 _PLAIN = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.@+-")
@@ -90,16 +91,54 @@ def read_roster(roster: Path) -> dict[str, tuple[str, int, str]]:
             if row["submission"]}
 
 
-def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[Skipped]]:
-    """The submissions in `folder` (learner folders and .zip files) with their learner ids, and what
-    is skipped with the reason: other files, hidden (dot-named) entries the roster does not name,
-    ids that cannot be ids (id_problem). An id comes from the roster (--roster), else from the name;
-    two submissions with one id become id and id-2."""
+@dataclass
+class Unmatched:
+    """Where a roster and the submissions folder disagree: a row naming no submission (its line, the submission it
+    names, its learner), or a submission no row names (graded under its own name); with the closest name on the
+    other side, where one is close."""
+
+    kind: str  # "row" (a row naming no submission) or "submission" (a submission no row names)
+    name: str  # the submission as the row names it, or the submission's name
+    learner: str = ""  # the row's learner, or the id the submission is graded as
+    line: int = 0  # the row's line
+    close: str = ""  # the closest name on the other side: did you mean it?
+
+    def describe(self, roster: str) -> str:
+        mean = f"; did you mean {self.close!r}?" if self.close else ""
+        if self.kind == "row":
+            return (f"{roster}, line {self.line}: {self.name!r} (learner {self.learner!r}) names no submission in the "
+                    f"submissions folder, so {self.learner!r} has no grade{mean}")
+        return f"{self.name!r}: no row of {roster} names it; graded as {self.learner!r}{mean}"
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "name": self.name, "learner": self.learner, "line": self.line or None,
+                "did_you_mean": self.close or None}
+
+
+@dataclass
+class Survey:
+    """A submissions folder read with its roster: the submissions to grade with their learner ids, what is skipped
+    and why, and where the roster and the folder disagree (nothing is left out silently)."""
+
+    entries: list[Entry]
+    skipped: list[Skipped]
+    unmatched: list[Unmatched]
+
+
+def survey(folder: Path, roster: Path | None = None) -> Survey:
+    """The submissions in `folder` (learner folders and .zip files) with their learner ids, what is skipped with the
+    reason (other files, hidden (dot-named) entries the roster does not name, ids that cannot be ids: id_problem),
+    and the roster's rows that name no submission and the submissions no row names. An id comes from the roster
+    (--roster), else from the name; two submissions with one id become id and id-2."""
+    import difflib
+
     names = read_roster(roster) if roster is not None else {}
     entries: list[Entry] = []
     skipped: list[Skipped] = []
     taken: set[str] = set()
     suffix: dict[str, int] = {}  # id -> the n of id-n to try next: a name once taken stays taken
+    named_rows: set[str] = set()  # the roster's submissions found in the folder
+    unnamed: list[tuple[str, str]] = []  # (a submission no row names, the id it is graded as)
     with os.scandir(folder) as listing:  # the types come with the listing: no stat per entry
         items = sorted(listing, key=lambda item: os.path.normcase(item.name))  # the order of sorted Paths
     for item in items:
@@ -110,12 +149,14 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
             skipped.append(Skipped(shown, "not a folder or a .zip file"))
             continue
         stem = path.stem if item.is_file() else path.name  # a link: what it points at
-        named = names.get(path.name) or names.get(stem)
+        key = path.name if path.name in names else stem if stem in names else None
+        named = names.get(key) if key is not None else None
         if named is None and path.name.startswith("."):
             skipped.append(Skipped(shown, "a hidden (dot-named) entry, as tools leave behind (.git, .DS_Store, "
                                           "._name); to grade it, rename it or name it in a roster (--roster)"))
             continue
         if named is not None:
+            named_rows.add(key)
             learner, line, _ = named
             problem = id_problem(learner)
             why = f"{roster}, line {line}: the learner id {learner!r} {problem}"
@@ -133,14 +174,25 @@ def survey(folder: Path, roster: Path | None = None) -> tuple[list[Entry], list[
             unique, n = f"{learner}-{n}", n + 1
         suffix[learner] = n  # the next submission with this id starts here, not at id-2 again
         taken.add(unique)
+        if roster is not None and named is None:
+            unnamed.append((shown if item.is_dir(follow_symlinks=False) else unicode_clean(stem), unique))
         entries.append(Entry(unique, path, origin if unique == learner else f"{origin}, made unique",
                              named[2] if named is not None else ""))
-    return entries, skipped
+    rows = {name: value for name, value in names.items() if name not in named_rows}
+    suggest = len(rows) * len(unnamed) <= MAX_SUGGESTIONS  # each pair compared once at most
+
+    def closest(name: str, among: list[str]) -> str:
+        return next(iter(difflib.get_close_matches(name, among, n=1)), "") if suggest else ""
+
+    unmatched = [Unmatched("row", name, learner, line, closest(name, [u for u, _ in unnamed]))
+                 for name, (learner, line, _) in sorted(rows.items(), key=lambda item: item[1][1])]
+    unmatched += [Unmatched("submission", name, learner, 0, closest(name, list(rows))) for name, learner in unnamed]
+    return Survey(entries, skipped, unmatched)
 
 
 def discover(folder: Path, roster: Path | None = None) -> list[Entry]:
     """Learner folders and .zip files in `folder` with their ids (survey, without what is skipped)."""
-    return survey(folder, roster)[0]
+    return survey(folder, roster).entries
 
 
 def _wanted(relative: str) -> str | None:

@@ -11,16 +11,15 @@ import gc
 import os
 import sys
 
+from grader.faces.commands import grades_at_once
 from grader.system import SINGLE_THREADED_BLAS, trace, traced
-
-_OTHER_COMMANDS = {"list", "quiz", "batch", "worker", "release", "gradescope", "classroom", "submit", "--help", "-h",
-                   "--version"}
 
 
 def _prestart(args: list[str]) -> None:
-    """Start the learner's child for a command that grades, held in grader.faces.prestart: behind the sandbox the door
-    chose for the last such command (grader.boundary.kept), with nothing else imported, else as it decides now."""
-    if not args or args[0] in _OTHER_COMMANDS or any(a in ("--help", "-h") for a in args):
+    """Start the learner's child for a command that grades at once (grader.faces.commands), held in
+    grader.faces.prestart: behind the sandbox the door chose for the last such command (grader.boundary.kept), with
+    nothing else imported, else as it decides now."""
+    if not grades_at_once(args):
         return
     mode = "off" if "--no-sandbox" in args else "auto"
     from grader.boundary import kept
@@ -40,7 +39,7 @@ def _prestart(args: list[str]) -> None:
 
 def _draws_figures(args: list[str]) -> bool:
     """Whether the command grades once and writes an HTML report (not --watch, which may never write one)."""
-    if not args or args[0] in _OTHER_COMMANDS or "--watch" in args or any(a in ("--help", "-h") for a in args):
+    if not grades_at_once(args) or "--watch" in args:
         return False
     return any(a == "--html" or a.startswith("--html=") for a in args)
 

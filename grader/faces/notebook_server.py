@@ -5,8 +5,8 @@ It reads one JSON request per line on stdin (the `%grade` arguments, the kernel'
 names of functions the notebook itself defined and the cells the kernel ran) and answers one JSON line
 on its real stdout: the report as text, as an HTML fragment (grader.render.html.render_fragment, with
 plots) where the front end shows HTML, and the score. Learner code runs only in the sandboxed children of
-its resident boundary (grader.boundary.choose, resident: a fork server where the system allows, else a fresh
-child per run), exactly as under `grade chNN`; the checks and references stay imported here between runs, so
+its resident door (grader.core.transaction, resident: a fork server where the system allows, else a fresh
+child per run), graded by the one transaction as under `grade chNN`; the checks and references stay imported here between runs, so
 a second `%grade` costs the run itself. It ends when the kernel closes its stdin.
 """
 
@@ -19,18 +19,19 @@ from pathlib import Path
 
 
 class Server:
-    """One kernel's grading process: its boundaries (one per sandbox setting, kept between runs) and requests."""
+    """One kernel's grading process: its doors (one per sandbox setting, kept between runs) and requests."""
 
     def __init__(self) -> None:
-        self.boundaries: dict[bool, object] = {}
+        self.doors: dict[bool, object] = {}
 
-    def boundary(self, sandboxed: bool):
-        """Where a run's children come from: the resident grader.boundary.Boundary for this sandbox setting."""
-        if sandboxed not in self.boundaries:
-            from grader import boundary
+    def door(self, sandboxed: bool):
+        """Where a run's children come from: the resident grader.core.transaction.Door for this sandbox setting."""
+        if sandboxed not in self.doors:
+            from grader.boundary import SandboxMode
+            from grader.core.transaction import Door
 
-            self.boundaries[sandboxed] = boundary.choose("auto" if sandboxed else "off", resident=True)
-        return self.boundaries[sandboxed]
+            self.doors[sandboxed] = Door(SandboxMode.AUTO if sandboxed else SandboxMode.OFF, resident=True)
+        return self.doors[sandboxed]
 
     def warm_up(self) -> None:
         """Import what grading needs and start the fork server, before the first `%grade` asks."""
@@ -42,25 +43,25 @@ class Server:
         import grader.core.pipeline  # noqa: F401
         import grader.render.text  # noqa: F401
 
-        self.boundary(True).warm_up()
+        self.door(True).boundary.warm_up()
 
     def close(self) -> None:
-        for boundary in self.boundaries.values():
-            boundary.close()
+        for door in self.doors.values():
+            door.close()
 
     def handle(self, request: dict) -> dict:
         """Grade as `grade run` would with request["args"]; {"error": why} for arguments it cannot take."""
         import click
 
-        from grader.faces import cli
+        from grader.faces.learner_commands import run_command
 
         os.chdir(request.get("cwd") or ".")
         args = [str(a) for a in request.get("args", [])]
         if any(a in ("-h", "--help") for a in args):
-            with cli.run_command.make_context("%grade", ["x"]) as ctx:
-                return {"text": cli.run_command.get_help(ctx)}
+            with run_command.make_context("%grade", ["x"]) as ctx:
+                return {"text": run_command.get_help(ctx)}
         try:
-            ctx = cli.run_command.make_context("%grade", args)
+            ctx = run_command.make_context("%grade", args)
             return self._grade(ctx.params, request)
         except click.ClickException as exc:
             return {"error": exc.format_message()}
@@ -68,8 +69,9 @@ class Server:
     def _grade(self, options: dict, request: dict) -> dict:
         import click
 
-        from grader.core.pipeline import Request, build_report
-        from grader.faces import cli
+        from grader.core.pipeline import Request
+        from grader.core.transaction import grade_submission
+        from grader.faces.options import chapters_and_functions, seed_here
         from grader.render import text
 
         if options["watch"]:
@@ -79,23 +81,24 @@ class Server:
         if not names:
             raise click.UsageError("name a chapter: %grade ch06 (or %grade all; %grade ch06 H_jacobian for one "
                                    "function)")
-        picked, functions = cli.chapters_and_functions(names)
-        seed = cli._seed_here(options["seed"])
+        picked, functions = chapters_and_functions(names)
+        seed = seed_here(options["seed"])
         submission = self._submission(options, [c.id for c in picked], defined, request.get("cells", []))
         html = bool(request.get("html"))
-        session = self.boundary(not options["no_sandbox"]).open_session(submission)
-        report = build_report(session, Request(tuple(c.id for c in picked), seed, learner=options["learner"],
-                                               quiz=not options["no_quiz"] and not functions,
-                                               plots=html or options["html_path"] is not None, functions=functions))
+        request = Request(tuple(c.id for c in picked), seed, learner=options["learner"],
+                          quiz=not options["no_quiz"] and not functions, plots=html or options["html_path"] is not None,
+                          functions=functions)
+        report = grade_submission(submission, request, self.door(not options["no_sandbox"])).report
         for chapter in report.chapters:
             note = _unsaved(submission, chapter.chapter)
             if note:
                 chapter.notes.append(note)
         if options["html_path"] is not None:
+            from grader.files import write_atomically
             from grader.render import figure_cache
             from grader.render import html as page
 
-            cli.write_atomically(options["html_path"], page.render(report, figure_cache.default()))
+            write_atomically(options["html_path"], page.render(report, figure_cache.default()))
         if options["output_format"] == "json":
             from grader.render import json_report
 
@@ -191,9 +194,9 @@ def _unsaved(submission, chapter: str) -> str:
 
 
 def cli_submission(options: dict):
-    from grader.faces import cli
+    from grader.faces.options import find_submission
 
-    return cli.find_submission(options["submission_dir"], options["use_solutions"])
+    return find_submission(options["submission_dir"], options["use_solutions"])
 
 
 def _functions(chapter: str) -> set[str]:

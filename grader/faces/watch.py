@@ -1,8 +1,8 @@
 """`grade ch06 --watch`: stay running and grade a chapter again each time its file is saved.
 
-A resident boundary (grader.boundary.choose with resident=True: where the system allows, a fork server, a
+A resident door (grader.core.transaction.Door with resident=True: where the system allows, a fork server, a
 sandboxed interpreter with numpy and the child side already imported) starts a fresh, confined child per
-run, and this process keeps the checks and the references imported, so a save costs only the run itself. The files are polled (a stat of a dozen
+run (grader.core.transaction.grade_submission), and this process keeps the checks and the references imported, so a save costs only the run itself. The files are polled (a stat of a dozen
 files every 50 ms: portable, no watcher library). After each run it prints the chapter's report and
 what changed since the last run of that chapter: checks newly passing, newly failing. A syntax error
 or an endless loop in the saved file is reported like any run and the watch goes on; Ctrl-C ends it.
@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from grader.boundary import Boundary, Limits
+from grader.boundary import Limits
 from grader.chapters import BY_ID
-from grader.core.pipeline import Request, build_report
+from grader.core.pipeline import Request
+from grader.core.transaction import Door, grade_submission
 from grader.model import Report, Status
 from grader.submission import Submission
 
@@ -40,7 +41,7 @@ class Watcher:
     submission: Submission
     chapters: list[str]
     request: Request
-    boundary: Boundary  # where each run's child comes from (grader.boundary.choose, resident)
+    door: Door  # where each run's child comes from (resident)
     limits: Limits = field(default_factory=Limits)
     last: dict[str, dict[str, Status]] = field(default_factory=dict)  # chapter -> check id -> status
 
@@ -76,10 +77,9 @@ class Watcher:
 
     def grade(self, chapters: list[str]) -> tuple[Report, float]:
         started = time.perf_counter()
-        session = self.boundary.open_session(self.submission, self.limits)
         request = Request(tuple(chapters), self.request.seed, learner=self.request.learner, quiz=self.request.quiz,
                           functions=self.request.functions)
-        report = build_report(session, request)
+        report = grade_submission(self.submission, request, self.door, limits=self.limits).report
         return report, time.perf_counter() - started
 
     def changes(self, report: Report) -> list[str]:

@@ -81,7 +81,7 @@ MARKS = {"pass": "\u2713", "fail": "\u2717", "error": "!", "skip": "\u2013", "re
 
 BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="en">
 <h{{ h }} class="title" id="{{ pid }}title">Jacobians &amp; Linearization: grading report</h{{ h }}>
-<p class="note">Submission {{ report.submission }} &middot; seed {{ report.seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
+<p class="note">Submission {{ report.submission }} &middot; seed {{ seed }}{% if report.learner %} &middot; quiz learner {{ report.learner }}{% endif %}</p>
 <p class="note" id="{{ pid }}provenance">{{ footer }}</p>
 <section id="{{ pid }}summary"{{ landmark("summary") }}><h{{ h + 1 }} class="summary-title" id="{{ pid }}summary-title">Summary</h{{ h + 1 }}>
 <table class="summary"><caption>Points by chapter</caption>
@@ -192,8 +192,8 @@ def _verdict(report: Report, verdict_line) -> str:
     return verdict_line(report)
 
 
-def _render(report: Report, pid: str, root: str, kind: str, heading: int,
-            kept: FigureCache | None, draw_here: bool = False, meanwhile: Callable[[], None] | None = None) -> str:
+def _render(report: Report, pid: str, root: str, kind: str, heading: int, kept: FigureCache | None,
+            draw_here: bool = False, meanwhile: Callable[[], None] | None = None, learner_sees: bool = False) -> str:
     import dataclasses
 
     from markupsafe import Markup
@@ -231,18 +231,19 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int,
     return template.render(report=report, figures=figures, num=_num, values=_values, not_written=not_written,
                            plural=plural,
                            verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
-                           kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report),
-                           adjustments=report.all_adjustments())
+                           kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report, learner_sees),
+                           seed=provenance.shown_seed(report, learner_sees), adjustments=report.all_adjustments())
 
 
 def render(report: Report, kept: FigureCache | None = None, draw_here: bool = False,
-           meanwhile: Callable[[], None] | None = None) -> str:
+           meanwhile: Callable[[], None] | None = None, learner_sees: bool = False) -> str:
     """The report as one self-contained HTML page. Learner text is escaped by the template and has
     no lone surrogates or control characters (grader.safe_text.for_html), so the page always encodes.
     Figures found in `kept` for the same plot data are reused, the others drawn and kept there; with
     `draw_here`, drawn by this process alone (see grader.render.drawer.figures_due). `meanwhile`: the
-    caller's own work, done while the figures are drawn elsewhere (its exceptions are the caller's)."""
-    return _render(report, "", "main", "page", 1, kept, draw_here, meanwhile)
+    caller's own work, done while the figures are drawn elsewhere (its exceptions are the caller's). With
+    `learner_sees` (a batch's page for its learner), a seed other than the public one is not shown."""
+    return _render(report, "", "main", "page", 1, kept, draw_here, meanwhile, learner_sees)
 
 
 def render_fragment(report: Report, id_prefix: str | None = None, heading_level: int = 2,

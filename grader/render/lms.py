@@ -416,20 +416,30 @@ def moodle_gradebook(results: list[LearnerResult], chapters: list[str]) -> str:
     possible in its name ("ch06 <title> (out of 25)": give the grade item that maximum, or map to an
     existing one), one for what belongs to no chapter (BEYOND_CHAPTERS, out of 0: a late penalty is negative,
     so give its grade item a negative minimum), so that the columns add up to the total; then the total (with
-    overrides and penalties) and a feedback column (why a learner is not graded, what was flagged, the
-    adjustments: the learner sees it). A learner not graded has empty grade cells."""
+    overrides and penalties) and a feedback column, which the learner sees (learner_feedback: why they are not
+    graded, or the adjustments with their reasons). A learner not graded has empty grade cells."""
     possible = points_possible(results, chapters)
     total = sum(possible.values())
     rows = [["Learner id"] + [f"{_column(c)} (out of {possible.get(c, 0):g})" for c in chapters]
             + [f"{BEYOND_CHAPTERS} (out of 0)", f"Total (out of {total:g})", "Feedback"]]
     for result in results:
-        said = [result.message, *result.flags, *(f"{a['points']:+g} on {a['target']}: {a['reason']}"
-                                                 for a in result.adjustments)]
-        feedback = "; ".join(s for s in said if s)
-        feedback = feedback if result.status == "graded" else f"{result.status}: {feedback}"
         rows.append([for_csv(result.learner)] + [_score(result, c) for c in chapters]
-                    + [beyond_chapters(result, chapters), points_text(result.score), for_csv(feedback)])
+                    + [beyond_chapters(result, chapters), points_text(result.score), for_csv(learner_feedback(result))])
     return _csv(rows)
+
+
+def learner_feedback(result: LearnerResult) -> str:
+    """What a learner reads beside their grade in an LMS: why they are not graded, or each adjustment with its reason,
+    in sentences that start with a word (no spreadsheet takes them for a formula, so none needs escaping). What
+    was flagged is for the instructor's eyes, and is not in it."""
+    if result.status != "graded":
+        return f"Not graded ({result.status}): {result.message}"
+    said = []
+    for a in result.adjustments:
+        what = "Late penalty" if a["kind"] == "late" else "Override"
+        where = "" if a["target"] == "total" else f" on {a['target']}"
+        said.append(f"{what}{where}: {a['points']:+g} ({a['reason']})")
+    return "; ".join(said)
 
 
 def changes_csv(changes: list[tuple]) -> str:

@@ -61,6 +61,8 @@ class Summary:
     untimed: list[str] = field(default_factory=list)  # graded with a deadline but no trusted submission time
     similar: list = field(default_factory=list)  # grader.course.similarity.Pair, most alike first
     statistics: dict | None = None  # grader.course.statistics.compute's numbers (None: fewer than 5 learners)
+    first_run: bool = False  # the history's first finished run: no score moved, each was graded first
+    roster: dict = field(default_factory=dict)  # the roster's disagreements with the folder: file, unmatched, said
 
     @functools.cached_property
     def counts(self) -> dict:
@@ -216,7 +218,9 @@ def _json_data(view: Summary) -> dict:
         "flagged": view.flagged,
         "not_graded": view.not_graded,
         "skipped": [{"name": n, "reason": r} for n, r in view.skipped],
+        "first_run": view.first_run,
         "changes": [{"learner": c[0], "before": c[1], "after": c[2], "delta": c[3], "why": c[4]} for c in view.changes],
+        "roster": {"file": view.roster.get("file"), "unmatched": list(view.roster.get("unmatched", []))},
         "similar": [pair.to_dict() for pair in view.similar],
         "notes": list(view.notes),
         "untimed": list(view.untimed),
@@ -307,6 +311,23 @@ def _statistics_parts(found: dict | None) -> Iterator[str]:
                        (" <span class='flag'>differs</span>" if p["differs"] and not found["rough"] else "")]
                       for i, p in parameters], {4})
 
+def moved_line(view: Summary) -> str:
+    """How many scores moved since the last run ("the first run: 16 learners graded first" on a first run)."""
+    if view.first_run:
+        return f"the history's first run: {_count(len(view.changes), 'learner')} graded first"
+    return f"{_count(len(view.changes), 'score')} moved since the last run"
+
+
+def change_text(change: tuple) -> str:
+    """One line of changes.csv in words: "182.7 -> 203: why", "first graded: 198", "no longer graded (was 12)"."""
+    _, before, after, _, why = change
+    if before is None:
+        return f"{why}: {after:g}" if after is not None else why
+    if after is None:
+        return f"{why} (was {before:g})"
+    return f"{before:g} -> {after:g}: {why}"
+
+
 def _table(caption_id: str, title: str, header: list[str], rows: list[list[str]],
            numeric: set[int] = frozenset()) -> str:
     """A titled table; `rows` hold HTML already escaped; columns in `numeric` are right-aligned."""
@@ -324,8 +345,7 @@ def html_parts(view: Summary) -> Iterator[str]:
     yield (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>Class summary</title>"
            f"<style>{STYLE}</style></head><body><main><h1>Class summary</h1>")
     yield (f"<p>{_count(len(view.graded), 'learner')} graded; {len(view.not_graded)} could not be graded; "
-           f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; "
-           f"{_count(len(view.changes), 'score')} moved since the last run.</p>")
+           f"{len(view.skipped)} skipped; {len(view.flagged)} flagged; {escape(moved_line(view))}.</p>")
     yield f"<p id='isolation'>{escape(view.isolation)}</p>" if view.isolation else ""
     if len(view.graded):
         first = view.graded.first
@@ -377,8 +397,10 @@ def html_parts(view: Summary) -> Iterator[str]:
         yield "</ul>"
     sections = (("flagged", "Flagged (graded; look at these)", view.flagged,
                  ((k, "; ".join(v)) for k, v in sorted(view.flagged.items()))),
-                ("changes", "Scores that moved since the last run", view.changes,
-                 ((c[0], f"{c[1]} -> {c[2]}: {c[4]}") for c in view.changes)),
+                ("roster", "The roster and the submissions disagree", view.roster.get("said"),
+                 (("", said) for said in view.roster.get("said", []))),
+                ("changes", "First grades" if view.first_run else "Scores that moved since the last run",
+                 view.changes, ((c[0], change_text(c)) for c in view.changes)),
                 ("notes", "For the instructor", view.notes, (("", n) for n in view.notes)),
                 ("not-graded", "Not graded", view.not_graded, sorted(view.not_graded.items())),
                 ("skipped", "Skipped (not taken as submissions)", view.skipped, view.skipped))

@@ -345,35 +345,6 @@ def test_every_output_says_what_made_it(solutions_report, tmp_path):
     assert made["grader"] in lms.junit([("x", solutions_report)])
 
 
-def test_overrides_stay_within_the_points_and_apply_in_order(solutions_report):
-    import copy
-    from datetime import datetime, timezone
-
-    from grader.course import overrides
-    from grader.course_config import Late
-
-    report = copy.deepcopy(solutions_report)
-    ch06 = report.chapters[1]
-    check = next(c for c in ch06.checks if c.kind == "code")
-    rows = [overrides.Override("x", f"ch06/{check.id}", 5.0, None, "more than its points", "bo", "o.csv, line 2"),
-            overrides.Override("x", "ch06", None, 0.5, "half the chapter", "bo", "o.csv, line 3"),
-            overrides.Override("x", "total", -1000.0, None, "everything", "bo", "o.csv, line 4"),
-            overrides.Override("x", "ch06/nope", 1.0, None, "no such check", "bo", "o.csv, line 5")]
-    problems = overrides.apply(report, rows)
-    assert problems == ["o.csv, line 5: ch06/nope is not a check graded for x (`grade list --checks` shows the ids); "
-                        "row not applied"]
-    assert ch06.adjustments[0].points == 0  # already at its maximum
-    assert ch06.score == ch06.raw_score / 2 and report.score == 0 and report.raw_score > 0
-    late = Late(datetime(2026, 5, 1, tzinfo=timezone.utc), per_day=0.1, cap=0.25)
-    fresh = copy.deepcopy(solutions_report)
-    overrides.apply(fresh, [], late, datetime(2026, 5, 9, tzinfo=timezone.utc))
-    assert fresh.score == pytest.approx(0.75 * fresh.raw_score)  # capped
-    waived = copy.deepcopy(solutions_report)
-    overrides.apply(waived, [overrides.Override("x", "late", None, 0.0, "extension", "bo", "o.csv, line 6")], late,
-                    datetime(2026, 5, 9, tzinfo=timezone.utc))
-    assert waived.score == waived.raw_score
-
-
 @pytest.mark.parametrize("text, says", [
     ("quiz_feedback: {default: recorded, ch42: immediate}\n", "line 1: quiz_feedback names 'ch42'"),
     ("seed: 5\ndeadline: 2026-05-01T23:59:00\n", "line 2: deadline needs its time zone"),

@@ -18,6 +18,7 @@ from click.testing import CliRunner
 
 from grader.course import release
 from grader.faces.cli import main
+from grader.judging import expected
 from grader.render import lms
 from tests.support import (
     REAL_BWRAP,
@@ -36,17 +37,18 @@ WRONG_H = ("def H_jacobian(x, y):\n    r2 = x * x + y * y\n    r = np.sqrt(r2)\n
 
 @pytest.fixture(scope="module")
 def workflow(tmp_path_factory):
-    """The workflow `grade release` writes beside the handout (the handout itself stubbed: its build and
-    its scan are test_release's)."""
+    """The workflow `grade release` writes into the handout (the handout's recorded values, its wheel and its scan
+    stubbed: they are test_release's)."""
     out = tmp_path_factory.mktemp("release") / "handout"
     patch = pytest.MonkeyPatch()
 
-    def build(folder: Path, course, **options):
-        folder.mkdir(parents=True, exist_ok=True)
+    def build_wheel(stage: Path, folder: Path) -> Path:
         (folder / WHEEL).write_bytes(b"")
-        return release.Release(folder, folder / WHEEL, "0.1.0+handout.0123456789ab")
+        return folder / WHEEL
 
-    patch.setattr(release, "build", build)
+    patch.setattr(release, "record", lambda course: expected.Recording(seed=course.public_seed))
+    patch.setattr(release, "_build_wheel", build_wheel)
+    patch.setattr(release, "scan", lambda folder: [])
     patch.setattr(release, "describe", lambda built: "Handout built.")
     try:
         result = CliRunner().invoke(main, ["release", str(out)])

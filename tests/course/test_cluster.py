@@ -512,7 +512,7 @@ def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_tw
 def test_a_task_is_keyed_by_the_learner_its_content_hash_and_the_grader_version():
     """The same grading asked twice (a coordinator run again while the first one's task still runs) is one task;
     another learner, other files or another grader is another, and so is a try on another worker."""
-    from grader.course.batch import Staged
+    from grader.course.workers import Staged
     from grader.course.cluster import task_key
 
     def staged(learner: str, digest: str) -> Staged:

@@ -292,7 +292,7 @@ def _autograder(tmp_path: Path, metadata: dict) -> tuple[dict, subprocess.Comple
     (root / "source").mkdir(parents=True)
     (root / "source" / "course.yaml").write_text(COURSE, encoding="utf-8")
     settings = {"course": "gaming", "chapters": ["ch06"], "learner_field": "name", "time_budget": 60,
-                "sandbox": "none"}
+                "sandbox": "off"}
     (root / "source" / "autograder.json").write_text(json.dumps(settings), encoding="utf-8")
     (root / "submission").mkdir()
     (root / "submission" / "ch06_measurement.py").write_text(_reference_files()["ch06_measurement.py"],

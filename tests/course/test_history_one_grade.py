@@ -116,7 +116,7 @@ def test_a_late_archive_scores_on_gradescope_as_in_the_batch(graded, tmp_path):
     (root / "source").mkdir(parents=True)
     shutil.copy(graded.parent / "course.yaml", root / "source" / "course.yaml")
     settings = {"course": "one-grade", "chapters": CHAPTERS.split(","), "learner_field": "email",
-                "time_budget": 60, "sandbox": "none"}
+                "time_budget": 60, "sandbox": "off"}
     (root / "source" / "autograder.json").write_text(json.dumps(settings), encoding="utf-8")
     shutil.copytree(graded.parent / "submissions" / "bo" / "exercises", root / "submission" / "exercises")
     metadata = {"id": 777, "created_at": CLASS["bo"][1], "assignment": {"due_date": DEADLINE},

@@ -16,7 +16,7 @@ import pytest
 
 from grader import checks as check_registry
 from grader.chapters import BY_ID
-from grader.course import batch, statistics
+from grader.course import outputs, statistics
 from grader.course.history import History
 from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
@@ -209,19 +209,18 @@ def test_the_chi_square_and_fisher_tests_agree_with_scipy_on_random_tables():
 
 
 def _summary_of_a_batch(out: Path, reports: dict[str, Report]) -> tuple[dict, str]:
-    """The class outputs grade batch writes for these reports (each as its report.json), through its own
-    ClassOutputs and rebuild: (summary.json, summary.html)."""
-    for learner, report in reports.items():
-        (out / learner).mkdir(parents=True)
-        (out / learner / "report.json").write_text(json.dumps({**report.to_dict(), "batch": {"warnings": []}}),
-                                                   encoding="utf-8")
-    history = History(out / "gradebook.db")
-    collected = batch.ClassOutputs(out, list(reports), {}, {}, CHAPTERS)
-    try:
-        batch.rebuild(out, history, history.start("simulated", None, None, 1, CHAPTERS), CHAPTERS, collected)
-    finally:
-        collected.close()
-        history.close()
+    """The class outputs grade batch writes for these reports, each recorded in the history as a batch records it,
+    then rebuilt from it (grader.course.outputs.rebuild): (summary.json, summary.html)."""
+    from grader.course.settings import RunSettings
+    from grader.model import LearnerResult
+
+    settings = RunSettings(tuple(CHAPTERS), 1, grader="simulated")
+    out.mkdir(parents=True, exist_ok=True)
+    with History(out / "gradebook.db") as history:
+        run = history.start(settings)
+        for learner, report in reports.items():
+            history.record(run, LearnerResult.of(learner, report), judged=report)
+        outputs.rebuild(out, history, run, settings)
     return (json.loads((out / "summary.json").read_text(encoding="utf-8")),
             (out / "summary.html").read_text(encoding="utf-8"))
 

@@ -116,8 +116,11 @@ def test_canvas_and_moodle_gradebooks_have_their_imports_columns_and_points_poss
                                     "Feedback"]
     rows = moodle.set_index("Learner id")
     assert rows.loc["O'Brien, \"Jr\"", f"Total (out of {sum(possible.values()):g})"] != ""
-    assert rows.loc["dave"].iloc[0] == "" and rows.loc["dave", "Feedback"].startswith("unreadable: ")
-    assert "learner.yaml names 'robert'" in rows.loc["bob", "Feedback"]
+    assert rows.loc["dave"].iloc[0] == "" and rows.loc["dave", "Feedback"].startswith("Not graded (unreadable): ")
+    # what was flagged is for the instructor's eyes: in gradebook.csv, never in the column the learner reads
+    assert "learner.yaml names 'robert'" not in rows.loc["bob", "Feedback"]
+    gradebook = pandas.read_csv(out / "gradebook.csv", dtype=str, keep_default_na=False).set_index("learner")
+    assert "learner.yaml names 'robert'" in gradebook.loc["bob", "message"]
 
 
 def test_junit_is_valid_for_jenkins_with_time_failure_text_and_chapter_errors(graded):

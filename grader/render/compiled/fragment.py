@@ -1,7 +1,7 @@
 # The report's fragment template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "ad8be39491ad061690eb6be0347d2544c48614f4f37339e6f79a9aebe743a577"
+DIGEST = "a9938eeafbe6668d6a6bd35b517a293f1966b3a167a843bb34f6439ae9674d26"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'fragment'
 
@@ -17,6 +17,7 @@ def root(context, missing=missing):
     l_0_pid = resolve('pid')
     l_0_h = resolve('h')
     l_0_report = resolve('report')
+    l_0_seed = resolve('seed')
     l_0_footer = resolve('footer')
     l_0_landmark = resolve('landmark')
     l_0_num = resolve('num')
@@ -76,7 +77,7 @@ def root(context, missing=missing):
     yield '>\n<p class="note">Submission '
     yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'submission'))
     yield ' &middot; seed '
-    yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'seed'))
+    yield escape((undefined(name='seed') if l_0_seed is missing else l_0_seed))
     if environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'learner'):
         pass
         yield ' &middot; quiz learner '
@@ -338,4 +339,4 @@ def root(context, missing=missing):
     yield '>'
 
 blocks = {}
-debug_info = '1=59&2=61&3=67&4=73&5=81&6=85&9=95&10=106&11=112&12=118&13=126&14=132&15=148&17=152&18=158&19=174&20=180&21=188&22=196&23=206&24=222&25=231&26=240&27=258&28=261&29=279&30=292&31=302&32=306&33=312&34=318&35=324&38=333'
+debug_info = '1=60&2=62&3=68&4=74&5=82&6=86&9=96&10=107&11=113&12=119&13=127&14=133&15=149&17=153&18=159&19=175&20=181&21=189&22=197&23=207&24=223&25=232&26=241&27=259&28=262&29=280&30=293&31=303&32=307&33=313&34=319&35=325&38=334'

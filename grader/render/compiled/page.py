@@ -1,7 +1,7 @@
 # The report's page template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "43968cd325ca361f3d8cc10ece7d2a4a15a6e7788ca416c0fb62f32aac7bc5e5"
+DIGEST = "ca291d8871e7ea874af5103f881bf2653da8f74404f6f3cdaec02a12df3ac5ff"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'page'
 
@@ -17,6 +17,7 @@ def root(context, missing=missing):
     l_0_pid = resolve('pid')
     l_0_h = resolve('h')
     l_0_report = resolve('report')
+    l_0_seed = resolve('seed')
     l_0_footer = resolve('footer')
     l_0_landmark = resolve('landmark')
     l_0_num = resolve('num')
@@ -76,7 +77,7 @@ def root(context, missing=missing):
     yield '>\n<p class="note">Submission '
     yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'submission'))
     yield ' &middot; seed '
-    yield escape(environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'seed'))
+    yield escape((undefined(name='seed') if l_0_seed is missing else l_0_seed))
     if environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'learner'):
         pass
         yield ' &middot; quiz learner '
@@ -338,4 +339,4 @@ def root(context, missing=missing):
     yield '>\n</body></html>'
 
 blocks = {}
-debug_info = '6=59&8=61&9=67&10=73&11=81&12=85&15=95&16=106&17=112&18=118&19=126&20=132&21=148&23=152&24=158&25=174&26=180&27=188&28=196&29=206&30=222&31=231&32=240&33=258&34=261&35=279&36=292&37=302&38=306&39=312&40=318&41=324&44=333'
+debug_info = '6=60&8=62&9=68&10=74&11=82&12=86&15=96&16=107&17=113&18=119&19=127&20=133&21=149&23=153&24=159&25=175&26=181&27=189&28=197&29=207&30=223&31=232&32=241&33=259&34=262&35=280&36=293&37=303&38=307&39=313&40=319&41=325&44=334'

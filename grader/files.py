@@ -1,0 +1,25 @@
+"""Writing a file so that no reader ever sees half of it: through a temporary file beside it, then one rename."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import TextIO
+
+
+def write_atomically(path: Path | str, text: str) -> None:
+    """Write `text` (UTF-8) to `path` through a temporary file beside it."""
+    write_atomically_from(Path(path), lambda handle: handle.write(text))
+
+
+def write_atomically_from(path: Path, write: Callable[[TextIO], object], replace: bool = True) -> Path:
+    """As write_atomically, `write` writing the text into the file it is given (piece by piece: a large class's
+    outputs are never whole in memory); with replace=False the written file is left beside `path` (returned) for
+    the caller to os.replace."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with temporary.open("w", encoding="utf-8") as handle:
+        write(handle)
+    if replace:
+        os.replace(temporary, path)
+    return temporary
