@@ -165,14 +165,14 @@ def _learner_side(submissions: str, jobs: int) -> None:
     import multiprocessing
 
     from grader.chapters import CHAPTERS
+    from grader.core.transaction import Door
     from grader.course import staging
-    from grader.course.batch import choose_boundary
 
     scratch = Path(tempfile.mkdtemp(prefix="grade-floor-"))
     try:
         roots = [str(staging.stage(entry, scratch)) for entry in staging.discover(Path(submissions))]
         _PLANNED.extend(_encoded_once(chapter.id, chapter.module) for chapter in CHAPTERS)
-        choose_boundary("required", probe=True)  # as the batch does before any learner
+        Door("required", probe=True).isolation  # as the batch proves its sandbox before any learner
         cpu_before, started = busy_cpu_seconds(), time.perf_counter()
         with multiprocessing.get_context("fork").Pool(jobs) as pool:
             answered = sum(pool.imap_unordered(_run_learner, roots))
@@ -206,11 +206,11 @@ def _run_learner(root: str) -> int:
     """One learner's calls, run in a child of this worker's fork server: how many it answered."""
     from grader.boundary import Limits
     from grader.boundary.wire import RAISED, VALUE
-    from grader.course.batch import choose_boundary
+    from grader.core.transaction import Door
     from grader.submission import Submission
 
     if "boundary" not in _WORKER:
-        _WORKER["boundary"] = choose_boundary("required")
+        _WORKER["boundary"] = Door("required", resident=True).boundary
     runs = _WORKER["boundary"].open_session(Submission(Path(root), "exercises"), Limits()).run(_PLANNED)
     return sum(result.kind in (VALUE, RAISED) for run in runs.values() for result in run.results)
 

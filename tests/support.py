@@ -79,6 +79,20 @@ def replace_functions(module: str, replacements: dict[str, str]) -> str:
     return text
 
 
+def chapter_submission(root: Path, learner: str, module: str = "ch00_range_sensor", text: str | None = None) -> Path:
+    """A learner's submission of one chapter (`module`: the reference's, or `text`) with that chapter's reference
+    answers and learner.yaml naming `learner`: a class of these grades in a fraction of a second per learner."""
+    shutil.rmtree(root, ignore_errors=True)
+    package = root / "exercises"
+    (package / "answers").mkdir(parents=True)
+    source = re.sub(r"\bsolutions\.", "exercises.", (REPO / "solutions" / f"{module}.py").read_text())
+    (package / f"{module}.py").write_text(text if text is not None else source, encoding="utf-8")
+    chapter = module[:4]
+    shutil.copy(REPO / "solutions" / "answers" / f"{chapter}.yaml", package / "answers" / f"{chapter}.yaml")
+    (package / "answers" / "learner.yaml").write_text(f"learner: {learner}\n", encoding="utf-8")
+    return root
+
+
 HOSTILE_H = '''
 
 def H_jacobian(x, y):

@@ -83,9 +83,11 @@ class Batch:
 
     @property
     def complete(self) -> bool:
-        """Every submission graded (now or before), none skipped for its id, and the roster names exactly them."""
+        """Every submission graded (now or before), none skipped for its id, and every roster row's learner graded (a
+        submission no row names is graded under its own name, and listed)."""
         return (all(s in ("graded", "unchanged") for s in self.statuses.values())
-                and not any(entry.submission for entry in self.skipped) and not self.unmatched)
+                and not any(entry.submission for entry in self.skipped)
+                and not any(u.kind == "row" for u in self.unmatched))
 
 
 def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None, roster: Path | None = None,

@@ -160,6 +160,11 @@ class History:
         rows = self.db.execute("SELECT * FROM results WHERE run = ? ORDER BY rowid", (run,)).fetchall()
         return {row["learner"]: _result(row) for row in rows}
 
+    def result(self, run: int, learner: str) -> LearnerResult | None:
+        """`learner`'s result of `run` (None: none recorded)."""
+        row = self.db.execute("SELECT * FROM results WHERE run = ? AND learner = ?", (run, learner)).fetchone()
+        return None if row is None else _result(row)
+
     def judged(self, sha: str | None) -> Report | None:
         """The report as judged that the history keeps by `sha` (None for none)."""
         if not sha:

@@ -91,9 +91,10 @@ def report_json(report: Report, facts: LearnerFacts) -> str:
         data["provenance"]["seed"] = None
     data["batch"] = {"seconds": facts.seconds, "learner_output": facts.learner_output,
                      "warnings": list(facts.warnings), "files_hash": facts.files_hash, "submitted": facts.submitted,
-                     "time_from": facts.time_from, "manifest": facts.manifest, **dict(facts.extra)}
+                     "time_from": facts.time_from, "manifest": facts.manifest}
     if not report.infrastructure and facts.digest:
         data["batch"]["hash"] = facts.digest
+    data["batch"].update(facts.extra)
     return json_text(data) + "\n"
 
 
@@ -230,14 +231,8 @@ class ClassOutputs:
 
     def finish(self) -> None:
         """Take in every learner not taken in yet (their results and reports read from the history)."""
-        recorded = None
         while self.position < len(self.learners):
-            learner = self.learners[self.position]
-            if self.waiting.get(learner) is None:
-                recorded = recorded if recorded is not None else self.history.results(self.run)
-                if learner in recorded:
-                    self.waiting[learner] = (recorded[learner], None)
-            self._take(learner)
+            self._take(self.learners[self.position])
 
     def close(self) -> None:
         self.scratch.close()
@@ -247,8 +242,11 @@ class ClassOutputs:
         state = self.waiting.pop(learner, None)
         self.held.discard(learner)
         self.position += 1
-        if state is None:
-            return  # no result recorded in this run (a run interrupted before it)
+        if state is None:  # not held: its result and report as the history recorded them
+            result = self.history.result(self.run, learner)
+            if result is None:
+                return  # none recorded in this run
+            state = (result, None)
         result, report = state
         if report is None and result.status == "graded":
             report = self.history.report(result)

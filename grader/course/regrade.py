@@ -174,16 +174,16 @@ def regrade(out: Path, course: Course | None = None, *, overrides: Path | None =
     rows, problems = (in_force(overrides_path, graded, chapters, text=settings.overrides.text)
                       if settings.overrides.text is not None else ([], []))
     rows_of = by_learner(rows)
+    grading = Grading(tuple(chapters), settings.seed, settings.html, settings.plots,
+                      {"learner_seconds": settings.time_budget}, settings.sandbox,
+                      frozenset(the_course.hidden) if the_course else frozenset(), the_course, render=False)
     tasks, left_out = [], {}
     for learner in graded:
-        staged = staged_again(out, learner, results[learner], the_course, rows_of.get(learner, ()))
+        staged = staged_again(out, learner, results[learner], grading, rows_of.get(learner, ()))
         if staged is None:
             left_out[learner] = "its stored submission is gone (OUT/.staging)"
         else:
             tasks.append(staged)
-    grading = Grading(tuple(chapters), settings.seed, settings.html, settings.plots,
-                      {"learner_seconds": settings.time_budget}, settings.sandbox,
-                      frozenset(the_course.hidden) if the_course else frozenset(), the_course, render=False)
     pool = pool or LocalPool(jobs)
     isolation = pool.isolation(settings.sandbox)
     compared, found = [], {}

@@ -359,20 +359,21 @@ class LocalPool:
                     yield Outcome(futures[future], "error", f"{type(exc).__name__}: {exc}")
 
 
-def staged_again(out: Path, learner: str, result, course: Course | None, overrides: tuple) -> Staged | None:
+def staged_again(out: Path, learner: str, result, grading: Grading, overrides: tuple) -> Staged | None:
     """A learner of an earlier run as it was staged (OUT/.staging keeps exactly the files it graded), to be graded
-    again (grade regrade), with its submission time as the history keeps it and what its staging finds to flag;
-    None where the stored files are gone."""
+    again (grade regrade) with `grading`, with its submission time as the history keeps it and what its staging finds
+    to flag; None where the stored files are gone."""
     from grader.course import submit
 
     root = out / STAGING / folder_name(learner)
     if not (root / "exercises").is_dir():
         return None
+    course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     roster_time = result.submitted if result.time_from == "roster" else ""
     submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course)
-    return Staged(learner, str(root), result.content_hash or "", learner_yaml_warnings(root, learner) + manifest_flags
+    return Staged(learner, str(root), content_hash(root, learner, grading), learner_yaml_warnings(root, learner) + manifest_flags
                   + timing, submitted, result.time_from if submitted else None, _manifest_summary(manifest),
                   (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
                   tuple(overrides), result.seconds or 0.0)

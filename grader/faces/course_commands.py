@@ -155,7 +155,10 @@ def _say_batch(result, out, roster: str) -> None:
     counts = ", ".join(f"{n} {status}" for status, n in sorted(result.counts.items()))
     skipped = f"; {len(result.skipped)} skipped" if result.skipped else ""
     flagged = f"; {len(result.flagged)} flagged" if result.flagged else ""
-    unmatched = f"; the roster disagrees with the folder {plural(len(result.unmatched), 'time')}" if result.unmatched else ""
+    rows = sum(u.kind == "row" for u in result.unmatched)
+    unmatched = (f"; {plural(rows, 'roster row')} naming no submission" if rows else "") + (
+        f"; {plural(len(result.unmatched) - rows, 'submission')} no roster row names" if len(result.unmatched) > rows
+        else "")
     click.echo(f"{plural(len(result.statuses), 'submission')}: {counts or 'none'}{skipped}{flagged}{unmatched}; graded "
                f"{result.graded_now} in {result.seconds:.1f} s. Gradebook: {out / 'gradebook.csv'}")
     for learner, message in sorted(result.messages.items()):
@@ -186,8 +189,7 @@ def _say_batch(result, out, roster: str) -> None:
             said(f"{change[0]}: {change_text(change)}")
     for pair in result.similar[:5]:
         click.echo(f"  alike: {for_terminal(pair.first, one_line=True)} and {for_terminal(pair.second, one_line=True)} "
-                   f"({pair.score:.2f}; {', '.join(pair.functions[:3])}): for a person to look at, in summary.html",
-                   err=True)
+                   f"({pair.score:.2f}; {', '.join(pair.functions[:3])}): for a person to look at, in summary.html")
     click.echo(result.isolation, err=True)
 
 

@@ -176,8 +176,10 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
     """The results format GitHub Classroom's autograding-grading-reporter reads from a runner (base64 in
     the step output `result`): version, status ("pass", "fail" or "error"), max_score, message and one test
     per judged check with name, status, score (the check's own points: the reporter adds them up),
-    max_score, message, filename and line_no. Answers recorded for grading on submission and hidden
-    checks are not judged here: they are in no test, and `message` says how many points they hold."""
+    max_score, message, filename and line_no; each adjustment (an override, a late penalty) is a test of its own
+    points (max_score 0), so that the reporter's sum of the scores is the grade. Answers recorded for grading on
+    submission and hidden checks are not judged here: they are in no test, and `message` says how many points they
+    hold."""
     tests = []
     for chapter in report.chapters:
         info = BY_ID.get(chapter.chapter)
@@ -196,6 +198,10 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
                           "filename": quiz_file if check.kind == "quiz" else filename, "line_no": 0})
     statuses = {t["status"] for t in tests}
     status = "error" if "error" in statuses else "fail" if "fail" in statuses else "pass"
+    for adjustment in report.all_adjustments():  # so that the reporter's sum of the scores is the grade
+        tests.append({"name": f"{'late penalty' if adjustment.kind == 'late' else 'override'} on {adjustment.target}",
+                      "status": "pass", "score": adjustment.points, "max_score": 0, "message": adjustment.describe(),
+                      "filename": "", "line_no": 0})
     pending = report.pending_score
     said = [f"{report.score:g}/{report.max_score:g} points judged here"]
     if pending:

@@ -113,9 +113,9 @@ def test_batch_closes_every_route_and_refuses_linked_submissions(tmp_path):
     for route in ROUTES:
         report = json.loads((tmp_path / "out" / route / "report.json").read_text(encoding="utf-8"))
         _assert_closed(route, report)
-    assert result["statuses"]["linked"] == "unreadable" and "symbolic link" in result["messages"]["linked"]
-    assert result["statuses"]["linked_inside"] == "unreadable"
-    assert "no chapter files" in result["messages"]["linked_inside"]
+    assert result.statuses["linked"] == "unreadable" and "symbolic link" in result.messages["linked"]
+    assert result.statuses["linked_inside"] == "unreadable"
+    assert "no chapter files" in result.messages["linked_inside"]
     assert not (tmp_path / "out" / "linked" / "report.json").exists()
     honest = json.loads((tmp_path / "out" / "honest" / "report.json").read_text(encoding="utf-8"))
     assert honest["chapters"][0]["code_score"] == honest["chapters"][0]["code_max_score"]

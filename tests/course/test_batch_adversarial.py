@@ -102,10 +102,10 @@ def test_the_batch_finishes_in_bounded_time(batch):
     """Every learner is graded, and what would run forever was stopped by its own limit (the import's 2 s, the
     call's 5 s), never by the learner's whole budget: so each learner costs at most their limits."""
     out, result = batch
-    assert set(result["statuses"].values()) <= {"graded"}, result["messages"]
+    assert set(result.statuses.values()) <= {"graded"}, result.messages
     assert "longer than 2 s" in _checks(out, "loop_at_import")[1]["chapters"][1]["problems"][0]
     assert "stopped after 5 s" in _checks(out, "loop_in_function")[0]["H_worked_example"]["message"]
-    for learner in result["statuses"]:
+    for learner in result.statuses:
         messages = [c["message"] for c in _checks(out, learner)[0].values()]
         assert not any("for all chapters ran out" in m for m in messages), learner
 

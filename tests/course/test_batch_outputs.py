@@ -151,3 +151,25 @@ def test_a_rerun_finds_every_learner_unchanged_in_the_new_layout(batch):
     _, _, again, _ = batch
     said = again.stdout.decode("utf-8")
     assert "11 unchanged" in said and "graded 0" in said, said
+
+
+def test_what_a_learner_reads_never_holds_the_course_seed(tmp_path):
+    """report.html, report.json and results.json are the learner's to read: the course seed is in none of them (a
+    learner who knows it could work out every expected value); the instructor's gradebook keeps it."""
+    from click.testing import CliRunner
+
+    from grader.faces.cli import main
+    from tests.support import chapter_submission
+
+    chapter_submission(tmp_path / "submissions" / "ann", "ann")
+    (tmp_path / "course.yaml").write_text("course: secret-seed\nseed: 424242\n", encoding="utf-8")
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(out), "--chapters", "ch00",
+                                     "--course", str(tmp_path / "course.yaml")])
+    assert done.exit_code == 0, done.output
+    for name in ("report.html", "report.json", "results.json"):
+        assert "424242" not in (out / "ann" / name).read_text(encoding="utf-8"), name
+    report = json.loads((out / "ann" / "report.json").read_text(encoding="utf-8"))
+    assert report["seed"] is None and report["provenance"]["seed"] is None
+    assert "seed not shown" in (out / "ann" / "report.html").read_text(encoding="utf-8")
+    assert (out / "gradebook.csv").read_text(encoding="utf-8").splitlines()[1].endswith(",424242")

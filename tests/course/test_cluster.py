@@ -502,7 +502,7 @@ def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_tw
     for name, pool in (("once", batch.LocalPool(1)), ("twice", Twice(1))):
         result = batch.run_batch(submissions, tmp_path / name, chapters=["ch06"], seed=the_course.grading_seed,
                                  html=False, course=the_course, hidden=the_course.hidden, pool=pool)
-        assert result["statuses"] == {"ann": "graded", "bob": "graded"}
+        assert result.statuses == {"ann": "graded", "bob": "graded"}
     assert history(tmp_path / "twice") == [("ann", "graded", 1), ("bob", "graded", 1)]
     assert gradebook_learners(tmp_path / "twice") == ["ann", "bob"]
     for name in ("gradebook.csv", "summary.json"):

@@ -316,3 +316,43 @@ def test_points_are_rounded_once_wherever_they_are_set():
     assert adjustment.points == 0.1667
     with pytest.raises(TypeError):
         CheckResult("c", "f", "d", Status.PASS)  # type: ignore[call-arg]
+
+
+def test_a_late_penalty_waived_leaves_its_trace_everywhere_the_grade_is(tmp_path):
+    """dee, two days late, has the penalty waived by an overrides row: the waiver is an adjustment of 0 points with its
+    reason in report.json, report.html and results.json, the gradebook's adjustments cell and Moodle's feedback, and
+    the history keeps what it did."""
+    from click.testing import CliRunner
+
+    from grader.faces.cli import main
+    from tests.support import chapter_submission
+
+    chapter_submission(tmp_path / "submissions" / "dee", "dee")
+    (tmp_path / "roster.csv").write_text("submission,learner,submitted\ndee,dee,2026-05-03T12:00:00+00:00\n",
+                                         encoding="utf-8")
+    (tmp_path / "course.yaml").write_text(COURSE, encoding="utf-8")
+    (tmp_path / "overrides.csv").write_text("learner,target,points,factor,reason,who\n"
+                                            "dee,late,,0,accommodation: extension to Friday,the instructor\n",
+                                            encoding="utf-8")
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(out), "--chapters", "ch00",
+                                     "--roster", str(tmp_path / "roster.csv"), "--course", str(tmp_path / "course.yaml"),
+                                     "--overrides", str(tmp_path / "overrides.csv"), "--lms", "moodle"])
+    assert done.exit_code == 0, done.output
+    report = json.loads((out / "dee" / "report.json").read_text(encoding="utf-8"))
+    [waiver] = report["adjustments"]
+    assert waiver["kind"] == "late" and waiver["points"] == 0 and report["score"] == report["raw_score"]
+    assert "2 days late" in waiver["reason"] and "waived by override: accommodation: extension to Friday" in \
+        waiver["reason"] and waiver["who"] == "the instructor" and waiver["source"] == "overrides.csv, line 2"
+    assert "accommodation: extension to Friday" in (out / "dee" / "report.html").read_text(encoding="utf-8")
+    results = json.loads((out / "dee" / "results.json").read_text(encoding="utf-8"))
+    assert results["extra_data"]["adjustments"] == report["adjustments"] and "late penalty: +0" in results["output"]
+    with (out / "gradebook.csv").open(newline="", encoding="utf-8") as handle:
+        [row] = list(csv.DictReader(handle))
+    assert "late penalty +0 on total" in row["adjustments"] and "extension to Friday" in row["adjustments"]
+    with (out / "gradebook-moodle.csv").open(newline="", encoding="utf-8") as handle:
+        [row] = list(csv.DictReader(handle))
+    assert row["Feedback"].startswith("Late penalty: +0 (2 days late") and "extension to Friday" in row["Feedback"]
+    with sqlite3.connect(out / "gradebook.db") as db:
+        [(applied,)] = db.execute("SELECT applied FROM overrides").fetchall()
+    assert applied.startswith("waived a late penalty of -")

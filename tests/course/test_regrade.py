@@ -97,7 +97,7 @@ def test_a_regrade_with_an_unchanged_grader_changes_nothing(tmp_path):
     done = run_grade("regrade", out)
     assert done.returncode == 0, done.stderr[-3000:]
     assert "Graded 4 learners of run 1 again" in done.stdout
-    assert "No learner's grade or check verdict would change." in done.stdout
+    assert "No learner's grade, check verdict or adjustment would change." in done.stdout
     assert _regrade_rows(out) == [] and (out / "regrade.csv").read_text(encoding="utf-8").startswith(
         "learner,old_score,new_score,checks_changed,why")
     assert _files(out) == before  # not a byte of the batch's outputs, not a row of its history
@@ -150,7 +150,7 @@ def test_a_changed_tolerance_lists_exactly_the_learners_whose_verdicts_move_and_
     assert _rows(out, "SELECT learner, delta, why FROM changes WHERE run = 2") == [("bo", 1.0, why)]
     report = json.loads((out / "bo" / "report.json").read_text(encoding="utf-8"))
     check = next(c for ch in report["chapters"] for c in ch["checks"] if c["id"] == f"quiz_{QUESTION}")
-    assert check["status"] == "pass" and report["score"] == old["bo"] + 1 and "hash" not in report["batch"]
+    assert check["status"] == "pass" and report["score"] == old["bo"] + 1
     with (out / "gradebook.csv").open(newline="", encoding="utf-8") as handle:
         gradebook = {row["learner"]: row for row in csv.DictReader(handle)}
     assert float(gradebook["bo"]["total"]) == old["bo"] + 1 and float(gradebook["cy"]["total"]) == old["cy"]
@@ -160,3 +160,104 @@ def test_a_changed_tolerance_lists_exactly_the_learners_whose_verdicts_move_and_
 
     done = run_grade("regrade", out, cwd=project, env=env)  # the applied grades are today's: nothing moves now
     assert done.returncode == 0 and _regrade_rows(out) == [], done.stdout
+    done = run_grade("batch", submissions, "--out", out, "--chapters", "ch06", "--no-html", cwd=project, env=env)
+    assert done.returncode == 0 and "1 unchanged" in done.stdout, done.stdout  # bo's regrade is today's grade
+
+
+# ------------------------------------------------------------------------------------ what a regrade grades with
+
+DEADLINE_COURSE = """\
+course: regrade-course
+seed: 424242
+deadline: "2026-05-01T23:59:00+00:00"
+late_penalty: {per_day: 0.1, max: 0.5}
+"""
+
+
+def _late_class(tmp_path: Path) -> tuple[Path, Path, Path]:
+    """ann on time and dee two days late, each handing in ch00; a roster with their times, a course file with the
+    deadline and an overrides file waiving dee's penalty, all outside OUT: (submissions, roster, course file)."""
+    from tests.support import chapter_submission
+
+    submissions = tmp_path / "submissions"
+    for learner in ("ann", "dee"):
+        chapter_submission(submissions / learner, learner)
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner,submitted\nann,ann,2026-05-01T12:00:00+00:00\n"
+                      "dee,dee,2026-05-03T12:00:00+00:00\n", encoding="utf-8")
+    course = tmp_path / "course.yaml"
+    course.write_text(DEADLINE_COURSE, encoding="utf-8")
+    (tmp_path / "overrides.csv").write_text("learner,target,points,factor,reason,who\n"
+                                            "dee,late,,0,accommodation: extension to Friday,the instructor\n",
+                                            encoding="utf-8")
+    (tmp_path / "overrides-nodee.csv").write_text("learner,target,points,factor,reason,who\n", encoding="utf-8")
+    return submissions, roster, course
+
+
+def _invoke(*args: object):
+    from click.testing import CliRunner
+
+    from grader.faces.cli import main
+
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def _totals(out: Path) -> dict[str, dict[str, str]]:
+    """Each learner's total in gradebook.csv, Moodle's and Canvas' gradebooks (Canvas': its late penalty column)."""
+    def rows(name: str) -> list[dict]:
+        with (out / name).open(newline="", encoding="utf-8") as handle:
+            return list(csv.DictReader(handle))
+
+    totals: dict[str, dict[str, str]] = {}
+    for row in rows("gradebook.csv"):
+        totals.setdefault(row["learner"], {})["gradebook"] = row["total"]
+    for row in rows("gradebook-moodle.csv"):
+        totals[row["Learner id"]]["moodle"] = next(v for k, v in row.items() if k.startswith("Total"))
+    for row in rows("gradebook-canvas.csv")[1:]:
+        totals[row["SIS Login ID"]]["canvas late"] = row["Late penalty and total overrides"]
+    return totals
+
+
+def test_after_regrade_apply_canvas_and_moodle_show_the_new_grades_too(tmp_path):
+    """A batch for Canvas and Moodle with dee's late penalty waived; the waiver withdrawn by a regrade that names the
+    overrides without it, applied: every gradebook shows dee's penalty (the class outputs are rebuilt, all of them)."""
+    submissions, roster, course = _late_class(tmp_path)
+    out = tmp_path / "out"
+    done = _invoke("batch", submissions, "--out", out, "--chapters", "ch00", "--roster", roster, "--course", course,
+                   "--overrides", tmp_path / "overrides.csv", "--lms", "canvas", "--lms", "moodle", "--no-html")
+    assert done.exit_code == 0, done.output
+    before = _totals(out)
+    full = float(before["dee"]["gradebook"])  # not late, as waived
+    assert before["dee"] == {"gradebook": f"{full:g}", "moodle": f"{full:g}", "canvas late": "0"}
+    done = _invoke("regrade", out, "--course", course, "--overrides", tmp_path / "overrides-nodee.csv", "--apply",
+                   "--reason", "dee's extension withdrawn")
+    assert done.exit_code == 0, done.output
+    assert "overrides: " in done.output and "1 row fewer" in done.output  # the difference named, and shown
+    after = _totals(out)
+    assert after["dee"] == {"gradebook": f"{0.8 * full:g}", "moodle": f"{0.8 * full:g}",
+                            "canvas late": f"{-0.2 * full:g}"}
+    assert after["ann"] == before["ann"]
+
+
+def test_a_regrade_grades_with_what_the_batch_ran_with_unless_told_otherwise(tmp_path):
+    """The batch read a course file and an overrides file outside OUT; `grade regrade OUT` with nothing named grades
+    with them (as the history keeps them) and moves nobody, also after those files changed on disk; --apply records
+    a run that moves nobody."""
+    submissions, roster, course = _late_class(tmp_path)
+    out = tmp_path / "out"
+    done = _invoke("batch", submissions, "--out", out, "--chapters", "ch00", "--roster", roster, "--course", course,
+                   "--overrides", tmp_path / "overrides.csv", "--no-html")
+    assert done.exit_code == 0, done.output
+    (tmp_path / "overrides.csv").write_text("learner,target,points,factor,reason,who\n", encoding="utf-8")
+    course.write_text(DEADLINE_COURSE.replace("per_day: 0.1", "per_day: 0.3"), encoding="utf-8")
+    done = _invoke("regrade", out)
+    assert done.exit_code == 0, done.output
+    assert "With what run 1 graded with" in done.output and "No learner's grade" in done.output, done.output
+    assert "changed since run 1 read it" in done.output  # the edited overrides file is not used, and that is said
+    done = _invoke("regrade", out, "--apply", "--reason", "nothing changed")
+    assert done.exit_code == 0, done.output
+    assert _rows(out, "SELECT learner FROM changes WHERE run = 2") == []
+    [(who, applied)] = _rows(out, "SELECT learner, applied FROM overrides WHERE run = 2")
+    assert who == "dee" and applied.startswith("waived a late penalty of -")  # the run kept what the waiver did
+    done = _invoke("regrade", out, "--course", course)  # named: graded with it, and the difference shown
+    assert done.exit_code == 0 and "deadline and late penalty" in done.output, done.output

@@ -299,7 +299,9 @@ def test_hard_coded_public_values_pass_at_home_and_fail_where_submissions_are_gr
                         "--course", str(tmp_path / "course.yaml"), "--no-html")
         assert done.returncode in (0, 1), done.stderr
         graded = json.loads((tmp_path / "out" / "copycat" / "report.json").read_text(encoding="utf-8"))
-        assert graded["seed"] == COURSE_SEED
+        assert graded["seed"] is None  # the learner reads report.json: the course seed is not in it
+        gradebook = (tmp_path / "out" / "gradebook.csv").read_text(encoding="utf-8")
+        assert gradebook.splitlines()[1].endswith(f",{COURSE_SEED}")  # graded at it: the instructor's gradebook says so
         batch = {c["id"]: c["status"] for c in graded["chapters"][0]["checks"]}
         assert [batch[c] for c in random_inputs] == ["fail"] * 2
         assert "H_rows_orthogonal" in batch  # the hidden check runs where submissions are graded
@@ -385,3 +387,35 @@ def test_a_learner_submits_from_the_handout_and_batch_knows_the_handout(handout,
             assert any("packed with an older or other handout" in w for w in warnings) == stale, warnings
     finally:
         shutil.rmtree(base, ignore_errors=True)
+
+
+@pytest.mark.parametrize("before", ["absent", "kept"])
+def test_a_refused_release_leaves_out_as_it_was(tmp_path, monkeypatch, before):
+    """A handout that would hold an answer is refused, and OUT is as it was: absent, or with what it held (even with
+    --force); nothing is left beside it. The handout is built elsewhere and moved into OUT only once it passes."""
+    from click.testing import CliRunner
+
+    from grader.faces.cli import main
+    from grader.judging import expected
+
+    def build_wheel(stage: Path, folder: Path) -> Path:
+        (folder / "jacobians_grader-0.1.0-py3-none-any.whl").write_bytes(b"")
+        return folder / "jacobians_grader-0.1.0-py3-none-any.whl"
+
+    monkeypatch.setattr(release, "record", lambda course: expected.Recording(seed=course.public_seed))
+    monkeypatch.setattr(release, "_build_wheel", build_wheel)
+    monkeypatch.setattr(release, "scan", lambda folder: ["exercises/ch06_measurement.py: reference code `r = ...`"])
+    out = tmp_path / "handout"
+    if before == "kept":
+        out.mkdir()
+        (out / "notes.txt").write_text("the instructor's own", encoding="utf-8")
+    done = CliRunner().invoke(main, ["release", str(out), "--force"])
+    assert done.exit_code == 1 and "would hold answers" in done.output and "left as it was" in done.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["handout"] if before == "kept" else [])
+    if before == "kept":
+        assert [p.name for p in out.iterdir()] == ["notes.txt"]
+    monkeypatch.setattr(release, "scan", lambda folder: [])
+    done = CliRunner().invoke(main, ["release", str(out), "--force"])
+    assert done.exit_code == 0, done.output
+    assert (out / "handout.json").is_file() and (out / ".github" / "workflows" / "classroom.yml").is_file()
+    assert not (out / "notes.txt").exists() and sorted(p.name for p in tmp_path.iterdir()) == ["handout"]

@@ -216,7 +216,7 @@ def test_batch_grades_zipped_notebooks_as_their_py(tmp_path):
     sandboxed = shutil.which("bwrap") is not None and os.environ.get("GRADER_SANDBOX") != "off"
     result = run_batch(submissions, tmp_path / "out", chapters=["ch06", "ch07"], jobs=1, seed=7, html=False,
                        sandboxed=sandboxed)
-    assert result["statuses"] == {"as_py": "graded", "as_notebook": "graded"}
+    assert result.statuses == {"as_py": "graded", "as_notebook": "graded"}
     reports = {n: json.loads((tmp_path / "out" / n / "report.json").read_text(encoding="utf-8"))
                for n in ("as_py", "as_notebook")}
     assert _verdicts(reports["as_notebook"]) == _verdicts(reports["as_py"])

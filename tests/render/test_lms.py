@@ -188,3 +188,34 @@ def _registry():
 
     return Registry().with_resources((lms.schema(n)["$id"], Resource.from_contents(lms.schema(n)))
                                      for n in lms.SCHEMAS)
+
+
+def test_moodles_feedback_is_the_learners_own_words_and_nothing_for_the_instructor():
+    """Moodle shows its Feedback column to the learner: each adjustment with its reason, in sentences that start with
+    a word (never escaped as a spreadsheet formula), and nothing flagged for the instructor's eyes."""
+    from grader.model import LearnerResult
+
+    adjusted = LearnerResult("ann", "graded", score=7, chapters={"ch00": {"code": 7, "quiz": 0, "score": 7, "max": 10}},
+                             adjustments=[{"target": "total", "points": -3, "reason": "agreed penalty", "kind": "override",
+                                           "who": "bo", "source": "o.csv, line 2"},
+                                          {"target": "total", "points": -1.5, "reason": "1 day late", "kind": "late",
+                                           "who": "", "source": "the course config"}],
+                             flags=["learner.yaml names 'bo' ...; correct the roster or the file and grade again"])
+    not_graded = LearnerResult("cy", "unreadable", "cy.zip: not a valid zip file")
+    rows = list(csv.DictReader(io.StringIO(lms.moodle_gradebook([adjusted, not_graded], ["ch00"]))))
+    assert rows[0]["Feedback"] == "Override: -3 (agreed penalty); Late penalty: -1.5 (1 day late)"
+    assert rows[1]["Feedback"] == "Not graded (unreadable): cy.zip: not a valid zip file"
+    assert not any(row["Feedback"].startswith(("'", "=", "+", "-", "@")) for row in rows)
+    assert "correct the roster" not in lms.moodle_gradebook([adjusted], ["ch00"])
+
+
+def test_the_class_summary_says_a_first_run_is_a_first_run():
+    from grader.render.summary import Summary, change_text, moved_line
+
+    assert change_text(("kim", None, 198, 198, "first graded")) == "first graded: 198"
+    assert change_text(("carl", 182.7, 203, 20.3, "late penalty: none now")) == "182.7 -> 203: late penalty: none now"
+    assert change_text(("al", 12, None, None, "not in this run's submissions")) == (
+        "not in this run's submissions (was 12)")
+    assert moved_line(Summary(None, changes=[("kim", None, 198, 198, "first graded")] * 16, first_run=True)) == (
+        "the history's first run: 16 learners graded first")
+    assert moved_line(Summary(None, changes=[], first_run=False)) == "0 scores moved since the last run"

@@ -1,0 +1,52 @@
+"""The roster and the submissions folder, matched both ways (grader.course.staging.survey): a row naming no submission
+and a submission no row names are each listed, with the closest name on the other side, in the command's output and
+in summary.json; a row is never dropped silently."""
+
+from __future__ import annotations
+
+import json
+
+from click.testing import CliRunner
+
+from grader.course.staging import survey
+from grader.faces.cli import main
+from tests.support import chapter_submission
+
+
+def _folder(tmp_path):
+    submissions = tmp_path / "submissions"
+    for name in ("bug-H-transposed", "ann-smith", "cy"):
+        chapter_submission(submissions / name, name)
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner\nann-smith,ann\nbug-H-transposd,yan\nzed,zed\n", encoding="utf-8")
+    return submissions, roster
+
+
+def test_a_roster_row_naming_no_submission_and_a_submission_no_row_names_are_both_found(tmp_path):
+    submissions, roster = _folder(tmp_path)
+    found = survey(submissions, roster)
+    assert sorted(e.learner for e in found.entries) == ["ann", "bug-H-transposed", "cy"]
+    assert [(u.kind, u.name, u.learner, u.line, u.close) for u in found.unmatched] == [
+        ("row", "bug-H-transposd", "yan", 3, "bug-H-transposed"), ("row", "zed", "zed", 4, ""),
+        ("submission", "bug-H-transposed", "bug-H-transposed", 0, "bug-H-transposd"),
+        ("submission", "cy", "cy", 0, "")]
+    assert found.unmatched[0].describe("roster.csv") == (
+        "roster.csv, line 3: 'bug-H-transposd' (learner 'yan') names no submission in the submissions folder, so "
+        "'yan' has no grade; did you mean 'bug-H-transposed'?")
+    assert survey(submissions).unmatched == []  # without a roster, every submission is graded under its name
+
+
+def test_grade_batch_lists_them_and_says_it_is_incomplete(tmp_path):
+    submissions, roster = _folder(tmp_path)
+    out = tmp_path / "out"
+    done = CliRunner().invoke(main, ["batch", str(submissions), "--out", str(out), "--roster", str(roster),
+                                     "--chapters", "ch00", "--no-html"])
+    assert done.exit_code == 1, done.output  # two learners of the roster have no grade
+    assert "2 roster rows naming no submission; 2 submissions no roster row names" in done.output
+    assert "did you mean 'bug-H-transposed'?" in done.output and "did you mean 'bug-H-transposd'?" in done.output
+    summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
+    assert summary["roster"]["file"] == "roster.csv"
+    assert [(u["kind"], u["name"], u["did_you_mean"]) for u in summary["roster"]["unmatched"]] == [
+        ("row", "bug-H-transposd", "bug-H-transposed"), ("row", "zed", None),
+        ("submission", "bug-H-transposed", "bug-H-transposd"), ("submission", "cy", None)]
+    assert "names no submission" in (out / "summary.html").read_text(encoding="utf-8")
