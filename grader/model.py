@@ -295,7 +295,7 @@ class Report:
     def to_kept(self) -> dict:
         """The report as judged, to be made again by from_kept (grader.core.memo, the history): to_dict() without
         the adjustments, with each check's details, the plot data, what learner code printed and the flags."""
-        return dict(self.to_dict(), adjustments=[], chapters=[c.to_kept() for c in self.chapters],
+        return dict(self.to_dict(chapters=[c.to_kept() for c in self.chapters]), adjustments=[],
                     learner_output=self.learner_output, flags=list(self.flags), learner_unset=self.learner_unset)
 
     @classmethod
@@ -307,7 +307,8 @@ class Report:
         report.learner_unset = bool(data.get("learner_unset"))
         return report
 
-    def to_dict(self) -> dict:
+    def to_dict(self, chapters: list[dict] | None = None) -> dict:
+        """The report as plain data (grader/schemas/report.schema.json); `chapters`: its chapters' data, made already."""
         return {
             "version": SCHEMA_VERSION,
             "submission": self.submission,
@@ -320,7 +321,7 @@ class Report:
             "raw_score": self.raw_score,
             "adjustments": [a.to_dict() for a in self.all_adjustments()],
             "infrastructure": self.infrastructure or None,
-            "chapters": [c.to_dict() for c in self.chapters],
+            "chapters": [c.to_dict() for c in self.chapters] if chapters is None else chapters,
         }
 
 

@@ -20,10 +20,8 @@ tried once more, then listed as `error` with empty score cells and graded again 
 
 from __future__ import annotations
 
-import json
 import sys
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -188,8 +186,7 @@ class Recorder:
         self.statuses[learner], self.messages[learner] = outcome.status, outcome.message
         report, files = None, outcome.files
         if outcome.status == "graded":
-            report = Report.from_kept(json.loads(zlib.decompress(outcome.kept[1]).decode("utf-8", "surrogatepass")))
-            report.attach(outcome.adjustments)
+            report = outcome.report
             facts = outputs.LearnerFacts.of(outcome.staged, report, outcome.extra)
             result = facts.result(report)
             result.report = outcome.kept[0]

@@ -62,7 +62,7 @@ def now() -> str:
 
 def kept_report(report: Report) -> tuple[str, bytes]:
     """(the hash, the compressed data) the history keeps `report` as judged by: Report.to_kept, without adjustments."""
-    text = json.dumps(report.to_kept(), sort_keys=True, ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
+    text = json.dumps(report.to_kept(), ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
     return hashlib.sha256(text).hexdigest(), zlib.compress(text, 1)
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import csv
 import io
 import json
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,6 +28,7 @@ from grader.course import history as histories
 from grader.course import outputs
 from grader.course.overrides import by_learner, in_force
 from grader.course.settings import RunSettings, Source, differences
+from grader.course.staging import folder_name
 from grader.course.workers import Grading, LocalPool, Outcome, staged_again
 from grader.files import write_atomically
 from grader.model import Report, points_text, rounded_points
@@ -144,7 +144,8 @@ def regrade(out: Path, course: Course | None = None, *, overrides: Path | None =
         if run is None:
             raise RegradeError(f"{out / histories.FILE_NAME} has no finished run yet: let `grade batch` finish first")
         info, results, before = history.run_info(run), history.results(run), history.settings(run)
-        old = {learner: history.report(result) for learner, result in results.items() if result.status == "graded"}
+        old = {learner: history.report(result) or _written_report(out, learner)
+               for learner, result in results.items() if result.status == "graded"}
     notes = []
     if before is None:  # a history from a grader that kept no settings: the course file and overrides of today
         notes.append(f"run {run} kept no record of what it graded with (an earlier grader's history): graded with "
@@ -188,10 +189,7 @@ def regrade(out: Path, course: Course | None = None, *, overrides: Path | None =
     isolation = pool.isolation(settings.sandbox)
     compared, found = [], {}
     for done, outcome in enumerate(pool.grade(tasks, out, grading, rows_of, force=True), 1):
-        new = None
-        if outcome.status == "graded":
-            new = Report.from_kept(json.loads(zlib.decompress(outcome.kept[1]).decode("utf-8", "surrogatepass")))
-            new.attach(outcome.adjustments)
+        new = outcome.report if outcome.status == "graded" else None
         learner = outcome.learner
         found[learner] = outcome
         compared.append(compare(learner, results[learner].score, old.get(learner), new, outcome.message))
@@ -200,6 +198,15 @@ def regrade(out: Path, course: Course | None = None, *, overrides: Path | None =
     compared.sort(key=lambda m: graded.index(m.learner))
     return Regrade(run, info, settings, differences(before, settings), compared, left_out, problems, notes, isolation,
                    found, rows, the_course)
+
+
+def _written_report(out: Path, learner: str) -> Report | None:
+    """The report an earlier grader wrote into OUT/<folder>/report.json, where its history kept none (a history from
+    before reports were kept there), or None."""
+    try:
+        return Report.from_dict(json.loads((out / folder_name(learner) / "report.json").read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
+        return None
 
 
 def csv_text(found: Regrade) -> str:

@@ -27,6 +27,7 @@ from grader.course.staging import STAGING, Entry, StagingError, folder_name, sta
 
 if TYPE_CHECKING:
     from grader.course_config import Course
+    from grader.model import Report
 
 RETRY_PAUSE = 1.0  # seconds before a learner whose child could not start is tried again
 
@@ -96,7 +97,7 @@ class Staged:
 @dataclass
 class Outcome:
     """One learner's outcome as plain data. status: "graded" (now: `kept` is the report as judged, as the history
-    keeps it, grader.course.history.kept_report), "unchanged" (its files, grader and settings as when the history
+    keeps it, grader.course.history.kept_report, and `report` that report adjusted), "unchanged" (its files, grader and settings as when the history
     last kept its report: not graded again), "unreadable" or "error"; the message; `staged` (what staging found);
     the adjustments made and what each override did (its source, whether applied, in words); the texts of its
     files in OUT/<folder>/ in the order they are written (None: remove that file), report.json last;
@@ -107,6 +108,7 @@ class Outcome:
     message: str
     staged: Staged | None = None
     kept: tuple[str, bytes] | None = None
+    report: Report | None = None  # graded now: the report, adjusted (a grader process's own object, never learner code's)
     adjustments: list[dict] = field(default_factory=list)
     outcomes: list[tuple[str, bool, str]] = field(default_factory=list)
     files: dict[str, str | None] = field(default_factory=dict)
@@ -312,7 +314,7 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
                        infrastructure=report.infrastructure, extra=dict(extra))
     report.learner_output = report.learner_output[:outputs.LEARNER_OUTPUT]
     kept = kept_report(report)
-    outcome = Outcome(learner, "graded", "", staged, kept, [a.to_dict() for a in report.all_adjustments()],
+    outcome = Outcome(learner, "graded", "", staged, kept, report, [a.to_dict() for a in report.all_adjustments()],
                       [(o.override.source, o.applied, o.said) for o in graded.outcomes], extra=dict(extra))
     outcome.message = outputs.graded_message(report)
     if grading.render:
@@ -353,10 +355,11 @@ class LocalPool:
             futures = {pool.submit(_grade_one, task, str(out), grading, tuple(overrides.get(task.learner, ())),
                                    previous.get(task.learner), force): task.learner for task in tasks}
             for future in as_completed(futures):
+                learner = futures.pop(future)  # its outcome is let go once taken: memory does not grow with the class
                 try:
                     yield future.result()
                 except Exception as exc:  # one broken submission never stops the batch
-                    yield Outcome(futures[future], "error", f"{type(exc).__name__}: {exc}")
+                    yield Outcome(learner, "error", f"{type(exc).__name__}: {exc}")
 
 
 def staged_again(out: Path, learner: str, result, grading: Grading, overrides: tuple) -> Staged | None:
