@@ -15,8 +15,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
+from grader import boundary
 from grader.boundary import Limits, SandboxMode
+from grader.chapters import BY_ID
+from grader.core.pipeline import build_report
 from grader.core.policy import Outcome, Policy, apply_policy
+from grader.model import ChapterResult, Report
 
 if TYPE_CHECKING:
     from grader.boundary import Boundary, Session
@@ -49,8 +53,6 @@ class Door:
     def boundary(self) -> Boundary:
         """The chosen boundary (BoundaryUnavailable where `mode` cannot be had here)."""
         if self._boundary is None:
-            from grader import boundary
-
             self._boundary = boundary.choose(self.mode.value, resident=self.resident, probe=self.probe,
                                              secrets=self.secrets, remember=self.remember,
                                              turned_off=self.turned_off)
@@ -111,8 +113,6 @@ def grade_submission(submission: Submission, request: Request, door: Door, polic
     session is open (imports to make while the child runs). Tried a second time behind a renewed door when the first
     try failed for a reason outside the learner's code; then `policy` is applied to the report. BoundaryUnavailable
     where the door's mode cannot be had here at all."""
-    from grader.core.pipeline import build_report
-
     report = None
     for attempt in (1, 2):
         try:
@@ -140,8 +140,5 @@ def grade_submission(submission: Submission, request: Request, door: Door, polic
 
 def _not_started(request: Request, why: str) -> Report:
     """The report of a submission whose learner code could not start at all: no grade, and why."""
-    from grader.chapters import BY_ID
-    from grader.model import ChapterResult, Report
-
     return Report(request.label or "", [ChapterResult(c, BY_ID[c].title) for c in request.chapters],
                   seed=request.seed, infrastructure=why)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from grader import provenance
 from grader.boundary import SandboxMode
 from grader.chapters import CHAPTERS
 from grader.core.policy import apply_policy
@@ -106,8 +107,6 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     processes on this machine; grader.course.cluster.ClusterPool grades on a Dask cluster), and whatever it grades
     on, this process alone writes into `out`. Every learner's result goes into OUT/gradebook.db as soon as it is
     graded, once (a result that arrives twice is recorded once)."""
-    from grader import provenance
-
     chapters = chapters or [c.id for c in CHAPTERS]
     if jobs is not None and jobs < 1:
         raise ValueError(f"jobs must be at least 1, not {jobs}")

@@ -21,10 +21,14 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from grader.course import history as histories
+from grader.course import statistics
 from grader.course.staging import STAGING, folder_name
+from grader.course_config import PUBLIC_SEED, CourseError
 from grader.files import write_atomically, write_atomically_from
 from grader.model import LearnerResult, Report
-from grader.render import plural
+from grader.quiz import class_questions
+from grader.render import lms, plural, summary
 from grader.safe_text import json_text
 
 if TYPE_CHECKING:
@@ -83,8 +87,6 @@ class LearnerFacts:
 def report_json(report: Report, facts: LearnerFacts) -> str:
     """A learner's report.json: the report (grader/schemas/batch-report.schema.json) and what the batch keeps; a
     seed other than the public one is not in it (null: the learner reads this file)."""
-    from grader.course_config import PUBLIC_SEED
-
     data = report.to_dict()
     if report.seed != PUBLIC_SEED:
         data["seed"] = None
@@ -101,8 +103,6 @@ def report_json(report: Report, facts: LearnerFacts) -> str:
 def learner_files(report: Report, facts: LearnerFacts, grading: Grading) -> dict[str, str | None]:
     """The texts of a graded learner's files, in the order they are written: results.json (Gradescope's format),
     report.html (where the run writes it) and report.json, last: it marks the learner done."""
-    from grader.render import lms
-
     files: dict[str, str | None] = {
         "results.json": lms.gradescope(report, hidden=grading.hidden, execution_time=facts.seconds,
                                        heading=[f"Graded as {facts.learner}."], notes=list(facts.warnings))}
@@ -196,10 +196,6 @@ class ClassOutputs:
     So the memory of a batch does not grow with its reports."""
 
     def __init__(self, out: Path, history: History, run: int, learners: list[str], chapters: list[str]) -> None:
-        from grader.course import statistics
-        from grader.quiz import class_questions
-        from grader.render import lms, summary
-
         self.out, self.history, self.run, self.learners = out, history, run, learners
         self.position = 0  # learners[:position] are taken in
         self.waiting: dict[str, tuple | None] = {}  # recorded before their turn: (result, report), None to read again
@@ -288,10 +284,6 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
     history. `overrides`: each row in force and what it did (learner, target, points, factor, reason, who, source,
     said). A gradebook.csv changed by hand since the last run is kept as gradebook.edited-<time>.csv (it is an
     export: changes belong in overrides.csv) and said so."""
-    from grader.course import history as histories
-    from grader.course import statistics
-    from grader.render import lms, summary
-
     chapters = list(settings.chapters)
     own = collected is None
     if own:
@@ -351,8 +343,6 @@ def lms_layouts(out: Path, settings: RunSettings) -> list[str]:
 
 
 def _has_deadline(settings: RunSettings) -> bool:
-    from grader.course_config import CourseError
-
     try:
         course = settings.course_file()
     except CourseError:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from grader import provenance
 from grader.boundary import SandboxMode
 from grader.course import history as histories
 from grader.course import outputs
@@ -30,6 +31,7 @@ from grader.course.overrides import by_learner, in_force
 from grader.course.settings import RunSettings, Source, differences
 from grader.course.staging import folder_name
 from grader.course.workers import Grading, LocalPool, Outcome, staged_again
+from grader.course_config import CourseError
 from grader.files import write_atomically
 from grader.model import Report, points_text, rounded_points
 from grader.safe_text import for_csv
@@ -134,9 +136,6 @@ def regrade(out: Path, course: Course | None = None, *, overrides: Path | None =
     for a course file (`course`) or an overrides file (`overrides`) named here, and compare. Writes nothing.
     RegradeError where OUT holds no finished run; grader.course.workers.InfrastructureError where learner code
     cannot run here; grader.course.overrides.OverridesError for an overrides file that cannot be read."""
-    from grader import provenance
-    from grader.course_config import CourseError
-
     if not (out / histories.FILE_NAME).is_file():
         raise RegradeError(f"{out} holds no {histories.FILE_NAME}: regrade a folder `grade batch --out` wrote")
     with histories.History(out / histories.FILE_NAME) as history:

@@ -13,6 +13,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from grader.course_config import CourseError, from_text
+
 if TYPE_CHECKING:
     from grader.course_config import Course
 
@@ -79,8 +81,6 @@ class RunSettings:
     def course_file(self) -> Course | None:
         """The course this run read, made again from the text it kept (None where it read no file: the defaults);
         grader.course_config.CourseError where the kept text is not a course file (a hand-edited history)."""
-        from grader.course_config import from_text
-
         if self.course.text is None:
             return None
         return from_text(self.course.text, f"{self.course.path} (as run with)")
@@ -108,8 +108,6 @@ def differences(before: RunSettings, now: RunSettings) -> list[str]:
 def _course_differences(before: RunSettings, now: RunSettings) -> list[str]:
     if before.course.text == now.course.text:
         return []
-    from grader.course_config import CourseError
-
     try:
         old, new = before.course_file(), now.course_file()
     except CourseError as exc:

@@ -21,9 +21,17 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from grader.boundary import Limits, SandboxMode
+from grader import provenance
+from grader.boundary import BoundaryUnavailable, Limits, SandboxMode
+from grader.core.memo import Memo
+from grader.core.pipeline import Request
 from grader.core.policy import Override, Policy, parse_time
+from grader.core.transaction import Door, grade_submission
+from grader.course import outputs, submit
+from grader.course.history import kept_report
 from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage
+from grader.quiz import learner_id
+from grader.submission import Submission
 
 if TYPE_CHECKING:
     from grader.course_config import Course
@@ -56,8 +64,6 @@ class Grading:
     def judging(self, learner: str) -> str:
         """What a learner's report as judged depends on beside their files: a report graded with the same is not
         graded again."""
-        from grader import provenance
-
         course = self.course
         return json.dumps([list(self.chapters), self.seed, provenance.code_digest()[:16], self.plots,
                            sorted(dict(self.limits).items()), learner, course.id if course else None,
@@ -97,8 +103,9 @@ class Staged:
 @dataclass
 class Outcome:
     """One learner's outcome as plain data. status: "graded" (now: `kept` is the report as judged, as the history
-    keeps it, grader.course.history.kept_report, and `report` that report adjusted), "unchanged" (its files, grader and settings as when the history
-    last kept its report: not graded again), "unreadable" or "error"; the message; `staged` (what staging found);
+    keeps it, grader.course.history.kept_report, and `report` that report adjusted), "unchanged" (its files, grader
+    and settings as when the history last kept its report: not graded again), "unreadable" or "error"; the message;
+    `staged` (what staging found);
     the adjustments made and what each override did (its source, whether applied, in words); the texts of its
     files in OUT/<folder>/ in the order they are written (None: remove that file), report.json last;
     `infrastructure`: why it could not be graded for a reason outside the learner's code ("" when it was)."""
@@ -108,7 +115,7 @@ class Outcome:
     message: str
     staged: Staged | None = None
     kept: tuple[str, bytes] | None = None
-    report: Report | None = None  # graded now: the report, adjusted (a grader process's own object, never learner code's)
+    report: Report | None = None  # graded now, adjusted: a grader process's own object, never learner code's
     adjustments: list[dict] = field(default_factory=list)
     outcomes: list[tuple[str, bool, str]] = field(default_factory=list)
     files: dict[str, str | None] = field(default_factory=dict)
@@ -134,8 +141,6 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
     (unreadable; unchanged: its content hash is `previous`, that of the report the history keeps, unless `force`).
     The manifest of an archive made by `grade submit` is checked (grader.course.submit.check) and what it says is
     flagged."""
-    from grader.course import submit
-
     started = time.monotonic()
     learner = entry.learner
     try:
@@ -160,8 +165,6 @@ def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[st
     """A staged submission's own answers/learner.yaml naming someone other than the id it is graded as (its folder
     or zip name, or the roster): the quiz numbers and option letters are the graded id's, so answers worked out for
     the other id's do not match. One sentence saying so, or nothing."""
-    from grader.quiz import learner_id
-
     who, source = learner_id(root / "exercises" / "answers", None)
     if not source.endswith("learner.yaml") or who == learner:
         return []
@@ -176,8 +179,6 @@ def submission_time(entry: Entry, manifest: dict | None, course: Course | None) 
     roster's `submitted` column (the LMS's time). The time in the archive's manifest is written on the learner's own
     machine: it is used only where the course accepts it (`manifest_time: accept`), and never silently. An
     unparsable time is no time, and said."""
-    from grader.course import submit
-
     flags = []
     if entry.submitted:
         if parse_time(entry.submitted) is not None:
@@ -236,8 +237,6 @@ def door(sandbox: str):
     """This worker's door for `sandbox` (grader.core.transaction.Door, resident: its fork server started on first
     use), kept for every learner it grades with the same mode (a cluster's worker outlives a batch: one asking
     another mode gets a door of its own)."""
-    from grader.core.transaction import Door
-
     if _worker_state.get("sandbox") != sandbox:
         drop_door()
     if "door" not in _worker_state:
@@ -248,8 +247,6 @@ def door(sandbox: str):
 
 def worker_isolation(sandbox: str) -> str:
     """The isolation line of this worker's door for `sandbox` (InfrastructureError where it cannot start)."""
-    from grader.boundary import BoundaryUnavailable
-
     try:
         return door(sandbox).isolation
     except BoundaryUnavailable as exc:
@@ -269,8 +266,6 @@ def _worker_memo():
     """This worker's verdicts, kept across the learners it grades (grader.core.memo.Memo without a folder): a chapter
     answered exactly as another learner's is judged once."""
     if "memo" not in _worker_state:
-        from grader.core.memo import Memo
-
         _worker_state["memo"] = Memo(None, "this worker")
     return _worker_state["memo"]
 
@@ -278,9 +273,6 @@ def _worker_memo():
 def probe(sandbox: str) -> str:
     """The isolation line here, after one child interpreter started the way the workers will start theirs
     (InfrastructureError with the reason when it does not), so that no learner is graded on a broken sandbox."""
-    from grader.boundary import BoundaryUnavailable
-    from grader.core.transaction import Door
-
     try:
         return Door(sandbox, probe=True).isolation
     except BoundaryUnavailable as exc:
@@ -292,12 +284,6 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
     through the one transaction, its overrides and late penalty applied, and (Grading.render) render its files.
     One whose child could not start, twice, is `error`: no report is kept (the next run grades it again), and its
     results.json and report.html are removed, so that nothing looks like a grade."""
-    from grader.core.pipeline import Request
-    from grader.core.transaction import grade_submission
-    from grader.course import outputs
-    from grader.course.history import kept_report
-    from grader.submission import Submission
-
     started = time.monotonic()
     learner, course = staged.learner, grading.course
     request = Request(tuple(grading.chapters), grading.seed, learner=learner, plots=grading.plots, label=learner,
@@ -366,8 +352,6 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
     """A learner of an earlier run as it was staged (OUT/.staging keeps exactly the files it graded), to be graded
     again (grade regrade) with `grading`, with its submission time as the history keeps it and what its staging finds
     to flag; None where the stored files are gone."""
-    from grader.course import submit
-
     root = out / STAGING / folder_name(learner)
     if not (root / "exercises").is_dir():
         return None
@@ -376,7 +360,8 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     roster_time = result.submitted if result.time_from == "roster" else ""
     submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course)
-    return Staged(learner, str(root), content_hash(root, learner, grading), learner_yaml_warnings(root, learner) + manifest_flags
-                  + timing, submitted, result.time_from if submitted else None, _manifest_summary(manifest),
+    return Staged(learner, str(root), content_hash(root, learner, grading),
+                  learner_yaml_warnings(root, learner) + manifest_flags + timing, submitted,
+                  result.time_from if submitted else None, _manifest_summary(manifest),
                   (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
                   tuple(overrides), result.seconds or 0.0)

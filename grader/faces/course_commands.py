@@ -347,7 +347,8 @@ def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: s
     click.echo(f"Written: {written}")
     if apply_it:
         run = regrade.apply(folder, found, reason.strip())
-        click.echo(f"Recorded as run {run} of {folder / 'gradebook.db'} ({for_terminal(reason.strip(), one_line=True)});"
+        click.echo(f"Recorded as run {run} of {folder / 'gradebook.db'} "
+                   f"({for_terminal(reason.strip(), one_line=True)});"
                    " every class output is rebuilt from it (gradebook.csv and the LMS gradebooks, changes.csv, "
                    "junit.xml, the summary), and the moved learners' reports are written again.")
     elif moved:

@@ -336,7 +336,8 @@ def test_a_late_penalty_waived_leaves_its_trace_everywhere_the_grade_is(tmp_path
                                             encoding="utf-8")
     out = tmp_path / "out"
     done = CliRunner().invoke(main, ["batch", str(tmp_path / "submissions"), "--out", str(out), "--chapters", "ch00",
-                                     "--roster", str(tmp_path / "roster.csv"), "--course", str(tmp_path / "course.yaml"),
+                                     "--roster", str(tmp_path / "roster.csv"),
+                                     "--course", str(tmp_path / "course.yaml"),
                                      "--overrides", str(tmp_path / "overrides.csv"), "--lms", "moodle"])
     assert done.exit_code == 0, done.output
     report = json.loads((out / "dee" / "report.json").read_text(encoding="utf-8"))

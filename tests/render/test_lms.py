@@ -196,8 +196,8 @@ def test_moodles_feedback_is_the_learners_own_words_and_nothing_for_the_instruct
     from grader.model import LearnerResult
 
     adjusted = LearnerResult("ann", "graded", score=7, chapters={"ch00": {"code": 7, "quiz": 0, "score": 7, "max": 10}},
-                             adjustments=[{"target": "total", "points": -3, "reason": "agreed penalty", "kind": "override",
-                                           "who": "bo", "source": "o.csv, line 2"},
+                             adjustments=[{"target": "total", "points": -3, "reason": "agreed penalty",
+                                           "kind": "override", "who": "bo", "source": "o.csv, line 2"},
                                           {"target": "total", "points": -1.5, "reason": "1 day late", "kind": "late",
                                            "who": "", "source": "the course config"}],
                              flags=["learner.yaml names 'bo' ...; correct the roster or the file and grade again"])
