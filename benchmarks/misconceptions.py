@@ -640,14 +640,14 @@ def grade_mutant(folder: Path, chapter: str, function: str, mutant) -> list:
     """The results of `function`'s checks for the reference solutions with `function` replaced by `mutant`."""
     from grader import checks
     from grader.chapters import BY_ID
-    from grader.core.grading import DEFAULT_SEED, grade
+    from grader.core.grading import DEFAULT_SEED, judge_chapters
     from grader.judging import mutants
     from tests.support import open_session
 
     module = BY_ID[chapter].module
     root = build_submission(folder, {module: replace_function(module, function, mutants.standalone(mutant))})
     others = frozenset(f"{chapter}/{c.id}" for c in checks.load(chapter).checks if c.function != function)
-    report = grade(open_session(root), [chapter], seed=DEFAULT_SEED, exclude=others)
+    report = judge_chapters(open_session(root), [chapter], seed=DEFAULT_SEED, exclude=others)
     return report.chapters[0].checks
 
 

@@ -153,10 +153,10 @@ def grade_code(root: Path, chapters, package: str = "exercises", *, seed: int | 
                boundary=None, with_plots: bool = False):
     """The Report of `chapters` of the submission at root/package, graded by grader.core.grading.grade in a child
     (see open_session); `seed`: the public seed unless given."""
-    from grader.core.grading import DEFAULT_SEED, grade
+    from grader.core.grading import DEFAULT_SEED, judge_chapters
 
     session = open_session(root, package, limits, boundary)
-    return grade(session, list(chapters), seed=DEFAULT_SEED if seed is None else seed, with_plots=with_plots)
+    return judge_chapters(session, list(chapters), seed=DEFAULT_SEED if seed is None else seed, with_plots=with_plots)
 
 
 def grade_checks(root: Path, chapter: str, **options) -> dict:

@@ -68,7 +68,7 @@ def _settled(chapter: ChapterResult, run: ChapterRun) -> bool:
                    for c in chapter.checks)
 
 
-def grade(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
+def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
           with_plots: bool = False, submission_label: str | None = None,
           exclude: frozenset[str] = frozenset(), memo: Memo | None = None) -> Report:
     """Grade `chapter_ids` of the session's submission, but the checks in `exclude` ("chNN/check_id");

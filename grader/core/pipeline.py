@@ -99,7 +99,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
     """Grade `request.chapters` of the session's submission into one Report (closes the session), as `course`
     has it (default: a handout's own course; on the instructor's side every check runs). With `memo`
     (grader.core.memo: `grade` on one submission, walled off), verdicts made from exactly the same answers are reused."""
-    from grader.core.grading import grade
+    from grader.core.grading import judge_chapters
 
     course = course or courses.here()
     others, notes = other_functions(request)
@@ -117,7 +117,7 @@ def build_report(session: Session, request: Request, course: courses.Course | No
         session.meanwhile.append(quiz_meanwhile)
     version: list[str] = []
     session.meanwhile.append(lambda: _version_ready(memo, version))
-    report = grade(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
+    report = judge_chapters(session, list(request.chapters), seed=request.seed, with_plots=request.plots,
                    submission_label=request.label,
                    exclude=hidden | switched_off(course, request.chapters) | others, memo=memo)
     for chapter in report.chapters:

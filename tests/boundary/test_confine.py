@@ -261,7 +261,7 @@ def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tm
     from grader.boundary.sandbox import Sandbox
     from grader.boundary.session import Session
     from grader.boundary.spawn import start_child
-    from grader.core.grading import grade
+    from grader.core.grading import judge_chapters
     from grader.submission import Submission
 
     class Broken(Sandbox):
@@ -270,7 +270,7 @@ def test_a_child_that_cannot_start_is_an_infrastructure_failure_never_a_grade(tm
 
     broken = Broken(BWRAP)
     session = Session(Submission(build_submission(tmp_path / "any"), "exercises"), lambda: start_child(broken))
-    report = grade(session, ["ch06"])
+    report = judge_chapters(session, ["ch06"])
     assert "failed to start" in report.infrastructure
     assert all(c.status.value == "error" for c in report.chapters[0].checks)
 

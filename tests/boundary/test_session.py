@@ -202,7 +202,7 @@ def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submiss
     """The quiz is judged while the child runs the code's calls (Session.meanwhile): here the learner's module
     waits, at import, for a file that only the meanwhile work writes, so grading finishes only if that work runs
     after the request is sent and before the results are awaited."""
-    from grader.core.grading import grade
+    from grader.core.grading import judge_chapters
 
     signal_file = tmp_path / "meanwhile-ran"
     root = submission_factory({"ch00_range_sensor": (
@@ -219,7 +219,7 @@ def test_the_sessions_meanwhile_work_runs_while_the_child_runs_the_calls(submiss
     session = open_session(root)  # no sandbox: the learner's module sees tmp_path
     ran = []
     session.meanwhile.append(lambda: (ran.append(True), signal_file.write_text("yes", encoding="utf-8")))
-    report = grade(session, ["ch00"])
+    report = judge_chapters(session, ["ch00"])
     chapter = report.chapters[0]
     assert ran == [True]
     assert not chapter.problems, chapter.problems

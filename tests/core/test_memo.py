@@ -201,9 +201,9 @@ def test_a_worker_memo_judges_a_chapter_answered_alike_once(tmp_path, monkeypatc
     right = [build_submission(tmp_path / name) for name in ("ann", "bo")]
     buggy = build_submission(tmp_path / "cy", {"ch06_measurement": replace_function(
         "ch06_measurement", "range_bearing", WRONG_BEARING)})
-    reports = [grading.grade(open_session(root), ["ch03", "ch06"], memo=memo) for root in (*right, buggy)]
+    reports = [grading.judge_chapters(open_session(root), ["ch03", "ch06"], memo=memo) for root in (*right, buggy)]
     assert planned == ["ch03", "ch06", "ch06"]  # ann's chapters; bo's answers are ann's; cy's ch03 is theirs too
-    alone = [grading.grade(open_session(root), ["ch03", "ch06"]) for root in (right[1], buggy)]
+    alone = [grading.judge_chapters(open_session(root), ["ch03", "ch06"]) for root in (right[1], buggy)]
     assert [c.to_dict() for c in reports[1].chapters] == [c.to_dict() for c in alone[0].chapters]
     assert [c.to_dict() for c in reports[2].chapters] == [c.to_dict() for c in alone[1].chapters]
     assert reports[2].chapters[1].score < reports[1].chapters[1].score
@@ -227,7 +227,7 @@ def test_a_worker_encodes_a_chapters_kept_calls_once_and_sends_each_child_what_i
     encodings = []
     for name in ("ann", "bo", "cy"):
         encoded.clear()
-        grading.grade(open_session(build_submission(tmp_path / name)), ["ch03", "ch06"], memo=memo)
+        grading.judge_chapters(open_session(build_submission(tmp_path / name)), ["ch03", "ch06"], memo=memo)
         encodings.append(sum(isinstance(v, list) and bool(v) and isinstance(v[0], dict) and "index" in v[0]
                              for v in encoded))
     assert encodings[1:] == [2, 0]  # ann's calls planned and kept; encoded once for bo, for both chapters; cy: none

@@ -27,11 +27,11 @@ SCRIPT = textwrap.dedent("""
     process = drawer._STARTED[0][0]
     spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
 
-    from grader.core.grading import grade
+    from grader.core.grading import judge_chapters
     from grader.boundary import open_session
     from grader.submission import Submission
     session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
-    report = grade(session, ["ch01", "ch06", "ch08"], with_plots=True)
+    report = judge_chapters(session, ["ch01", "ch06", "ch08"], with_plots=True)
 
     def must_not_run(*args, **kwargs):
         raise AssertionError("the figures were drawn here, not by the drawing process")
@@ -149,10 +149,10 @@ def test_the_pages_meanwhile_work_runs_once_the_figures_are_sent_to_be_drawn():
         from grader.render import drawer, html
         assert drawer.start()
         from grader.boundary import open_session
-        from grader.core.grading import grade
+        from grader.core.grading import judge_chapters
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
-        report = grade(session, ["ch06"], with_plots=True)
+        report = judge_chapters(session, ["ch06"], with_plots=True)
         sent = []
         page = html.render(report, meanwhile=lambda: sent.append(not drawer._STARTED))
         assert sent == [True] and page.count("data:image/svg+xml;base64,") == 1, sent
@@ -219,11 +219,11 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
         while Path(f"/proc/{process.pid}/stat").read_text().split()[2] != "Z":
             pass  # dead and unreaped: a zombie until someone waits for it
 
-        from grader.core.grading import grade
+        from grader.core.grading import judge_chapters
         from grader.boundary import open_session
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
-        report = grade(session, ["ch06", "ch07"], with_plots=True)
+        report = judge_chapters(session, ["ch06", "ch07"], with_plots=True)
         drawn = drawer.figures_due([c for c in report.chapters if c.plots])()
         print(os.path.exists(f"/proc/{process.pid}"), [len(f) for f in drawn],
               all(f.uri.startswith("data:image/svg+xml;base64,") for figures in drawn for f in figures))
@@ -244,11 +244,11 @@ def test_figures_due_here_draws_them_in_this_process_alone():
         from grader.render import drawer
 
         assert drawer.start()
-        from grader.core.grading import grade
+        from grader.core.grading import judge_chapters
         from grader.boundary import open_session
         from grader.submission import Submission
         session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
-        report = grade(session, ["ch06", "ch07"], with_plots=True)
+        report = judge_chapters(session, ["ch06", "ch07"], with_plots=True)
 
         def must_not_run(*args, **kwargs):
             raise AssertionError("the figures were drawn by processes forked for them")
@@ -294,11 +294,11 @@ def test_the_lighter_import_changes_no_figure(tmp_path):
     import json
 
     from grader.boundary import open_session
-    from grader.core.grading import grade
+    from grader.core.grading import judge_chapters
     from grader.submission import Submission
 
     session = open_session(Submission(REPO, "solutions"), sandbox="off")
-    report = grade(session, [f"ch{n:02d}" for n in range(10)], with_plots=True)
+    report = judge_chapters(session, [f"ch{n:02d}" for n in range(10)], with_plots=True)
     chapters = tmp_path / "chapters.json"
     chapters.write_text(json.dumps([c.to_dict() for c in report.chapters if c.plots]), encoding="utf-8")
     digests = {}
