@@ -346,10 +346,8 @@ def _not_graded(reason: str, started: float, heading: list[str], isolation: str)
 
     message = (f"NOT GRADED: the autograder could not grade this submission for a reason outside your code "
                f"({reason}). This is not your grade: your instructor sees this and will grade it again.")
-    data = json.loads(lms.gradescope_not_graded(message, execution_time=time.monotonic() - started, heading=heading,
-                                                isolation=isolation))
-    data["extra_data"] = {"not_graded": reason}
-    return json.dumps(data, allow_nan=False) + "\n"
+    return lms.gradescope_not_graded(message, execution_time=time.monotonic() - started, heading=heading,
+                                     isolation=isolation, not_graded=reason)
 
 
 def run(root: Path) -> int:

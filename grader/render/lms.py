@@ -155,9 +155,10 @@ def gradescope(report: Report, **options) -> str:
 
 
 def gradescope_not_graded(message: str, *, execution_time: float | None = None, heading: Iterable[str] = (),
-                          isolation: str = "") -> str:
+                          isolation: str = "", not_graded: str | None = None) -> str:
     """results.json for a submission that could not be graded at all (no chapter files, not a readable
-    submission): score 0, the reason on top and as the one test."""
+    submission): score 0, the reason on top and as the one test; `not_graded`: why it could not be graded for a
+    reason outside the learner's code (in extra_data.not_graded, for the instructor)."""
     output = [*heading, message]
     if isolation:
         output.append(isolation)
@@ -167,6 +168,8 @@ def gradescope_not_graded(message: str, *, execution_time: float | None = None, 
                        "extra_data": {"id": "submission", "status": "fail"}}]}
     if execution_time is not None:
         data["execution_time"] = round(max(0.0, execution_time), 2)
+    if not_graded is not None:
+        data["extra_data"] = {"not_graded": not_graded}
     return for_display(data)
 
 
