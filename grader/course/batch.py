@@ -149,19 +149,18 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
                 collected.arrived(*recorder.record(outcome))
                 if progress:
                     progress(done, len(found.entries), time.monotonic() - started)
-            roster_name = roster.name if roster else "the roster"
             rebuilt = outputs.rebuild(
                 out, history, run, settings, collected,
                 overrides=outputs.override_rows(rows, recorder.outcomes, recorder.graded()),
                 notes=override_problems + notes, skipped=found.skipped, isolation=isolation,
-                roster={"file": roster_name if roster else None, "unmatched": [u.to_dict() for u in found.unmatched],
-                        "said": [u.describe(roster_name) for u in found.unmatched]},
+                roster={"file": roster.name, "unmatched": [u.to_dict() for u in found.unmatched],
+                        "said": [u.describe(roster.name) for u in found.unmatched]} if roster else {},
                 similarity=similarity)
         finally:
             collected.close()
     return Batch(recorder.statuses, recorder.messages, time.monotonic() - started, found.skipped, isolation,
                  found.unmatched, rebuilt.flagged, rebuilt.changes, rebuilt.first_run, override_problems,
-                 rebuilt.similar, [n for n in rebuilt.notes if n not in override_problems])
+                 rebuilt.similar, notes + rebuilt.notes)
 
 
 class Recorder:
@@ -171,7 +170,7 @@ class Recorder:
     def __init__(self, out: Path, history: histories.History, run: int, grading: Grading,
                  kept: dict[str, LearnerResult], latest: dict[str, LearnerResult]) -> None:
         self.out, self.history, self.run, self.grading = out, history, run, grading
-        self.kept, self.latest = kept, latest  # each learner's last report kept; their line in the last finished run
+        self.kept, self.latest = kept, latest  # each learner's last report kept; their last line, which files show
         self.statuses: dict[str, str] = {}
         self.messages: dict[str, str] = {}
         self.outcomes: dict[tuple[str, str], str] = {}  # (learner, override source) -> what it did
@@ -194,14 +193,9 @@ class Recorder:
                 files = outputs.learner_files(report, facts, self.grading)
         elif outcome.status == "unchanged":
             report, result, files = self._adjusted(outcome)
-        else:
-            manifest = (outcome.staged.manifest or {}) if outcome.staged else {}
-            result = LearnerResult(learner, outcome.status, outcome.message,
-                                   flags=list(outcome.staged.warnings) if outcome.staged else [],
-                                   files_hash=outcome.staged.files_hash if outcome.staged else None,
-                                   manifest_handout=manifest.get("handout"),
-                                   submitted=outcome.staged.submitted or None if outcome.staged else None,
-                                   time_from=outcome.staged.time_from if outcome.staged else None)
+        else:  # not graded: what staging found, where it got that far
+            facts = outputs.LearnerFacts.of(outcome.staged) if outcome.staged else outputs.LearnerFacts(learner)
+            result = facts.result(None, outcome.status, outcome.message)
         try:
             outputs.write_learner_files(self.out, learner, files)
         except OSError as exc:

@@ -62,11 +62,12 @@ class LearnerFacts:
     extra: Mapping = field(default_factory=dict)
 
     @classmethod
-    def of(cls, staged: Staged, report: Report, extra: Mapping = ()) -> LearnerFacts:
-        """The facts of a learner just staged and graded."""
-        return cls(staged.learner, tuple(staged.warnings) + tuple(report.flags), round(staged.seconds, 3),
-                   staged.files_hash, staged.submitted or None, staged.time_from, staged.manifest, staged.digest,
-                   report.learner_output[:LEARNER_OUTPUT], dict(extra))
+    def of(cls, staged: Staged, report: Report | None = None, extra: Mapping = ()) -> LearnerFacts:
+        """The facts of a learner just staged, and graded into `report` (None: not graded)."""
+        return cls(staged.learner, tuple(staged.warnings) + tuple(report.flags if report else ()),
+                   round(staged.seconds, 3), staged.files_hash, staged.submitted or None, staged.time_from,
+                   staged.manifest, staged.digest, report.learner_output[:LEARNER_OUTPUT] if report else "",
+                   dict(extra))
 
     @classmethod
     def of_result(cls, result: LearnerResult, report: Report | None = None, extra: Mapping = ()) -> LearnerFacts:
@@ -75,13 +76,14 @@ class LearnerFacts:
                    result.submitted, result.time_from, result.manifest, result.content_hash,
                    report.learner_output[:LEARNER_OUTPUT] if report is not None else "", dict(extra))
 
-    def result(self, report: Report) -> LearnerResult:
-        """The history's line for this learner graded with `report` (adjusted)."""
+    def result(self, report: Report | None, status: str = "graded", message: str = "") -> LearnerResult:
+        """The history's line for this learner graded with `report` (adjusted; None: not graded, `status` says why
+        and `message` how)."""
         manifest = self.manifest or {}
-        return LearnerResult.of(self.learner, report, flags=list(self.warnings), files_hash=self.files_hash,
-                                content_hash=self.digest, manifest_handout=manifest.get("handout"),
-                                submitted=self.submitted, time_from=self.time_from, seconds=self.seconds,
-                                manifest=self.manifest)
+        return LearnerResult.of(self.learner, report, status, message, flags=list(self.warnings),
+                                files_hash=self.files_hash, content_hash=self.digest if report else None,
+                                manifest_handout=manifest.get("handout"), submitted=self.submitted,
+                                time_from=self.time_from, seconds=self.seconds, manifest=self.manifest)
 
 
 def report_json(report: Report, facts: LearnerFacts) -> str:
@@ -265,7 +267,8 @@ class ClassOutputs:
 @dataclass
 class Rebuilt:
     """What a rebuild found for the instructor: the learners flagged, the changes since the last finished run (and
-    whether there was one), the similar pairs, and notes."""
+    whether there was one), the similar pairs, and its own notes (a gradebook edited by hand, learners without a
+    trusted time, what similarity could not rank)."""
 
     flagged: dict[str, list[str]]
     changes: list[tuple]
@@ -293,10 +296,10 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         results, graded = collected.results.values(), collected.graded  # read one by one
         moved = histories.changes(history, run, collected.results)
         first_run = history.previous(run) is None
-        said = list(notes) + _keep_hand_edits(out, history, run)
-        if settings.course.text is not None and _has_deadline(settings) and collected.untimed:
+        found = _keep_hand_edits(out, history, run)
+        if _has_deadline(settings) and collected.untimed:
             untimed = collected.untimed
-            said.append(f"no trusted submission time for {len(untimed)} of {len(graded)} graded (no `submitted` in "
+            found.append(f"no trusted submission time for {len(untimed)} of {len(graded)} graded (no `submitted` in "
                         "the roster for them; a time only from their own archive's manifest counts only with "
                         f"manifest_time: accept): {', '.join(untimed[:20])}" + (" ..." if len(untimed) > 20 else ""))
         digest = hashlib.sha256()
@@ -322,9 +325,9 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
                 similar, left_out = similarities.rank(out / STAGING, graded)
             except Exception as exc:  # noqa: BLE001  a ranking for a person to look at never costs the class outputs
                 similar, left_out = [], [f"--similarity could not rank this class ({type(exc).__name__}: {exc})"]
-            said += left_out
+            found += left_out
         view = summary.Summary(collected.tally, collected.not_graded, isolation,
-                               [(s.name, s.reason) for s in skipped], collected.flagged, moved, said,
+                               [(s.name, s.reason) for s in skipped], collected.flagged, moved, list(notes) + found,
                                similar=similar, untimed=list(collected.untimed) if _has_deadline(settings) else [],
                                statistics=statistics.compute(collected.items), first_run=first_run,
                                roster=roster or {})
@@ -333,7 +336,7 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
     finally:
         if own:
             collected.close()
-    return Rebuilt(collected.flagged, moved, first_run, similar, said)
+    return Rebuilt(collected.flagged, moved, first_run, similar, found)
 
 
 def lms_layouts(out: Path, settings: RunSettings) -> list[str]:

@@ -225,10 +225,11 @@ def write_csv(out: Path, found: Regrade) -> Path:
     return path
 
 
-def apply(out: Path, found: Regrade, reason: str) -> int:
+def apply(out: Path, found: Regrade, reason: str) -> tuple[int, list[str]]:
     """Record the regrade as a run of the history with `reason` and the settings it graded with: the moved
     learners' new results (their files written again), every other learner of the regraded run kept as it was,
-    and every class output rebuilt from the new run. Returns the run's id."""
+    and every class output rebuilt from the new run. Returns the run's id and what the rebuild noted for the
+    instructor (a gradebook edited by hand, learners without a trusted time)."""
     from grader.course.batch import Recorder
 
     moved = {m.learner for m in found.moved if m.new_score is not None}
@@ -250,7 +251,8 @@ def apply(out: Path, found: Regrade, reason: str) -> int:
                 for source, _, text in outcome.outcomes}
         said.update(recorder.outcomes)
         graded = {learner for learner, result in before.items() if result.status == "graded"}
-        outputs.rebuild(out, history, run, found.settings, overrides=outputs.override_rows(found.rows, said, graded),
-                        notes=found.override_problems + found.notes, isolation=found.isolation)
+        rebuilt = outputs.rebuild(out, history, run, found.settings,
+                                  overrides=outputs.override_rows(found.rows, said, graded),
+                                  notes=found.override_problems + found.notes, isolation=found.isolation)
     found.recorded = run
-    return run
+    return run, rebuilt.notes

@@ -300,9 +300,9 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
                        infrastructure=report.infrastructure, extra=dict(extra))
     report.learner_output = report.learner_output[:outputs.LEARNER_OUTPUT]
     kept = kept_report(report)
-    outcome = Outcome(learner, "graded", "", staged, kept, report, [a.to_dict() for a in report.all_adjustments()],
+    outcome = Outcome(learner, "graded", outputs.graded_message(report), staged, kept, report,
+                      [a.to_dict() for a in report.all_adjustments()],
                       [(o.override.source, o.applied, o.said) for o in graded.outcomes], extra=dict(extra))
-    outcome.message = outputs.graded_message(report)
     if grading.render:
         outcome.files = outputs.learner_files(report, outputs.LearnerFacts.of(staged, report, extra), grading)
     _settle_heap()

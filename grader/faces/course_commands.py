@@ -346,7 +346,9 @@ def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: s
         click.echo(f"  {for_terminal(problem, one_line=True)}", err=True)
     click.echo(f"Written: {written}")
     if apply_it:
-        run = regrade.apply(folder, found, reason.strip())
+        run, notes = regrade.apply(folder, found, reason.strip())
+        for note in notes:
+            click.echo(f"  {for_terminal(note, one_line=True)}", err=True)
         click.echo(f"Recorded as run {run} of {folder / 'gradebook.db'} "
                    f"({for_terminal(reason.strip(), one_line=True)});"
                    " every class output is rebuilt from it (gradebook.csv and the LMS gradebooks, changes.csv, "
