@@ -118,8 +118,12 @@ class History:
         return dict(self.db.execute("SELECT * FROM runs WHERE id = ?", (run,)).fetchone())
 
     def settings(self, run: int) -> RunSettings | None:
-        """What `run` graded with (None for a run of a history from before settings were kept)."""
-        return RunSettings.from_json(self.run_info(run).get("settings"))
+        """What `run` graded with (None for a run of a history from before settings were kept, or whose record of
+        them cannot be read: a database edited by hand)."""
+        try:
+            return RunSettings.from_json(self.run_info(run).get("settings"))
+        except (ValueError, TypeError, AttributeError):
+            return None
 
     def finish(self, run: int, results: list[LearnerResult], overrides: list[tuple], changes: list[tuple],
                gradebook_sha: str | None = None) -> None:
