@@ -27,7 +27,6 @@ if TYPE_CHECKING:
     from grader.core.memo import Memo
     from grader.core.pipeline import Request
     from grader.course_config import Course
-    from grader.model import Report
     from grader.submission import Submission
 
 NO_CHILD = "no child process could start"

@@ -297,7 +297,8 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         moved = histories.changes(history, run, collected.results)
         first_run = history.previous(run) is None
         found = _keep_hand_edits(out, history, run)
-        if _has_deadline(settings) and collected.untimed:
+        deadline = _has_deadline(settings)
+        if deadline and collected.untimed:
             untimed = collected.untimed
             found.append(f"no trusted submission time for {len(untimed)} of {len(graded)} graded (no `submitted` in "
                         "the roster for them; a time only from their own archive's manifest counts only with "
@@ -328,7 +329,7 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
             found += left_out
         view = summary.Summary(collected.tally, collected.not_graded, isolation,
                                [(s.name, s.reason) for s in skipped], collected.flagged, moved, list(notes) + found,
-                               similar=similar, untimed=list(collected.untimed) if _has_deadline(settings) else [],
+                               similar=similar, untimed=list(collected.untimed) if deadline else [],
                                statistics=statistics.compute(collected.items), first_run=first_run,
                                roster=roster or {})
         write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
