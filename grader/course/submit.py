@@ -83,14 +83,8 @@ def check(package: Path, graded_as: str, course_id: str | None,
         flags.append(f"packed with an older or other handout ({packed_handout or 'none: the project, not a handout'}"
                      f"{released}); the course's current handout is {current_handout}: its local score came from "
                      "other checks")
-    now = staged_hashes(package)
-    packed = {str(k): str(v) for k, v in manifest["files"].items()}
-    changed = sorted(n for n in now if n in packed and now[n] != packed[n])
-    added = sorted(set(now) - set(packed))
-    removed = sorted(set(packed) - set(now))
-    if changed or added or removed:
-        said = [f"{', '.join(names)} {what}" for names, what in ((changed, "changed"), (added, "added"),
-                                                                   (removed, "removed")) if names]
+    said = edits(package, manifest)
+    if said:
         flags.append(f"edited after packing ({manifest.get('packed', 'at an unknown time')}): {'; '.join(said)}")
     if manifest.get("learner") != graded_as:
         flags.append(f"packed as learner {manifest.get('learner')!r}, graded as {graded_as!r}: its quiz answers were "
@@ -98,6 +92,18 @@ def check(package: Path, graded_as: str, course_id: str | None,
     if course_id and manifest.get("course") and manifest["course"] != course_id:
         flags.append(f"packed for the course {manifest['course']!r}, not {course_id!r}")
     return manifest, flags
+
+
+def edits(package: Path, manifest: dict) -> list[str]:
+    """What changed in a staged package since its manifest was written, in words ("ch06_measurement.py changed",
+    "answers/ch06.yaml added"): nothing where every file hashes as the manifest says."""
+    now = staged_hashes(package)
+    packed = {str(k): str(v) for k, v in manifest["files"].items()}
+    changed = sorted(n for n in now if n in packed and now[n] != packed[n])
+    added = sorted(set(now) - set(packed))
+    removed = sorted(set(packed) - set(now))
+    return [f"{', '.join(names)} {what}" for names, what in ((changed, "changed"), (added, "added"),
+                                                               (removed, "removed")) if names]
 
 
 def packed_time(manifest: dict | None) -> str | None:

@@ -150,7 +150,7 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
-    submitted, timing = submission_time(entry, manifest, course)
+    submitted, timing = submission_time(entry, manifest, course, root / "exercises")
     staged = Staged(learner, str(root), content_hash(root, learner, grading),
                     learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing, submitted,
                     _time_source(entry, submitted), _manifest_summary(manifest),
@@ -174,11 +174,12 @@ def learner_yaml_warnings(root: Path, learner: str, origin: str = "") -> list[st
              "correct the roster or the file and grade again")]
 
 
-def submission_time(entry: Entry, manifest: dict | None, course: Course | None) -> tuple[str, list[str]]:
+def submission_time(entry: Entry, manifest: dict | None, course: Course | None,
+                    package: Path | None = None) -> tuple[str, list[str]]:
     """(the submission time that decides a late penalty, ISO 8601 or "", and what to flag about it). Trusted: the
     roster's `submitted` column (the LMS's time). The time in the archive's manifest is written on the learner's own
-    machine: it is used only where the course accepts it (`manifest_time: accept`), and never silently. An
-    unparsable time is no time, and said."""
+    machine: it is used only where the course accepts it (`manifest_time: accept`), never silently, and never where
+    the archive (staged in `package`) was edited after packing. An unparsable time is no time, and said."""
     flags = []
     if entry.submitted:
         if parse_time(entry.submitted) is not None:
@@ -188,11 +189,15 @@ def submission_time(entry: Entry, manifest: dict | None, course: Course | None) 
     packed = submit.packed_time(manifest)
     if not course or not course.late:
         return "", flags
-    if packed and course.accepts_manifest_time and parse_time(packed) is not None:
+    edited = bool(packed and package is not None and submit.edits(package, manifest))
+    if packed and course.accepts_manifest_time and parse_time(packed) is not None and not edited:
         return packed, flags + [f"submission time {packed} from the learner's own archive manifest (the course accepts "
                                 "it: manifest_time: accept); the roster gives none"]
-    said = (f"its archive's manifest says {packed!r}, written on the learner's own machine and not accepted "
-            "(manifest_time: accept in the course file would)" if packed else "no time at all")
+    said = ("no time at all" if not packed else
+            f"its archive's manifest says {packed!r}, but the archive was edited after packing, so that time is not "
+            "trusted" if edited else
+            f"its archive's manifest says {packed!r}, written on the learner's own machine and not accepted "
+            "(manifest_time: accept in the course file would)")
     return "", flags + [f"no trusted submission time (no `submitted` in the roster): {said}; no late penalty applied"]
 
 
@@ -359,7 +364,8 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     roster_time = result.submitted if result.time_from == "roster" else ""
-    submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course)
+    submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course,
+                                        root / "exercises")
     return Staged(learner, str(root), content_hash(root, learner, grading),
                   learner_yaml_warnings(root, learner) + manifest_flags + timing, submitted,
                   result.time_from if submitted else None, _manifest_summary(manifest),

@@ -182,21 +182,29 @@ def test_a_lookup_table_of_seen_expected_values_gains_nothing_over_20_resubmissi
 
 # ------------------------------------------------------------------------------ 3. trusted submission times
 
-def _manifest(packed: str) -> str:
+def _manifest(packed: str, files: dict | None = None) -> str:
     return json.dumps({"learner": "zed", "course": "late-course", "handout": None, "grader": "x", "packed": packed,
-                       "files": {}, "local": {}})
+                       "files": files or {}, "local": {}})
 
 
-@pytest.mark.parametrize("manifest_time", ["ignore", "accept"])
+@pytest.mark.parametrize("manifest_time", ["ignore", "accept", "accept, edited after packing"])
 @pytest.mark.slow
 def test_a_time_from_the_learners_own_manifest_decides_nothing_unless_the_course_accepts_it(tmp_path, manifest_time):
+    """The learner's own manifest time counts only where the course accepts it, and never from an archive edited
+    after packing (its manifest's hashes fail): a learner who edits late would otherwise keep an early time."""
+    from grader.course.submit import staged_hashes
+
     root = build_submission(tmp_path / "subs" / "zed")
-    (root / "exercises" / "submission-manifest.json").write_text(_manifest("2026-05-01T10:00:00+00:00"),
+    packed = staged_hashes(root / "exercises")  # every file as packed
+    if manifest_time.endswith("edited after packing"):
+        (root / "exercises" / "ch06_measurement.py").write_text("# edited after packing\n", encoding="utf-8")
+    (root / "exercises" / "submission-manifest.json").write_text(_manifest("2026-05-01T10:00:00+00:00", packed),
                                                                  encoding="utf-8")
     build_submission(tmp_path / "subs" / "yan")  # no manifest, no roster time
     course = tmp_path / "course.yaml"
     course.write_text(f"course: late-course\nseed: 99\ndeadline: '2026-05-01T23:59:00+00:00'\n"
-                      f"late_penalty: {{per_day: 0.1, max: 0.5}}\nmanifest_time: {manifest_time}\n", encoding="utf-8")
+                      f"late_penalty: {{per_day: 0.1, max: 0.5}}\nmanifest_time: {manifest_time.split(',')[0]}\n",
+                      encoding="utf-8")
     done = run_grade("batch", tmp_path / "subs", "--out", tmp_path / "out", "--chapters", "ch06", "--course", course,
                      "--no-html")
     assert done.returncode == 0, done.stderr[-3000:]
@@ -205,6 +213,9 @@ def test_a_time_from_the_learners_own_manifest_decides_nothing_unless_the_course
     if manifest_time == "ignore":
         assert summary["untimed"] == ["yan", "zed"] and zed["submitted"] is None
         assert any("not accepted" in w for w in zed["warnings"])
+    elif manifest_time.endswith("edited after packing"):
+        assert summary["untimed"] == ["yan", "zed"] and zed["submitted"] is None and zed["time_from"] is None
+        assert any("edited after packing, so that time is not trusted" in w for w in zed["warnings"]), zed["warnings"]
     else:
         assert zed["time_from"] == "manifest" and any("learner's own archive manifest" in w for w in zed["warnings"])
         assert summary["untimed"] == ["yan", "zed"]  # still listed: their only time is their own
