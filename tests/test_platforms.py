@@ -22,6 +22,7 @@ from tests.support import (
     WRONG_H,
     Watching,
     build_submission,
+    slow_but_the_first,
     code_points,
     replace_function,
     replace_functions,
@@ -296,6 +297,17 @@ def test_batch_with_two_workers_gives_linuxs_gradebook(route, submissions, batch
     refused = _run(route, "batch", str(batch_folder), "--out", str(tmp_path / "refused"), "--jobs", "2")
     assert refused.returncode == 2 and "--no-sandbox" in refused.stderr, refused.stderr[-2000:]
     assert _batch(route, batch_folder, tmp_path / "out", submissions) == linux_batch
+
+
+@pytest.mark.parametrize("route", slow_but_the_first(ROUTES))
+def test_a_batch_refused_for_want_of_a_barrier_says_what_this_system_offers(route, tmp_path):
+    """Windows and macOS have no bubblewrap: a batch that refuses to grade without a barrier says so, and names
+    grading on Linux, never a bubblewrap to install or fix there."""
+    build_submission(tmp_path / "submissions" / "ann")
+    refused = _run(route, "batch", str(tmp_path / "submissions"), "--out", str(tmp_path / "out"), "--chapters", "ch00")
+    assert refused.returncode == 2, refused.stderr[-2000:]
+    assert "this system has no bubblewrap (it exists on Linux only): grade a course on Linux" in refused.stderr
+    assert "apt-get" not in refused.stderr and "bwrap --version" not in refused.stderr
 
 
 def test_gradescope_says_who_learner_code_runs_as_without_uids(tmp_path):

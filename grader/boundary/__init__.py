@@ -31,7 +31,8 @@ if TYPE_CHECKING:
     from grader.boundary.session import ChapterRequest, ChapterRun, Limits, Session
 
 __all__ = ["SANDBOX_MODES", "Boundary", "BoundaryUnavailable", "ChapterRequest", "ChapterRun", "Launch", "Limits",
-           "SandboxMode", "Session", "choose", "first_child", "open_session"]
+           "SandboxMode", "Session", "bubblewrap_possible", "choose", "first_child", "how_to_get_a_barrier",
+           "open_session"]
 _IN_SESSION = ("ChapterRequest", "ChapterRun", "Limits", "Session")  # the others are in door
 
 

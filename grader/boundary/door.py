@@ -140,6 +140,20 @@ class Boundary:
             server.close()
 
 
+def bubblewrap_possible() -> bool:
+    """Whether this system could run bubblewrap at all (Linux's namespaces): what a refusal tells to fix."""
+    return process_groups() and os.path.isdir("/proc/self/ns")
+
+
+def how_to_get_a_barrier() -> str:
+    """What to do where no barrier stands, in the words of what this system offers."""
+    if bubblewrap_possible():
+        return ("fix the sandbox (bubblewrap: `apt-get install bubblewrap`, then `bwrap --version` must work, with "
+                "unprivileged user namespaces allowed)")
+    return ("this system has no bubblewrap (it exists on Linux only): grade a course on Linux with bubblewrap, or "
+            "grade only code you trust without it")
+
+
 def _no_bubblewrap(portable: bool) -> str:
     if portable:
         return ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "

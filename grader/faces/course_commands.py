@@ -134,10 +134,11 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
         if pool is not None:  # the cluster cannot grade (grader.course.cluster.ClusterError): the message says why
             click.echo(f"grade batch: no learner was graded: {for_terminal(str(exc), one_line=True)}", err=True)
             sys.exit(EXIT_USAGE)
-        click.echo(f"grade batch: no learner was graded: learner code cannot run here. "
-                   f"{for_terminal(str(exc), one_line=True)}\n"
-                   "Fix the sandbox (bubblewrap: `bwrap --version`, user namespaces) and run again, or pass "
-                   "--no-sandbox to grade without it (learner code then runs as you).", err=True)
+        from grader.boundary import how_to_get_a_barrier
+
+        click.echo(f"grade batch: no learner was graded: learner code cannot run here behind a barrier. "
+                   f"{for_terminal(str(exc), one_line=True)}\nTo grade: {how_to_get_a_barrier()}; --no-sandbox "
+                   "grades without it (learner code then runs as you and can read every file you can).", err=True)
         sys.exit(EXIT_USAGE)
     _say_batch(result, Path(out_dir), Path(roster).name if roster else "the roster")
     sys.exit(EXIT_ALL_PASSED if result.complete else EXIT_NOT_ALL_PASSED)
@@ -316,8 +317,10 @@ def regrade_command(out: str, apply_it: bool, reason: str | None, course_file: s
     except OverridesError as exc:
         raise click.BadParameter(for_terminal(str(exc)), param_hint="--overrides") from None
     except InfrastructureError as exc:
-        click.echo(f"grade regrade: no learner was graded again: learner code cannot run here. "
-                   f"{for_terminal(str(exc), one_line=True)}", err=True)
+        from grader.boundary import how_to_get_a_barrier
+
+        click.echo(f"grade regrade: no learner was graded again: learner code cannot run here behind a barrier. "
+                   f"{for_terminal(str(exc), one_line=True)}\nTo grade: {how_to_get_a_barrier()}.", err=True)
         sys.exit(EXIT_USAGE)
     written = regrade.write_csv(folder, found)
     info = found.run_info
