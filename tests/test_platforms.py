@@ -22,11 +22,11 @@ from tests.support import (
     WRONG_H,
     Watching,
     build_submission,
-    slow_but_the_first,
     code_points,
     replace_function,
     replace_functions,
     save,
+    slow_but_the_first,
 )
 
 ROUTES = ["windows", "macos"]
