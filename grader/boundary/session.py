@@ -28,6 +28,7 @@ from grader.boundary.wire import (
     RAISED_EVENT,
     RETURNED,
     TIMEOUT,
+    UNREAD,
     Call,
     EncodedCalls,
     Returned,
@@ -129,27 +130,35 @@ class _Child:
 
     def __init__(self, handle: ChildHandle) -> None:
         self.handle = handle
-        self.buffer = b""
+        self.buffer = bytearray()  # what came after the last whole line: grows in place, however long the line
 
     def send(self, request: str) -> None:
         self.handle.send(request)
 
+    @property
+    def partial(self) -> int:
+        """How many bytes of a line not yet whole have come (a large value still on its way)."""
+        return len(self.buffer)
+
     def events(self, deadline: Callable[[], float]):
         """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes. A line that
         is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
-        the caller stops the child for it."""
+        the caller stops the child for it. Each byte is looked at once for a line's end, and kept once."""
         while True:
-            if b"\n" in self.buffer:
-                *lines, self.buffer = self.buffer.split(b"\n")  # one split per chunk, not one copy per line
+            chunk = self.handle.read(deadline() - time.monotonic())  # TimeoutError when nothing comes in time
+            if not chunk:
+                return
+            end = chunk.rfind(b"\n")
+            if end < 0:
+                self.buffer += chunk
+            else:
+                *lines, rest = (bytes(self.buffer) + chunk[:end + 1] if self.buffer else chunk[:end + 1]).split(b"\n")
+                self.buffer = bytearray(chunk[end + 1:])
                 for line in lines:
                     yield _parse(line)
             if len(self.buffer) > MAX_LINE:
                 yield MALFORMED
                 return
-            chunk = self.handle.read(deadline() - time.monotonic())  # TimeoutError when nothing comes in time
-            if not chunk:
-                return
-            self.buffer += chunk
 
     def stop(self) -> str:
         """Kill the child and everything it started; return what learner code printed (capped)."""
@@ -418,11 +427,12 @@ class Session:
             return []
         exit_text = ("it broke the grading protocol: learner code wrote to the grader's result channel"
                      if ending is Ending.VIOLATED else child.exit_description(self.limits))
-        return self._recover(progress, pending, runs, ending is Ending.TIMED_OUT, exit_text)
+        return self._recover(progress, pending, runs, ending is Ending.TIMED_OUT, exit_text, child.partial)
 
     def _recover(self, progress: Progress, pending: list[ChapterRequest], runs: dict[str, ChapterRun],
-                 timed_out: bool, exit_text: str) -> list[ChapterRequest]:
-        """Record what broke the child and return the requests a fresh child should still run."""
+                 timed_out: bool, exit_text: str, partial: int = 0) -> list[ChapterRequest]:
+        """Record what broke the child (`partial`: the bytes of a result that had begun to come) and return the
+        requests a fresh child should still run."""
         name = progress.chapter
         if name is None:  # the child never got to learner code: nothing more can be done
             for req in pending:
@@ -442,15 +452,21 @@ class Session:
                                 "message": why, "traceback": "", "line": None}
         elif progress.stage is Stage.CALL and progress.index is not None:
             function = req.calls[progress.index].function
-            if timed_out:
+            if timed_out and partial:  # the call had returned: its value was still on its way
+                run.results[progress.index] = Returned(UNREAD, function, note=(
+                    f"only {partial / 2**20:.1f} MiB of its value had come when its {progress.call_budget:g} s ran "
+                    "out; a value that large (arrays of millions of numbers) takes too long to send"))
+            elif timed_out:
                 note = (f"stopped when the chapter's {self.limits.chapter_seconds:g} s ran out" if chapter_over
                         else progress.timeout_note(function))
                 run.results[progress.index] = Returned(TIMEOUT, function, note=note)
             else:
                 run.results[progress.index] = Returned(CRASHED, function, note=exit_text)
+            why = (f"the value of an earlier call of {function} could not be read back" if timed_out and partial
+                   else f"an earlier call of {function} did not return")
             for i, c in enumerate(req.calls):
                 if run.results[i] is None and c.function == function:
-                    run.results[i] = Returned(NOT_RUN, function, note=f"an earlier call of {function} did not return")
+                    run.results[i] = Returned(NOT_RUN, function, note=why)
         if chapter_over or progress.stage in (Stage.IMPORT, Stage.BETWEEN):
             for i, c in enumerate(req.calls):
                 if run.results[i] is None and run.import_error is None:

@@ -216,9 +216,15 @@ def from_array_library(value: object):
 
 def encode_value(value: object, depth: int = 0) -> dict:
     """The child's side: a learner's return value as plain JSON data. Nothing of it is called but an
-    array library's own conversion to numpy (a jax array, a torch tensor: the contract counts them)."""
+    array library's own conversion to numpy (a jax array, a torch tensor: the contract counts them). A value that
+    holds more than _MAX_ELEMENTS numbers in all is not sent: its result says how many it holds, and the limit."""
     import numpy as np
 
+    if depth == 0:
+        count = _numbers_in(value)
+        if count > _MAX_ELEMENTS:
+            return {"t": T_TOO_LARGE, "type": f"{_type_name(value)} holding {count:,} numbers (at most "
+                                              f"{_MAX_ELEMENTS:,} are read back)"}
     kind = type(value)
     if kind is not np.ndarray and kind not in _real_scalar_types():
         converted = from_array_library(value)
@@ -233,8 +239,9 @@ def encode_value(value: object, depth: int = 0) -> dict:
     if kind is np.ndarray:
         if value.dtype.kind not in "fiu":
             return {"t": T_NDARRAY_OTHER, "type": f"ndarray of dtype {value.dtype}"}
-        if value.size > _MAX_ELEMENTS:
-            return {"t": T_TOO_LARGE, "type": f"ndarray with {value.size} elements"}
+        if value.size > _MAX_ELEMENTS:  # one an array library converted, which _numbers_in could not count
+            return {"t": T_TOO_LARGE, "type": f"ndarray holding {value.size:,} numbers (at most {_MAX_ELEMENTS:,} "
+                                              "are read back)"}
         encoded = {"t": T_NDARRAY, "dtype": _dtype_name(value.dtype), "shape": list(value.shape)}
         if value.size <= _MAX_AS_TEXT:  # small arrays stay readable in the protocol
             encoded["data"] = np.asarray(value, dtype=np.float64).ravel().tolist()
@@ -259,6 +266,22 @@ def encode_value(value: object, depth: int = 0) -> dict:
     if isinstance(value, np.ndarray):
         name = f"{name} (an ndarray subclass)"
     return {"t": T_OTHER, "type": name}
+
+
+def _numbers_in(value: object, depth: int = 0) -> int:
+    """How many numbers `value` would send back: an array's (or an array library's) elements, a tuple's or list's
+    items' (as deep and as many as encode_value reads them); 0 for anything else. Reads sizes only, never data."""
+    import numpy as np
+
+    if isinstance(value, np.ndarray):
+        return int(value.size)
+    if type(value) in (tuple, list):
+        if depth >= _MAX_DEPTH or len(value) > _MAX_ITEMS:
+            return 0
+        return sum(_numbers_in(item, depth + 1) for item in value)
+    size = getattr(value, "size", None) if (getattr(type(value), "__module__", "") or "").split(".")[0] \
+        in ARRAY_LIBRARIES else None
+    return size if type(size) is int else 0
 
 
 @functools.lru_cache(maxsize=64)
@@ -288,6 +311,7 @@ RAISED = "raised"
 NOT_IMPLEMENTED = "not-implemented"
 MISSING = "missing"
 TIMEOUT = "timeout"
+UNREAD = "unread"  # it returned, but its value did not come back in time
 CRASHED = "crashed"
 NOT_RUN = "not-run"
 
@@ -371,6 +395,8 @@ class Returned:
             return f"{name} raised {err.get('exception')}: {err.get('message')}{where}"
         if self.kind == TIMEOUT:
             return f"{name} did not return in time: {self.note}."
+        if self.kind == UNREAD:
+            return f"{name} returned, but its value could not be read back: {self.note}."
         if self.kind == CRASHED:
             return f"the process running {name} ended abruptly ({self.note})."
         if self.kind == NOT_RUN:
