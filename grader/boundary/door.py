@@ -221,11 +221,16 @@ def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -
     if setpriv is None:
         return Boundary(launch, None, probe_failure=f"{without.why_not}; and {dropped.why_impossible()}")
     user = dropped.DroppedUser(setpriv)
-    reason = try_one(user, secrets=secrets)
+    user.before_run()  # a process left by an earlier run could kill the probe
+    try:
+        reason = try_one(user, secrets=secrets)
+    finally:
+        user.after_run()
     if reason is not None:
         return Boundary(launch, None, probe_failure=f"{without.why_not}; and as the unprivileged user {user.name}: "
                                                     f"{' '.join(reason.split())[:300]}")
-    return Boundary(launch, user)
+    # never a resident fork server as that user: every process of it is killed after each run (DroppedUser.after_run)
+    return Boundary(Launch.SPAWN if launch is Launch.FORK_SERVER else launch, user)
 
 
 def first_child(sandbox: str) -> tuple:

@@ -87,7 +87,7 @@ python3 -c "import sys; sys.exit(0 if sys.version_info >= (3, 10) else 'setup.sh
 # where bubblewrap cannot start, learner code runs as this unprivileged user, which cannot read the answers
 if [ "$(id -u)" = 0 ] && ! id grader-learner >/dev/null 2>&1; then
     useradd --system --no-create-home --shell /usr/sbin/nologin grader-learner 2>/dev/null \
-        || echo "setup.sh: could not create the user grader-learner; learner code would run as nobody" >&2
+        || echo "setup.sh: could not create the user grader-learner; without it nothing is graded where bubblewrap cannot start" >&2
 fi
 python3 -m venv "$SOURCE/venv"
 "$SOURCE/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$SOURCE/{wheel}"
@@ -136,6 +136,20 @@ def _project_root() -> Path:
     return PROJECT
 
 
+def _copy_of(project: Path, folder: Path) -> Path:
+    """What the instructor's wheel is built from, copied into `folder`: a build writes into the tree it builds
+    (build/, *.egg-info), so two builds of one project at once must not share it."""
+    import shutil
+
+    skip = shutil.ignore_patterns("__pycache__", "*.pyc", "build", "*.egg-info", ".venv", ".git")
+    folder.mkdir(parents=True)
+    for name in ("pyproject.toml", "README.md"):
+        shutil.copy2(project / name, folder / name)
+    for name in ("grader", "solutions", "quizzes"):
+        shutil.copytree(project / name, folder / name, ignore=skip)
+    return folder
+
+
 def build(out: Path, course, *, chapters: list[str], learner_field: str = "email", time_budget: float = 60.0,
           sandbox: str = "barrier", force: bool = False) -> tuple[Path, Settings]:
     """Write the autograder zip to `out` (refused if it exists, unless `force`)."""
@@ -152,7 +166,7 @@ def build(out: Path, course, *, chapters: list[str], learner_field: str = "email
     project = _project_root()
     with tempfile.TemporaryDirectory(prefix="gradescope-") as temporary:
         try:
-            wheel = _build_wheel(project, Path(temporary))
+            wheel = _build_wheel(_copy_of(project, Path(temporary) / "project"), Path(temporary))
         except ReleaseError as exc:
             raise GradescopeError(str(exc)) from None
         settings = Settings(course=course.id, chapters=list(chapters), learner_field=learner_field,

@@ -351,3 +351,58 @@ def test_override_numbers_must_be_finite_and_in_range(tmp_path):
     assert report["raw_score"] > 0 and report["score"] == report["raw_score"] - 1  # only the good row applied
     assert [a["source"] for a in report["adjustments"]] == ["overrides.csv, line 6"]
     ast.literal_eval(repr(report["score"]))  # a plain finite number
+
+
+# ------------------------------------------------------------------------------ the dropped uid leaves nothing behind
+
+PID_HOPPER = textwrap.dedent("""\
+    import os
+
+    import numpy as np
+
+
+    def _hop():
+        if os.fork():
+            return
+        os.setsid()
+        while True:  # a new pid all the time: what a sweep of /proc in one pass misses
+            if os.fork():
+                os._exit(0)
+
+
+    def range_bearing(x, y):
+        _hop()
+        return np.array([np.hypot(x, y), np.arctan2(y, x)])
+    """)
+# what outlived an earlier learner's run (in a container whose init reaps orphans): it kills every other process of
+# its uid, the next learner's child as it starts
+SURVIVOR = "import os, signal, time\nwhile True:\n    os.kill(-1, signal.SIGKILL)\n    time.sleep(0.02)\n"
+
+
+@pytest.mark.slow
+def test_without_bubblewrap_no_process_of_the_learners_uid_outlives_its_run(gradescope):
+    """Where learner code runs as grader-learner, nothing of it survives a run: a process hopping from pid to pid is
+    gone after it, and one left by an earlier run, which kills every new child of that uid as it starts, is gone
+    before the next learner's child starts, so that learner is graded."""
+    import pwd
+    import shutil
+    import time
+
+    from grader.boundary.dropped import LEARNER_USER, processes_of
+
+    user = pwd.getpwnam(LEARNER_USER)
+    results, output = gradescope({"ch06_measurement.py": PID_HOPPER}, _metadata())
+    assert "unprivileged user" in output and "NOT GRADED" not in output, output[-2000:]
+    assert processes_of(user.pw_uid) == []
+    python = shutil.which("python3", path=SYSTEM_PATH)  # the system's, which that user can run
+    survivor = subprocess.Popen(["setpriv", f"--reuid={user.pw_uid}", f"--regid={user.pw_gid}", "--clear-groups",
+                                 python, "-c", SURVIVOR], env={"PATH": SYSTEM_PATH})
+    try:
+        time.sleep(0.5)
+        assert survivor.poll() is None
+        right, output = gradescope({"ch06_measurement.py": _reference_files()["ch06_measurement.py"]}, _metadata())
+        assert "NOT GRADED" not in output and all(s == "passed" for s, _ in _code(right).values()), output[-2000:]
+        assert survivor.poll() is not None and processes_of(user.pw_uid) == []
+    finally:
+        survivor.kill()
+        survivor.wait()
