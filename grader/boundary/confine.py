@@ -129,7 +129,7 @@ def _scanned_pids(own_ns: str) -> list[int]:
     return found
 
 
-def _resident_bytes(pids: list[int]) -> int:
+def resident_bytes(pids: list[int]) -> int:
     page = os.sysconf("SC_PAGE_SIZE")
     total = 0
     for pid in pids:
@@ -141,7 +141,7 @@ def _resident_bytes(pids: list[int]) -> int:
     return total
 
 
-def _proportional_bytes(pids: list[int]) -> int:
+def proportional_bytes(pids: list[int]) -> int:
     """Their memory with shared pages split between the processes that share them (PSS): the forked
     copies of one interpreter share most of their pages, which their resident sizes count again each."""
     total = 0
@@ -153,15 +153,14 @@ def _proportional_bytes(pids: list[int]) -> int:
                         total += int(line.split()[1]) * 1024
                         break
         except (OSError, ValueError, IndexError):
-            total += _resident_bytes([pid])
+            total += resident_bytes([pid])
     return total
 
 
-def _over(own_ns: str, memory_bytes: int) -> bool:
-    """Whether the processes of the namespace together use more than memory_bytes (the cheap resident
-    sizes first, which can only overstate; the proportional sizes when they say so)."""
-    pids = _namespace_pids(own_ns)
-    return _resident_bytes(pids) > memory_bytes and _proportional_bytes(pids) > memory_bytes
+def over(pids: list[int], memory_bytes: int) -> bool:
+    """Whether the processes `pids` together use more than memory_bytes (the cheap resident sizes first, which can
+    only overstate; the proportional sizes when they say so)."""
+    return resident_bytes(pids) > memory_bytes and proportional_bytes(pids) > memory_bytes
 
 
 def _init(learner: int, memory_bytes: int | None) -> None:
@@ -177,7 +176,7 @@ def _init(learner: int, memory_bytes: int | None) -> None:
                      else 128 + os.WTERMSIG(status))
         if pid:
             continue  # an orphan reaped; look again at once
-        if memory_bytes is not None and _over(own_ns, memory_bytes):
+        if memory_bytes is not None and over(_namespace_pids(own_ns), memory_bytes):
             os.kill(-1, signal.SIGKILL)  # every process of the namespace but this one
             os._exit(OUT_OF_MEMORY)
         time.sleep(_POLL_SECONDS)

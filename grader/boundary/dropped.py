@@ -30,13 +30,18 @@ def learner_ids() -> tuple[int, int, str] | None:
 
 
 class DroppedUser:
-    """A grader.boundary.spawn CommandWrapper: the child's command run as the learner's user, through setpriv."""
+    """A grader.boundary.spawn CommandWrapper: the child's command run as the learner's user, through setpriv. During
+    a run the memory of every process of that user together is watched (MemoryWatch); `out_of_memory` says whether
+    the last run went over it (and was killed)."""
 
     available = False  # no private /tmp of its own: the child writes the learner's files to a host folder
 
-    def __init__(self, setpriv: str) -> None:
+    def __init__(self, setpriv: str, memory_bytes: int = 1 << 30) -> None:
         self.setpriv = setpriv
         self.uid, self.gid, self.name = learner_ids()
+        self.memory_bytes = memory_bytes
+        self.watch: MemoryWatch | None = None
+        self.out_of_memory = False
 
     def __call__(self, command: list[str]) -> list[str]:
         return [self.setpriv, f"--reuid={self.uid}", f"--regid={self.gid}", "--clear-groups", "--inh-caps=-all",
@@ -49,16 +54,22 @@ class DroppedUser:
     def scratch_dirs(self) -> list[str]:
         return []
 
-    def before_run(self) -> None:
-        """This machine's learner user is this run's alone (other graders here wait), and nothing of an earlier run is
-        left running as it when a learner's child starts."""
+    def before_run(self, memory_bytes: int | None = None) -> None:
+        """This machine's learner user is this run's alone (other graders here wait), nothing of an earlier run is
+        left running as it when a learner's child starts, and the memory of all its processes is watched from now
+        (at most `memory_bytes` together, else this user's default)."""
         _machine_lock.take()
         kill_every_process(self.uid, self.gid)
+        self.out_of_memory = False
+        self.watch = MemoryWatch(self, memory_bytes or self.memory_bytes)
 
     def after_run(self) -> None:
         """Every process this user runs is killed once a run is over (a process that left the run's process group and
         hops from pid to pid, forking and exiting, too); then another grader here may run learner code as it."""
         try:
+            if self.watch is not None:
+                self.out_of_memory = self.watch.stop()
+                self.watch = None
             kill_every_process(self.uid, self.gid)
         finally:
             _machine_lock.give()
@@ -66,8 +77,9 @@ class DroppedUser:
     def describe(self) -> str:
         return (f"isolation: no bubblewrap here; learner code runs as the unprivileged user {self.name} (uid {self.uid},"
                 " no groups, no capabilities), which cannot read the references, keys or course file (root's only), "
-                "with resource limits per process, its process tree killed on a timeout and every process of that "
-                "user killed after each run")
+                f"with resource limits per process, all its processes together within {self.memory_bytes >> 20} MiB "
+                f"(watched every {MemoryWatch.SECONDS * 1000:g} ms), its process tree killed on a timeout and every "
+                "process of that user killed after each run")
 
 
 ROUNDS = 200  # kill(-1) rounds before giving up on a user's processes (each new generation is killed in the next)
@@ -125,6 +137,37 @@ def processes_of(uid: int) -> list[int]:
         if state != b"Z" and uid in uids:
             found.append(int(entry))
     return found
+
+
+class MemoryWatch:
+    """The memory of every process of the learner user together, looked at every SECONDS from a thread of the
+    grader's while a run goes on, as the sandbox's own init looks at its namespace (grader.boundary.confine): over
+    `memory_bytes`, every process of that user is killed. (A user's processes share no cgroup of their own in the
+    containers this barrier serves: nothing there lets the grader make one.)"""
+
+    SECONDS = 0.02
+
+    def __init__(self, user: DroppedUser, memory_bytes: int) -> None:
+        import threading
+
+        self.user, self.memory_bytes, self.exceeded = user, memory_bytes, False
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self._watch, name="learner memory", daemon=True)
+        self.thread.start()
+
+    def _watch(self) -> None:
+        from grader.boundary.confine import over
+
+        while not self.stopped.wait(self.SECONDS):
+            if over(processes_of(self.user.uid), self.memory_bytes):
+                self.exceeded = True
+                kill_every_process(self.user.uid, self.user.gid)
+
+    def stop(self) -> bool:
+        """Stop watching; whether the run went over its memory (and was killed for it)."""
+        self.stopped.set()
+        self.thread.join()
+        return self.exceeded
 
 
 def kill_every_process(uid: int, gid: int) -> bool:

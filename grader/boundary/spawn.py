@@ -154,17 +154,30 @@ class _Started:
 
 class SpawnedChild(_Started):
     """A child interpreter started by start_child: its process (group), result pipe, output file, and
-    the folder it writes the learner's files to (`root`; removed at stop when it is on the host); `after`: what its
-    barrier does once it is stopped (a uid of learner code's own kills every process of that uid)."""
+    the folder it writes the learner's files to (`root`; removed at stop when it is on the host); `barrier`: one of a
+    uid of learner code's own (grader.boundary.dropped.DroppedUser), which watched its memory and kills every process
+    of that uid once it is stopped."""
 
     def __init__(self, process: subprocess.Popen | _Spawned, read_fd: int, capture_fd: int, root: str,
-                 host_root: bool, after: Callable[[], None] | None = None) -> None:
+                 host_root: bool, barrier=None) -> None:
         self.process = process
         self.read_fd = read_fd
         self.capture_fd = capture_fd
         self.root = root
         self.host_root = host_root
-        self.after = after
+        self.barrier = barrier
+
+    @property
+    def returncode(self) -> int | None:
+        """The exit status (negative: killed by that signal), or None while it runs; OUT_OF_MEMORY where its barrier
+        killed it for the memory of all its processes together."""
+        code = self.process.poll()
+        watch = getattr(self.barrier, "watch", None)  # during the run; its verdict stays once the run is over
+        if code is not None and (getattr(watch, "exceeded", False) or getattr(self.barrier, "out_of_memory", False)):
+            from grader.boundary.confine import OUT_OF_MEMORY
+
+            return OUT_OF_MEMORY
+        return code
 
     def send(self, request: str) -> None:
         """Write the whole request (with where to put the learner's files) to the child's stdin and close it."""
@@ -186,8 +199,8 @@ class SpawnedChild(_Started):
         self.process.wait()
         forget(self.process.pid)
         kill_orphans()  # grandchildren that left the process group with setsid
-        if self.after is not None:
-            self.after()
+        if self.barrier is not None:
+            self.barrier.after_run()
         os.close(self.read_fd)
         if self.host_root:
             import shutil
@@ -371,8 +384,8 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
                                    creationflags=getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0))
         return PortableChild(process, capture, scratch, root, _job_for(process, memory_bytes))
     sandboxed = bool(getattr(wrap, "available", False))  # then the child has a /tmp of its own
-    if hasattr(wrap, "before_run"):  # a barrier of its own uid: nothing of an earlier run left running as it
-        wrap.before_run()
+    if hasattr(wrap, "before_run"):  # a barrier of its own uid: nothing of an earlier run left, its memory watched
+        wrap.before_run(memory_bytes)
     scratch, root = _scratch(sandboxed)
     if not sandboxed and hasattr(wrap, "give"):  # a child under another uid writes into its host folder
         wrap.give(scratch)
@@ -394,4 +407,4 @@ def start_child(wrap: CommandWrapper | None = None, portable: bool = False, memo
     os.close(write_fd)
     keep(process.pid)
     return SpawnedChild(process, read_fd, capture_fd, root, host_root=not sandboxed,
-                        after=getattr(wrap, "after_run", None))
+                        barrier=wrap if hasattr(wrap, "after_run") else None)

@@ -406,3 +406,36 @@ def test_without_bubblewrap_no_process_of_the_learners_uid_outlives_its_run(grad
     finally:
         survivor.kill()
         survivor.wait()
+
+
+MEMORY_BOMB = textwrap.dedent("""\
+    import os
+
+    import numpy as np
+
+
+    def range_bearing(x, y):
+        for _ in range(6):  # six processes of 300 MiB each: each within its own limit, together far over
+            if os.fork() == 0:
+                block = np.ones(300 << 17)  # 300 MiB, written
+                while True:
+                    block[::4096] += 1
+        while True:
+            pass
+    """)
+
+
+@pytest.mark.slow
+def test_without_bubblewrap_the_memory_of_all_the_learners_processes_together_is_capped(gradescope):
+    """Where learner code runs as grader-learner, its processes together stay within the learner's memory: six of
+    300 MiB are killed, the check says the memory ran out (not that the function hung), and nothing is left."""
+    import pwd
+
+    from grader.boundary.dropped import LEARNER_USER, processes_of
+
+    results, output = gradescope({"ch06_measurement.py": MEMORY_BOMB}, _metadata())
+    assert "all its processes together within 1024 MiB" in output, output[-2000:]
+    messages = [t["output"] for t in results["tests"] if t["extra_data"]["id"] == "ch06/range_bearing_worked_example"]
+    assert messages and "ran out of memory: all its processes together may use at most 1024 MiB" in messages[0], \
+        messages
+    assert processes_of(pwd.getpwnam(LEARNER_USER).pw_uid) == []
