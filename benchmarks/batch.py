@@ -12,9 +12,9 @@ learner children: /proc polled), and the ratio of each at the largest count to a
 1). --discovery times grader.course.staging.discover on 2,500, 5,000 and 10,000 empty folders (and with a roster
 giving them all one id) and prints the cost per folder at 10,000 against at 2,500 (linear: near 1) and
 the seconds at 10,000 against the 3.4 s the issue measured. --scheduler grades the --count submissions through
-`grade batch --scheduler` on a `dask scheduler` started here (127.0.0.1) with one, then two `grade worker`
-processes of one worker each, each run right after the local pool's, and prints both in submissions per second
-(needs the [cluster] extra). --repeat N runs each N times: medians.
+`grade batch --scheduler` on a scheduler started here (`grade cluster scheduler`: TLS, on 127.0.0.1) with one, then
+two `grade worker` processes of one worker each, each run right after the local pool's, and prints both in
+submissions per second (needs the [cluster] extra). --repeat N runs each N times: medians.
 
 The floor, timed in the same rounds: the learner side alone, as `grade batch` would run it (the same number of
 worker processes, each with its own sandboxed fork server; every learner's calls run in a forked child and read
@@ -404,6 +404,8 @@ def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
     run into a fresh output folder) and the median of the pairs' ratios."""
     from distributed import Client
 
+    from grader.course import credentials
+
     make(work / "submissions", count, styles)
     env = dict(os.environ)
     env.pop("DASK_SCHEDULER_ADDRESS", None)
@@ -415,17 +417,20 @@ def cluster_figures(work: Path, count: int, styles: bool, repeat: int) -> None:
             raise SystemExit(f"grade batch {' '.join(extra)} did not grade every submission:\n{output}")
         return wall
 
-    address = f"tcp://127.0.0.1:{_free_port()}"
-    started = [_start([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port",
-                       address.rsplit(":", 1)[1], "--no-dashboard"], work / "scheduler.log")]
+    certs = work / "certs"
+    credentials.make(certs, force=True)
+    address = f"tls://127.0.0.1:{_free_port()}"
+    started = [_start([sys.executable, "-m", "grader", "cluster", "scheduler", "--certs", str(certs), "--host",
+                       "127.0.0.1", "--port", address.rsplit(":", 1)[1], "--no-dashboard"], work / "scheduler.log")]
     try:
         for workers in (1, 2):
-            started.append(_start([sys.executable, "-m", "grader", "worker", address, "--nworkers", "1",
-                                   "--no-dashboard", "--local-directory", str(work / f"worker-{workers}")],
-                                  work / f"worker-{workers}.log"))
-            with Client(address, timeout=60, set_as_default=False) as client:
+            started.append(_start([sys.executable, "-m", "grader", "worker", address, "--certs", str(certs),
+                                   "--nworkers", "1", "--no-dashboard", "--local-directory",
+                                   str(work / f"worker-{workers}")], work / f"worker-{workers}.log"))
+            with Client(address, timeout=60, security=credentials.security(certs, "coordinator"),
+                        set_as_default=False) as client:
                 client.wait_for_workers(workers, timeout=300)
-            pairs = [(wall_of(()), wall_of(("--scheduler", address))) for _ in range(repeat)]
+            pairs = [(wall_of(()), wall_of(("--scheduler", address, "--certs", str(certs)))) for _ in range(repeat)]
             local, dask = (statistics.median(walls) for walls in zip(*pairs))
             ratio = statistics.median(here / there for here, there in pairs)
             print(f"Dask, {workers} worker{'s' * (workers > 1)} on this machine: {count} submissions in {dask:.1f} s, "

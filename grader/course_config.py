@@ -63,6 +63,7 @@ class Course:
     # gives none (`manifest_time: accept`; by default it may not: the learner's machine wrote it)
     accepts_manifest_time: bool = False
     scheduler: str | None = None  # instructor side: the Dask scheduler grade batch grades on (grader.course.cluster)
+    scheduler_certs: str | None = None  # the folder of the cluster's certificates (grader.course.credentials)
     lines: dict | None = field(default=None, compare=False, hash=False)  # setting -> the line of its file it is on
 
     def where(self, setting: str) -> str:
@@ -224,15 +225,29 @@ def from_text(text: str, path: str) -> Course:
     if handout is not None and (not isinstance(handout, str) or not handout.strip()):
         raise CourseError(f"{where('handout')}: handout is the id of the current handout, as `grade release` prints "
                           "it (e.g. 0.1.0+handout.3f2a9c1b0d4e)")
-    scheduler = data.get("scheduler")
-    if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
-        raise CourseError(f"{where('scheduler')}: scheduler is the address of the Dask scheduler grade batch grades on, "
-                          f"e.g. tcp://scheduler.example.org:8786, not {scheduler!r}")
+    scheduler, scheduler_certs = _scheduler(data.get("scheduler"), path, where)
     return Course(id=str(data.get("course", Course.id)), seed=seed, quiz_feedback=feedback, hidden=frozenset(hidden),
                   exact_derivatives=exact, source=str(path), quiz_feedback_by=feedback_by, lines=lines,
                   accepts_manifest_time=manifest_time == "accept",
                   current_handout=handout.strip() if handout else None,
-                  late=_late(data, where), scheduler=scheduler.strip() if scheduler else None)
+                  late=_late(data, where), scheduler=scheduler, scheduler_certs=scheduler_certs)
+
+
+def _scheduler(value: object, path: Path, where) -> tuple[str | None, str | None]:
+    """scheduler: the address of the Dask scheduler grade batch grades on, or a mapping `{address: ..., certs: DIR}`
+    naming the folder of the cluster's certificates too (relative to the course file's folder)."""
+    if value is None:
+        return None, None
+    address, certs = (value.get("address"), value.get("certs")) if isinstance(value, dict) else (value, None)
+    unknown = sorted(set(value) - {"address", "certs"}) if isinstance(value, dict) else []
+    if unknown or not isinstance(address, str) or not address.strip() or (
+            certs is not None and (not isinstance(certs, str) or not certs.strip())):
+        raise CourseError(f"{where('scheduler')}: scheduler is the address of the Dask scheduler grade batch grades on, "
+                          "e.g. tls://scheduler.example.org:8786, or {address: tls://..., certs: DIR} with the folder of "
+                          f"the cluster's certificates (grade cluster certs DIR), not {value!r}")
+    if certs is not None:
+        certs = str(Path(path).parent / Path(certs.strip()).expanduser())
+    return address.strip(), certs
 
 
 def _quiz_feedback(value: object, where: str) -> tuple[str, dict]:

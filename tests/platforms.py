@@ -380,10 +380,20 @@ def environment(route: str, base: dict | None = None) -> dict:
 
 
 def grade_command(route: str, *arguments: str) -> list[str]:
-    """A command line running `grade ARGUMENTS...`; run it with environment(route)."""
-    return [sys.executable, "-m", "grader", *arguments]
+    """A command line running `grade ARGUMENTS...`; run it with environment(route). On Windows and macOS, as a
+    user who is not root, as a laptop's user is (tests.support.not_root)."""
+    return _as_a_laptops_user(route, [sys.executable, "-m", "grader", *arguments])
 
 
 def python_code(route: str, code: str) -> list[str]:
-    """A command line running the Python program `code` as on `route` (with the emulation run first)."""
-    return [sys.executable, "-c", (prelude(route) if route != "linux" else "") + code]
+    """A command line running the Python program `code` as on `route` (with the emulation run first), on Windows and
+    macOS as a user who is not root."""
+    return _as_a_laptops_user(route, [sys.executable, "-c", (prelude(route) if route != "linux" else "") + code])
+
+
+def _as_a_laptops_user(route: str, command: list[str]) -> list[str]:
+    if route == "linux":
+        return command
+    from tests.support import not_root
+
+    return not_root(command)

@@ -140,13 +140,41 @@ def checks_by_id(chapter) -> dict:
 
 # ------------------------------------------------------------------------------- grading, in this process
 
+def unbarred():
+    """A boundary for the suite's own code (the references and the submissions the tests write), in this process:
+    a fresh child without a barrier, as grader.boundary.choose("off") gives a user who is not root. (As root, where
+    the answers are installed, choose never starts learner code without one: tests/boundary/test_door_as_root.py.)"""
+    from grader.boundary.door import Boundary, Launch
+    from grader.system import process_groups
+
+    return Boundary(Launch.SPAWN if process_groups() else Launch.PORTABLE, None, turned_off="by the test suite")
+
+
+def not_root(command: list, real: bool = False) -> list:
+    """`command` as someone who is not root, where the suite runs as root: the effective uid and gid 65534, which the
+    grader reads as not root, while the process may still read and write every file the test made (its real uid
+    stays 0, for access(); the ambient capabilities CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH, for open()). The
+    grader then decides as it does for an instructor or learner who is not root (as root it never runs learner
+    code without a barrier: tests/boundary/test_door_as_root.py). `real`: the real uid and gid 65534 too, for a
+    command run by a shell (which sets an effective uid that differs from the real one back to it); then access()
+    finds only what others may reach. Unchanged where the suite is not root."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        return list(command)
+    setpriv = shutil.which("setpriv")
+    assert setpriv, "the suite as root needs setpriv (util-linux; .ci/run installs it)"
+    caps = "+dac_override,+dac_read_search"
+    ids = ["--reuid=65534", "--regid=65534", "--clear-groups"] if real else ["--euid=65534", "--egid=65534",
+                                                                              "--keep-groups"]
+    return [setpriv, *ids, f"--inh-caps={caps}", f"--ambient-caps={caps}", *map(str, command)]
+
+
 def open_session(root: Path, package: str = "exercises", limits=None, boundary=None):
     """A session for the submission at root/package: its child from `boundary` (grader.boundary.choose's), by
-    default a fresh child without the sandbox (so learner code sees the test's files)."""
-    from grader.boundary import Limits, choose
+    default a fresh child without a barrier (unbarred: learner code sees the test's files)."""
+    from grader.boundary import Limits
     from grader.submission import Submission
 
-    return (boundary or choose("off")).open_session(Submission(Path(root), package), limits or Limits())
+    return (boundary or unbarred()).open_session(Submission(Path(root), package), limits or Limits())
 
 
 def grade_code(root: Path, chapters, package: str = "exercises", *, seed: int | None = None, limits=None,
@@ -303,11 +331,14 @@ def run_grade(*args, cwd: Path = REPO, env: dict | None = None, timeout: float =
               flags=(), raw: bool = False, **options) -> subprocess.CompletedProcess:
     """The real `grade ARGS` in a fresh interpreter (`python [FLAGS] -m grader ARGS`), its output as text (as bytes
     with `raw`); with `quiz_dir`, its quiz code reads the banks and keys there. `options` go to subprocess.run;
-    `timeout` only stops a hang."""
+    `timeout` only stops a hang. Without a sandbox (--no-sandbox, GRADER_SANDBOX=off) it runs as someone who is
+    not root (not_root), the user such a run is for."""
     command = ["-m", "grader"] if quiz_dir is None else ["-c", _WITH_QUIZ_DIR, str(quiz_dir)]
     text = {} if raw else {"text": True, "encoding": "utf-8"}
-    return subprocess.run([sys.executable, *flags, *command, *map(str, args)], cwd=cwd, env=env, timeout=timeout,
-                          check=False, capture_output=True, stdin=subprocess.DEVNULL, **text, **options)
+    line = [sys.executable, *flags, *command, *map(str, args)]
+    unsandboxed = "--no-sandbox" in map(str, args) or (os.environ if env is None else env).get("GRADER_SANDBOX") == "off"
+    return subprocess.run(not_root(line) if unsandboxed else line, cwd=cwd, env=env,
+                          timeout=timeout, check=False, capture_output=True, stdin=subprocess.DEVNULL, **text, **options)
 
 
 def grade_json(*args, html: Path | None = None, **options) -> dict:

@@ -24,15 +24,17 @@ if TYPE_CHECKING:
         SandboxMode,
         BoundaryUnavailable,
         Launch,
+        answer_places,
         choose,
         first_child,
         open_session,
+        without_a_sandbox,
     )
     from grader.boundary.session import ChapterRequest, ChapterRun, Limits, Session
 
 __all__ = ["SANDBOX_MODES", "Boundary", "BoundaryUnavailable", "ChapterRequest", "ChapterRun", "Launch", "Limits",
-           "SandboxMode", "Session", "bubblewrap_possible", "choose", "first_child", "how_to_get_a_barrier",
-           "open_session"]
+           "SandboxMode", "Session", "answer_places", "bubblewrap_possible", "choose", "first_child",
+           "how_to_get_a_barrier", "open_session", "without_a_sandbox"]
 _IN_SESSION = ("ChapterRequest", "ChapterRun", "Limits", "Session")  # the others are in door
 
 

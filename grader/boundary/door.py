@@ -10,6 +10,8 @@ resident process kept between sessions), `choose` picks
 - the barrier: bubblewrap (grader.boundary.sandbox) where it is installed and starts; where it does not and the
   grader is root, a dropped uid (grader.boundary.dropped: learner code as an unprivileged user that cannot read
   the references, keys or course file), proved by a probe; else none, and the isolation line says which, and why.
+  Learner code never runs as root where the answers are installed: there, whatever was asked, it runs behind
+  bubblewrap or as the dropped uid (with --no-sandbox: as that user, which may then read the answers), or not.
 Environment overrides, for tests and benchmarks: GRADER_SANDBOX=off (no sandbox), GRADER_FORK_SERVER=off (a
 fresh interpreter per session even where a fork server would serve), GRADER_LAUNCHER=fork-server|spawn|portable
 (force one launcher).
@@ -154,6 +156,14 @@ def how_to_get_a_barrier() -> str:
             "grade only code you trust without it")
 
 
+def without_a_sandbox() -> str:
+    """What --no-sandbox does here, for a refusal that names it."""
+    if root_with_answers():
+        return ("--no-sandbox grades without bubblewrap, learner code as the unprivileged user grader-learner (never "
+                "as root), which can then read whatever any user can, answers included where others may read them")
+    return "--no-sandbox grades without it (learner code then runs as you and can read every file you can)"
+
+
 def _no_bubblewrap(portable: bool) -> str:
     if portable:
         return ("this system has no bubblewrap; learner code runs in a child process whose whole process tree is "
@@ -173,7 +183,10 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
     server where forking is safe); `probe`: start one interpreter the way sessions will before saying yes
     (BoundaryUnavailable if none starts at all; for "barrier" it must also fail to read every path of
     `secrets`); `turned_off`: how "off" was asked, for the isolation line; `remember`: the one-off `grade` keeps the
-    sandbox's command line for the next command's launcher, and uses the one kept (grader.boundary.kept)."""
+    sandbox's command line for the next command's launcher, and uses the one kept (grader.boundary.kept). As root
+    where the answers are installed (root_with_answers), whatever `sandbox` says, learner code runs behind
+    bubblewrap or as the dropped uid ("off": without proving that user reads no answer; "required": bubblewrap
+    only), or BoundaryUnavailable."""
     if sandbox not in SANDBOX_MODES:
         raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
     sandbox = SandboxMode(sandbox).value
@@ -204,23 +217,64 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
             chosen = Boundary(launch, None, probe_failure=" ".join(reason.split())[:300])
         elif reason is not None:
             raise BoundaryUnavailable(reason)
-    if sandbox == "barrier" and chosen.sandbox is None:
-        chosen = _dropped_user(launch, chosen, secrets)
+    as_root = root_with_answers()
+    if chosen.sandbox is None and (sandbox == "barrier" or as_root):
+        # "off" as root: the instructor waived the barrier around the answers, never the one around uid 0
+        off = turned_off if sandbox == "off" else ""
+        chosen = _dropped_user(launch, chosen, () if off else (*secrets, *answer_places()), off)
+    if chosen.sandbox is None and as_root:
+        raise BoundaryUnavailable(f"{chosen.why_not}. Learner code never runs as root where the answers are "
+                                  "installed: install bubblewrap, or create the user grader-learner (`useradd --system "
+                                  "--no-create-home --shell /usr/sbin/nologin grader-learner`) with the references, "
+                                  "keys and course file readable by root only, or grade as an unprivileged user")
     if sandbox in ("required", "barrier") and chosen.sandbox is None:
         raise BoundaryUnavailable(chosen.why_not)
     return chosen
 
 
-def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -> Boundary:
+def root_with_answers() -> bool:
+    """Whether learner code started here would start as root with the answers installed (not a learner's
+    handout): then it runs behind bubblewrap or as the dropped uid, whatever was asked, or not at all."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        return False
+    from grader.course_config import in_handout
+
+    return not in_handout()
+
+
+def answer_places() -> list[str]:
+    """Where this grader's answers are, wherever it is installed: the references (the solutions package) and the
+    quizzes' keys (inside the grader in its wheel, beside it in the project). The probe of a dropped uid proves that
+    user reads none of them."""
+    import importlib.util
+    from pathlib import Path
+
+    places = []
+    try:
+        spec = importlib.util.find_spec("solutions")
+    except (ImportError, ValueError):
+        spec = None
+    if spec is not None and spec.submodule_search_locations:
+        places += list(spec.submodule_search_locations)
+    grader_dir = Path(__file__).resolve().parents[1]
+    for quizzes in (grader_dir / "quizzes", grader_dir.parent / "quizzes"):
+        if (quizzes / "keys").is_dir():
+            places.append(str(quizzes / "keys"))
+            break
+    return places
+
+
+def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...], turned_off: str = "") -> Boundary:
     """Learner code as an unprivileged user, where this process is root and the probe shows that user starts an
-    interpreter and reads none of `secrets`; else `without`, its reason extended."""
+    interpreter and reads none of `secrets` (`turned_off`: how the barrier around the answers was waived, then
+    none are given); else `without`, its reason extended."""
     from grader.boundary import dropped
     from grader.boundary.sandbox import probe as try_one
 
     setpriv = dropped.possible()
     if setpriv is None:
         return Boundary(launch, None, probe_failure=f"{without.why_not}; and {dropped.why_impossible()}")
-    user = dropped.DroppedUser(setpriv)
+    user = dropped.DroppedUser(setpriv, turned_off=turned_off)
     user.before_run()  # a process left by an earlier run could kill the probe
     try:
         reason = try_one(user, secrets=secrets)

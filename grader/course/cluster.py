@@ -15,11 +15,17 @@ that arrives twice is recorded once (run_batch); a worker on which learner code 
 not start, or it holds another grader version) answers so for that task, never with a grade, and the task
 is tried on another worker.
 
-The workers: `grade worker SCHEDULER` (or `dask worker SCHEDULER --preload grader.course.cluster --nthreads 1`)
-checks on start that learner code starts here behind the sandbox and that this grader is the version of the
-coordinator using the scheduler (published on it by each coordinator while it runs), and refuses otherwise.
-The references and keys a worker grades with are those of the instructor's wheel installed with it: the
-version check proves they are the coordinator's.
+The cluster is closed to anyone without the course's certificates: scheduler, workers and coordinator connect
+over mutual TLS only (grader.course.credentials), so nobody else on the network reaches the scheduler, runs
+anything on a worker or hands in a result; a plain `tcp://` cluster is used only where the instructor passes
+--insecure-open-cluster, whose name says what it is.
+
+The workers: `grade worker SCHEDULER --certs DIR` (or `dask worker SCHEDULER --preload grader.course.cluster
+--nthreads 1` with Dask's TLS options) checks on start that its connections are encrypted, that learner code
+starts here behind a barrier (bubblewrap, or as root the dropped uid: never without one, whatever the
+coordinator asks) and that this grader is the version of the coordinator using the scheduler (published on it
+by each coordinator while it runs), and refuses otherwise. The references and keys a worker grades with are
+those of the instructor's wheel installed with it: the version check proves they are the coordinator's.
 
 Dask (the [cluster] extra: dask[distributed]) is imported here only, and this module only with --scheduler.
 """
@@ -40,9 +46,23 @@ from grader.course import workers
 VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # scheduler metadata: the running coordinator's grader
 TRIES = 3  # workers a learner is tried on, where learner code cannot run on one
 INSTALL_HINT = "pip install 'jacobians-grader[cluster]' (Dask's distributed scheduler)"
-# `grade worker --no-sandbox`: its processes start where learner code cannot run behind bubblewrap (they then grade
-# only for a coordinator run with --no-sandbox: grader.boundary.choose decides per task, as the coordinator asks)
-START_WITHOUT_SANDBOX = "GRADER_WORKER_WITHOUT_SANDBOX"
+WORKER_SANDBOX = "barrier"  # how learner code runs on every worker (grader.boundary.SandboxMode), whatever is asked
+# `grade worker --insecure-open-cluster`: its processes accept a cluster without TLS (their own start check)
+OPEN_CLUSTER = "GRADER_INSECURE_OPEN_CLUSTER"
+OPEN_OPTION = "--insecure-open-cluster"
+SECURE_SCHEMES = ("tls", "wss", "gateway")  # Dask's encrypted comms; Dask Gateway's, TLS through its proxy
+
+
+def open_cluster_refused(address: str, open_cluster: bool) -> str:
+    """Why `address` is refused ("" where it is not): a scheduler reached without TLS accepts anyone who reaches
+    its port, unless the instructor says the cluster is open (OPEN_OPTION)."""
+    scheme = address.split("://", 1)[0] if "://" in address else "tcp"
+    if scheme in SECURE_SCHEMES or open_cluster:
+        return ""
+    return (f"{address} is a cluster without TLS: anyone who reaches its port could run code on every worker, read "
+            "the references and the course seed there and rewrite any grade. Make the course's certificates "
+            "(`grade cluster certs DIR`), start the scheduler with them (`grade cluster scheduler --certs DIR`) and "
+            f"use its tls:// address with --certs DIR; or pass {OPEN_OPTION} where nobody else reaches that network")
 
 
 class ClusterError(workers.InfrastructureError):
@@ -55,7 +75,7 @@ class WorkerRefused(RuntimeError):
     not the coordinator's version): the message says why."""
 
 
-def _distributed():
+def distributed_module():
     """dask.distributed, or ClusterError saying how to install it."""
     try:
         import distributed
@@ -90,19 +110,19 @@ def _as_a_local_worker() -> None:
         multiprocessing.set_start_method(None, force=True)
 
 
-def sandbox_check(sandbox: str = "required") -> str:
-    """The isolation line of learner code here for `sandbox` (grader.boundary.choose's mode), after one child
-    interpreter started the way tasks will start theirs; WorkerRefused with the reason where it does not."""
+def sandbox_check() -> str:
+    """The isolation line of learner code on this worker (behind WORKER_SANDBOX), after one child interpreter
+    started the way tasks will start theirs; WorkerRefused with the reason where it does not."""
     _as_a_local_worker()
-    if sandbox not in _started:
+    if WORKER_SANDBOX not in _started:
         try:
-            _started[sandbox] = workers.probe(sandbox)
+            _started[WORKER_SANDBOX] = workers.probe(WORKER_SANDBOX, tuple(_credentials))
         except workers.InfrastructureError as exc:
-            raise WorkerRefused(f"learner code cannot run on {socket.gethostname()}: {exc}. Install bubblewrap "
-                                "(`bwrap --version` must work, with user namespaces), or start the worker with "
-                                "--no-sandbox: it then grades only for `grade batch --no-sandbox`, learner code "
-                                "running as the worker's user") from None
-    return _started[sandbox]
+            raise WorkerRefused(f"learner code cannot run on {socket.gethostname()} behind a barrier: {exc}. Install "
+                                "bubblewrap (`bwrap --version` must work, with user namespaces), or run the worker as "
+                                "root with a user grader-learner of its own (learner code then runs as that user): a "
+                                "worker never runs learner code without one") from None
+    return _started[WORKER_SANDBOX]
 
 
 def version_check(published: str | None) -> None:
@@ -115,13 +135,34 @@ def version_check(published: str | None) -> None:
                             "runs; one that was killed leaves it there until the next one connects)")
 
 
+def encryption_check(security) -> None:
+    """WorkerRefused where this worker's connections are not all encrypted with the course's certificates (Dask's
+    require-encryption and a worker certificate), unless it was started for an open cluster (OPEN_CLUSTER)."""
+    if os.environ.get(OPEN_CLUSTER) == "1":
+        return
+    if not (security.require_encryption and security.tls_ca_file and security.tls_worker_cert):
+        raise WorkerRefused("this worker's connections are not encrypted (no TLS certificate, or Dask's "
+                            "distributed.comm.require-encryption off): start it with `grade worker tls://SCHEDULER:8786 "
+                            "--certs DIR` (`grade cluster certs DIR` makes the certificates), or with Dask's TLS "
+                            f"options and DASK_DISTRIBUTED__COMM__REQUIRE_ENCRYPTION=True; {OPEN_OPTION} runs it "
+                            "without, where nobody else reaches the cluster's network")
+
+
+_credentials: list[str] = []  # this worker's certificate and key files: learner code must not read them
+
+
 async def dask_setup(worker) -> None:
-    """`dask worker --preload grader.course.cluster`: refuse to start where learner code cannot run here behind the
-    sandbox or where a running coordinator grades with another grader version. Dask only logs an exception of a
-    preload and starts the worker all the same, so this process ends (status 2), having said why; its nanny then
-    fails to start and `dask worker` ends too."""
+    """`dask worker --preload grader.course.cluster`: refuse to start where the worker's connections are not
+    encrypted, where learner code cannot run here behind a barrier or where a running coordinator grades with
+    another grader version. Dask only logs an exception of a preload and starts the worker all the same, so this
+    process ends (status 2), having said why; its nanny then fails to start and `dask worker` ends too. Files this
+    worker writes (Dask's spilled task data: learners' files) are its user's only."""
+    os.umask(0o077)
     try:
-        sandbox_check("off" if os.environ.get(START_WITHOUT_SANDBOX) == "1" else "required")
+        encryption_check(worker.security)
+        _credentials[:] = sorted({str(path) for path in (worker.security.tls_worker_cert, worker.security.tls_worker_key)
+                                  if path and "\n" not in str(path)})
+        sandbox_check()
         try:
             published = await worker.scheduler.get_metadata(keys=VERSION_KEY, default=None)
         except Exception:  # noqa: BLE001  no scheduler yet: the coordinator checks every worker when it connects
@@ -132,12 +173,12 @@ async def dask_setup(worker) -> None:
         os._exit(2)
 
 
-def worker_facts(sandbox: str, dask_worker=None) -> dict:
+def worker_facts(dask_worker=None) -> dict:
     """What the coordinator checks of each worker when it connects (run there by Client.run): its grader version,
-    and its isolation line for `sandbox` or why learner code cannot run there."""
+    and its isolation line or why learner code cannot run there."""
     facts = {"version": grader_version(), "host": socket.gethostname(), "pid": os.getpid()}
     try:
-        facts["isolation"] = sandbox_check(sandbox)
+        facts["isolation"] = sandbox_check()
     except WorkerRefused as exc:
         facts["problem"] = str(exc)
     return facts
@@ -145,19 +186,23 @@ def worker_facts(sandbox: str, dask_worker=None) -> dict:
 
 def grade_task(staged: workers.Staged, files: Mapping[str, bytes], grading: workers.Grading, version: str) -> dict:
     """One learner graded on this worker, from its staged `files` (relative path -> bytes), copied into a private
-    folder of this machine; returns plain data: {"graded": grader.course.workers.Outcome, "worker": its address},
-    or {"refused": why, "worker": ...} where this worker holds another grader `version` or learner code cannot
-    run here (an infrastructure failure, never a grade: the coordinator tries another worker)."""
+    folder of this machine, behind WORKER_SANDBOX whatever `grading` asks; returns plain data:
+    {"graded": grader.course.workers.Outcome, "worker": its address}, or {"refused": why, "worker": ...} where this
+    worker holds another grader `version` or learner code cannot run here (an infrastructure failure, never a
+    grade: the coordinator tries another worker)."""
+    import dataclasses
+
     from distributed import get_worker
 
     worker = get_worker().address
     mine = grader_version()
     if mine != version:
         return {"refused": f"worker {worker} holds grader {mine}, not the coordinator's {version}", "worker": worker}
+    grading = dataclasses.replace(grading, sandbox=WORKER_SANDBOX)
     with _lock:
         _as_a_local_worker()
         try:
-            line = workers.worker_isolation(grading.sandbox)
+            line = workers.worker_isolation(WORKER_SANDBOX, tuple(_credentials))
         except workers.InfrastructureError as exc:
             return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
         with tempfile.TemporaryDirectory(prefix="grade-task-") as scratch:
@@ -171,7 +216,8 @@ def grade_task(staged: workers.Staged, files: Mapping[str, bytes], grading: work
                 path.write_bytes(data)
             try:
                 graded = workers.grade_staged(staged, grading, root=Path(scratch),
-                                              extra={"isolation": {"line": line, "worker": worker}})
+                                              extra={"isolation": {"line": line, "worker": worker}},
+                                              secrets=tuple(_credentials))
             except (OSError, workers.InfrastructureError) as exc:  # no child process starts here at all
                 return {"refused": f"learner code cannot run on worker {worker}: {exc}", "worker": worker}
     return {"graded": graded, "worker": worker}
@@ -186,56 +232,93 @@ def task_key(staged: workers.Staged, version: str, attempt: int = 1) -> str:
     return f"grade-{digest.hexdigest()[:32]}" + (f"-try{attempt}" if attempt > 1 else "")
 
 
-def worker_command(scheduler: str, nworkers: int | None = None, dask_options: tuple[str, ...] = ()) -> list[str]:
+def worker_command(scheduler: str, nworkers: int | None = None, dask_options: tuple[str, ...] = (),
+                   certs: Path | None = None) -> list[str]:
     """The `dask worker` command `grade worker` becomes: worker processes of one thread each (a learner at a
-    time, behind the process's resident sandbox), each checking itself on start (the preload, dask_setup)."""
+    time, behind the process's resident barrier), each checking itself on start (the preload, dask_setup), with
+    the worker's certificate from `certs` (grader.course.credentials) and no dashboard."""
+    from grader.course import credentials
+
+    tls = credentials.dask_options(certs, "worker") if certs is not None else []
     return [sys.executable, "-m", "distributed.cli.dask_worker", scheduler, "--preload", "grader.course.cluster",
-            "--nthreads", "1", "--nworkers", str(nworkers or os.cpu_count() or 1), *dask_options]
+            "--nthreads", "1", "--nworkers", str(nworkers or os.cpu_count() or 1), "--no-dashboard", *tls,
+            *dask_options]
 
 
-def prepare_worker(scheduler: str, sandboxed: bool = True) -> str:
-    """The checks `grade worker` makes before it joins `scheduler`: Dask installed, learner code starting here
-    behind the sandbox, and this grader the version of a coordinator running there. Returns the isolation line;
-    WorkerRefused with the reason otherwise."""
+def worker_environment(certs: Path | None, open_cluster: bool) -> dict[str, str]:
+    """What `grade worker` adds to its worker processes' environment: Dask's require-encryption where the cluster
+    has certificates, or OPEN_CLUSTER where the instructor opened it."""
+    from grader.course import credentials
+
+    if certs is not None:
+        return credentials.require_encryption_environment()
+    return {OPEN_CLUSTER: "1"} if open_cluster else {}
+
+
+def prepare_worker(scheduler: str, certs: Path | None = None, open_cluster: bool = False) -> str:
+    """The checks `grade worker` makes before it joins `scheduler`: Dask installed, the connection encrypted with the
+    course's certificates in `certs` (unless `open_cluster`), learner code starting here behind a barrier, and
+    this grader the version of a coordinator running there. Returns the isolation line; WorkerRefused with the
+    reason otherwise."""
+    from grader.course import credentials
+
     try:
-        distributed = _distributed()
+        distributed = distributed_module()
     except ClusterError as exc:
         raise WorkerRefused(str(exc)) from None
-    if not sandboxed:
-        os.environ[START_WITHOUT_SANDBOX] = "1"  # inherited by the worker processes: their own start check
-    line = sandbox_check("required" if sandboxed else "off")
+    refused = open_cluster_refused(scheduler, open_cluster)
+    if refused:
+        raise WorkerRefused(refused)
+    if certs is None and not open_cluster:
+        raise WorkerRefused(f"{scheduler} needs the course's certificates: pass --certs DIR (`grade cluster certs DIR` "
+                            "makes them; this machine needs ca.pem and worker.pem)")
     try:
-        with distributed.Client(scheduler, set_as_default=False) as client:  # Dask's connect timeout (30 s)
+        security = credentials.security(certs, "worker", client="worker") if certs is not None else None
+    except credentials.CredentialsError as exc:
+        raise WorkerRefused(str(exc)) from None
+    if security is not None:
+        _credentials[:] = [str(credentials.role_file(Path(certs).expanduser(), "worker"))]
+    line = sandbox_check()
+    try:
+        with distributed.Client(scheduler, security=security, set_as_default=False) as client:  # Dask's timeout
             published = client.get_metadata(VERSION_KEY, default=None)
-    except (OSError, TimeoutError) as exc:
-        raise WorkerRefused(f"no Dask scheduler answers at {scheduler} ({exc}); start it (`dask scheduler`) or "
-                            "correct the address") from None
+    except Exception as exc:  # noqa: BLE001  refused, unreachable or misconfigured: Dask's own words say which
+        raise WorkerRefused(f"no Dask scheduler answers at {scheduler} ({exc}); start it (`grade cluster scheduler "
+                            "--certs DIR`) or correct the address") from None
     version_check(published)
     return line
 
 
-def become(command: list[str]) -> None:
-    """Replace this process with `command` (its signals, its exit status); where that is not possible, run it."""
-    if hasattr(os, "execv"):
-        os.execv(command[0], command)
+def become(command: list[str], environment: Mapping[str, str] = {}) -> None:  # noqa: B006
+    """Replace this process with `command` (its signals, its exit status), `environment` added to its own; where
+    that is not possible, run it. Files it writes are its user's only."""
+    env = {**os.environ, **environment}
+    if hasattr(os, "umask"):
+        os.umask(0o077)
+    if hasattr(os, "execve"):
+        os.execve(command[0], command, env)
     import subprocess
 
-    sys.exit(subprocess.call(command))
+    sys.exit(subprocess.call(command, env=env))
 
 
 # ------------------------------------------------------------------------------------ the coordinator's side
 
 class ClusterPool:
     """The pool run_batch grades through on a Dask cluster (see grader.course.workers.LocalPool): connected to the
-    scheduler at `scheduler` (or through `client`, a distributed.Client made elsewhere, e.g. by Dask Gateway).
-    `say` is given what the instructor should read as it happens (a worker that cannot grade)."""
+    scheduler at `scheduler` with `security` (a distributed.Security with the coordinator's certificate:
+    grader.course.credentials.security), or through `client`, a distributed.Client made elsewhere (e.g. by Dask
+    Gateway). A connection without TLS is refused unless `open_cluster`. `say` is given what the instructor should
+    read as it happens (a worker that cannot grade)."""
 
-    def __init__(self, scheduler: str | None = None, *, client=None, say: Callable[[str], None] | None = None,
-                 wait_for_workers: float = 60.0) -> None:
+    def __init__(self, scheduler: str | None = None, *, client=None, security=None, open_cluster: bool = False,
+                 say: Callable[[str], None] | None = None, wait_for_workers: float = 60.0) -> None:
         if scheduler is None and client is None:
             raise ValueError("a scheduler address or a client")
         self.scheduler = scheduler
         self.client = client
+        self.security = security
+        self.open_cluster = open_cluster
         self.say = say or (lambda line: None)
         self.wait_for_workers = wait_for_workers
         self.version = grader_version()
@@ -243,13 +326,28 @@ class ClusterPool:
         self._own_client = client is None
 
     def _connect(self):
-        distributed = _distributed()
+        distributed = distributed_module()
         if self.client is None:
+            refused = open_cluster_refused(self.scheduler, self.open_cluster)
+            if refused:
+                raise ClusterError(refused)
+            security = self.security
+            if security is None and not self.open_cluster:
+                security = distributed.Security()  # Dask's own TLS settings, where its configuration has them
+                if not (security.tls_ca_file and security.tls_client_cert):
+                    raise ClusterError(f"{self.scheduler} needs the course's certificates: pass --certs DIR (`grade "
+                                       "cluster certs DIR` makes them; the coordinator needs ca.pem and "
+                                       "coordinator.pem), or set Dask's distributed.comm.tls options")
             try:
-                self.client = distributed.Client(self.scheduler, set_as_default=False)  # Dask's connect timeout
-            except (OSError, TimeoutError) as exc:
-                raise ClusterError(f"no Dask scheduler answers at {self.scheduler} ({exc}); start it (`dask scheduler`"
-                                   ", dask-jobqueue, dask-kubernetes or Dask Gateway) or correct --scheduler") from None
+                self.client = distributed.Client(self.scheduler, security=security, set_as_default=False)
+            except Exception as exc:  # noqa: BLE001  refused, unreachable or misconfigured: Dask's own words say which
+                raise ClusterError(f"no Dask scheduler answers at {self.scheduler} ({exc}); start it (`grade cluster "
+                                   "scheduler --certs DIR`, dask-jobqueue, dask-kubernetes or Dask Gateway) or correct "
+                                   "--scheduler and --certs") from None
+        else:
+            refused = open_cluster_refused(self.client.scheduler.address, self.open_cluster)
+            if refused:
+                raise ClusterError(refused)
         return self.client
 
     @property
@@ -257,25 +355,29 @@ class ClusterPool:
         """The scheduler's address, for messages."""
         return self.scheduler or self.client.scheduler.address
 
-    def isolation(self, sandboxed: bool) -> str:
+    def isolation(self, sandbox: str) -> str:
         """Connect, publish this coordinator's grader version for the workers that join later, wait for a worker,
-        and check every worker: its grader version must be this one and learner code must start there behind
-        the sandbox. Returns the workers' isolation line; ClusterError where no worker can grade."""
+        and check every worker: its grader version must be this one and learner code must start there behind a
+        barrier. Returns the workers' isolation line; ClusterError where no worker can grade, or where the batch
+        asks (`sandbox` "off") to grade without a barrier (a cluster never does)."""
+        if sandbox == "off":
+            raise ClusterError("a cluster grades learner code only behind a barrier (bubblewrap on each worker, or as "
+                               "root an unprivileged user of its own): drop --no-sandbox")
         client = self._connect()
         try:
-            return self._check_workers(client, "required" if sandboxed else "off")
+            return self._check_workers(client)
         except BaseException:
             self.close()
             raise
 
-    def _check_workers(self, client, sandbox: str) -> str:
+    def _check_workers(self, client) -> str:
         client.set_metadata(VERSION_KEY, self.version)
         try:
             client.wait_for_workers(1, timeout=self.wait_for_workers)
         except TimeoutError:
             raise ClusterError(f"no worker joined the scheduler at {self.where} within {self.wait_for_workers:g} s; "
                                f"start workers with `grade worker {self.where}`") from None
-        facts = client.run(worker_facts, sandbox, on_error="return")
+        facts = client.run(worker_facts, on_error="return")
         lines: dict[str, list[str]] = {}
         refused = []
         for address, fact in sorted(facts.items()):
@@ -308,7 +410,7 @@ class ClusterPool:
 
     def _grade(self, entries: list, out: Path, grading: workers.Grading, overrides: Mapping[str, tuple],
                previous: Mapping[str, str], force: bool) -> Iterator[workers.Outcome]:
-        distributed = _distributed()
+        distributed = distributed_module()
         client = self.client or self._connect()
         flying: dict = {}  # future -> (staged, its files, attempt, the workers it could not run on)
         completed = distributed.as_completed(loop=client.loop)

@@ -285,18 +285,10 @@ def submission_seed(course_seed: int, learner: str, submission_id: str | None) -
 # the instructor's wheel, the references and the keys where the grader is installed, the submission's metadata
 # (it holds the previous submission's results, hidden checks' outputs included).
 def secrets(root: Path) -> list[Path]:
-    import importlib.util
+    from grader.boundary import answer_places
 
-    found = [root / "source" / COURSE_FILE, root / "source" / SETTINGS_FILE, root / "submission_metadata.json",
-             *sorted((root / "source").glob("*.whl"))]
-    for package in ("solutions", "grader.quizzes.keys"):
-        try:
-            spec = importlib.util.find_spec(package)
-        except ImportError:
-            continue
-        if spec is not None and spec.submodule_search_locations:
-            found += [Path(p) for p in spec.submodule_search_locations]
-    return found
+    return [root / "source" / COURSE_FILE, root / "source" / SETTINGS_FILE, root / "submission_metadata.json",
+            *sorted((root / "source").glob("*.whl")), *map(Path, answer_places())]
 
 
 def root_only(paths: list[Path], root: Path) -> None:

@@ -238,22 +238,23 @@ def _settle_heap() -> None:
         gc.freeze()
 
 
-def door(sandbox: str):
+def door(sandbox: str, secrets: tuple[str, ...] = ()):
     """This worker's door for `sandbox` (grader.core.transaction.Door, resident: its fork server started on first
     use), kept for every learner it grades with the same mode (a cluster's worker outlives a batch: one asking
-    another mode gets a door of its own)."""
-    if _worker_state.get("sandbox") != sandbox:
+    another mode gets a door of its own). `secrets`: what learner code must not read beside the answers (a barrier
+    that is not bubblewrap proves it first)."""
+    if _worker_state.get("sandbox") != (sandbox, secrets):
         drop_door()
     if "door" not in _worker_state:
-        _worker_state["door"] = Door(sandbox, resident=True, pause=RETRY_PAUSE)
-        _worker_state["sandbox"] = sandbox
+        _worker_state["door"] = Door(sandbox, resident=True, pause=RETRY_PAUSE, secrets=secrets)
+        _worker_state["sandbox"] = (sandbox, secrets)
     return _worker_state["door"]
 
 
-def worker_isolation(sandbox: str) -> str:
+def worker_isolation(sandbox: str, secrets: tuple[str, ...] = ()) -> str:
     """The isolation line of this worker's door for `sandbox` (InfrastructureError where it cannot start)."""
     try:
-        return door(sandbox).isolation
+        return door(sandbox, secrets).isolation
     except BoundaryUnavailable as exc:
         drop_door()
         raise InfrastructureError(str(exc)) from None
@@ -275,25 +276,30 @@ def _worker_memo():
     return _worker_state["memo"]
 
 
-def probe(sandbox: str) -> str:
+def probe(sandbox: str, secrets: tuple[str, ...] = ()) -> str:
     """The isolation line here, after one child interpreter started the way the workers will start theirs
     (InfrastructureError with the reason when it does not), so that no learner is graded on a broken sandbox."""
     try:
-        return Door(sandbox, probe=True).isolation
+        return Door(sandbox, probe=True, secrets=secrets).isolation
     except BoundaryUnavailable as exc:
         raise InfrastructureError(str(exc)) from None
 
 
-def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, extra: Mapping = ()) -> Outcome:
+def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, extra: Mapping = (),
+                 secrets: tuple[str, ...] = ()) -> Outcome:
     """Grade a staged learner (in a worker process: here, or on a cluster's worker with its files copied to `root`)
     through the one transaction, its overrides and late penalty applied, and (Grading.render) render its files.
+    `secrets`: what learner code must not read beside the answers (a cluster worker's credentials).
     One whose child could not start, twice, is `error`: no report is kept (the next run grades it again), and its
     results.json and report.html are removed, so that nothing looks like a grade."""
     started = time.monotonic()
     learner, course = staged.learner, grading.course
     request = Request(tuple(grading.chapters), grading.seed, learner=learner, plots=grading.plots, label=learner,
                       other_ids=staged.other_ids)
-    graded = grade_submission(Submission(root or Path(staged.root), "exercises"), request, door(grading.sandbox),
+    if course is not None and Path(course.source).is_file():
+        secrets = (*secrets, course.source)
+    graded = grade_submission(Submission(root or Path(staged.root), "exercises"), request,
+                              door(grading.sandbox, secrets),
                               staged.policy(course), limits=Limits(**dict(grading.limits)), course=course,
                               memo=_worker_memo())
     report = graded.report

@@ -7,7 +7,7 @@ used or listed: the learner's (grader.faces.learner_commands) and the instructor
     grade quiz ch06                        only the quiz
     grade classroom all                    GitHub Classroom's per-check results
     grade submit                           pack exercises/ into the archive your course grades
-    grade release / batch / regrade / worker / gradescope / selftest     the instructor's side
+    grade release / batch / regrade / worker / cluster / gradescope / selftest     the instructor's side
 """
 
 from __future__ import annotations

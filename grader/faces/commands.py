@@ -42,9 +42,14 @@ COMMANDS = {
         "grade batch submissions/ --out graded/",
         "grade batch submissions/ --out graded/ --roster roster.csv --chapters ch05,ch06 --lms canvas",
         "grade batch submissions/ --out graded/ --overrides overrides.csv --handout handout/ --similarity",
-        "grade batch submissions/ --out graded/ --scheduler tcp://scheduler:8786   on a Dask cluster")),
+        "grade batch submissions/ --out graded/ --scheduler tls://scheduler:8786 --certs ~/grading-certs   on a Dask "
+        "cluster")),
     "worker": Command(COURSE, "worker_command", False, (
-        "grade worker tcp://scheduler:8786", "grade worker tcp://scheduler:8786 --nworkers 8 --memory-limit 16GB")),
+        "grade worker tls://scheduler:8786 --certs ~/grading-certs",
+        "grade worker tls://scheduler:8786 --certs ~/grading-certs --nworkers 8 --memory-limit 16GB")),
+    "cluster": Command(COURSE, "cluster_group", False, (
+        "grade cluster certs ~/grading-certs            the course's certificate authority and one certificate per role",
+        "grade cluster scheduler --certs ~/grading-certs   the scheduler, TLS only")),
     "gradescope": Command(COURSE, "gradescope_command", False, (
         "grade gradescope autograder.zip", "grade gradescope autograder.zip --learner-id sid --chapters ch06,ch07")),
     "regrade": Command(COURSE, "regrade_command", False, (

@@ -86,13 +86,19 @@ def release_command(out: str, course_file: str | None, force: bool, no_classroom
 @click.option("--similarity", is_flag=True,
               help="Rank pairs of learners by how alike their code is (copydetect), for a person to look at.")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Grade on a Dask cluster: its scheduler, e.g. tcp://host:8786, whose workers run `grade worker` "
+              help="Grade on a Dask cluster: its scheduler, e.g. tls://host:8786, whose workers run `grade worker` "
                    "(default: $DASK_SCHEDULER_ADDRESS, else the course file's `scheduler:`; `local`: this machine's "
                    "pool). Needs the [cluster] extra.")
+@click.option("--certs", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help="The cluster's certificates (`grade cluster certs DIR`: ca.pem and coordinator.pem here; default: "
+                   "the course file's `scheduler: {certs: DIR}`, else Dask's own TLS settings).")
+@click.option("--insecure-open-cluster", "open_cluster", is_flag=True,
+              help="Grade on a scheduler without TLS: anyone who reaches its port can then run code on the workers, "
+                   "read the references and rewrite grades.")
 def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_list: str, jobs: int | None,
                   seed: int | None, course_file: str | None, no_html: bool, plots: bool, no_sandbox: bool,
                   time_budget: float, lms_layouts: tuple[str, ...], overrides_file: str | None, handout: str | None,
-                  similarity: bool, scheduler: str | None) -> None:
+                  similarity: bool, scheduler: str | None, certs: str | None, open_cluster: bool) -> None:
     """Grade a folder of submissions (folders or .zip files) into a gradebook and per-learner reports,
     at the course seed, hidden checks included; keep every run in OUT/gradebook.db and say in
     OUT/changes.csv whose score moved and why."""
@@ -113,7 +119,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
             similarities._engine()
         except similarities.SimilarityUnavailable as exc:
             raise click.UsageError(str(exc)) from None
-    pool = _cluster_pool(scheduler, the_course, jobs)
+    pool = _cluster_pool(scheduler, the_course, jobs, certs, open_cluster)
     try:
         result = batch.run_batch(Path(submissions), Path(out_dir), chapters=[c.id for c in picked],
                                  roster=Path(roster) if roster else None, jobs=jobs,
@@ -134,11 +140,11 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
         if pool is not None:  # the cluster cannot grade (grader.course.cluster.ClusterError): the message says why
             click.echo(f"grade batch: no learner was graded: {for_terminal(str(exc), one_line=True)}", err=True)
             sys.exit(EXIT_USAGE)
-        from grader.boundary import how_to_get_a_barrier
+        from grader.boundary import how_to_get_a_barrier, without_a_sandbox
 
         click.echo(f"grade batch: no learner was graded: learner code cannot run here behind a barrier. "
-                   f"{for_terminal(str(exc), one_line=True)}\nTo grade: {how_to_get_a_barrier()}; --no-sandbox "
-                   "grades without it (learner code then runs as you and can read every file you can).", err=True)
+                   f"{for_terminal(str(exc), one_line=True)}\nTo grade: {how_to_get_a_barrier()}; "
+                   f"{without_a_sandbox()}.", err=True)
         sys.exit(EXIT_USAGE)
     _say_batch(result, Path(out_dir), Path(roster).name if roster else "the roster")
     sys.exit(EXIT_ALL_PASSED if result.complete else EXIT_NOT_ALL_PASSED)
@@ -194,10 +200,10 @@ def _say_batch(result, out, roster: str) -> None:
     click.echo(result.isolation, err=True)
 
 
-def _cluster_pool(option: str | None, the_course, jobs: int | None):
+def _cluster_pool(option: str | None, the_course, jobs: int | None, certs: str | None, open_cluster: bool):
     """The pool grade batch grades through: None (this machine's, grader.course.batch.LocalPool), or a
     grader.course.cluster.ClusterPool on the scheduler that --scheduler, else $DASK_SCHEDULER_ADDRESS, else the course
-    file's `scheduler:` names (`local`: this machine's)."""
+    file's `scheduler:` names (`local`: this machine's), with the certificates of --certs, else the course file's."""
     for address, origin in ((option, "--scheduler"), (os.environ.get("DASK_SCHEDULER_ADDRESS"), "DASK_SCHEDULER_ADDRESS"),
                             (the_course.scheduler, the_course.where("scheduler"))):
         if address:
@@ -207,35 +213,108 @@ def _cluster_pool(option: str | None, the_course, jobs: int | None):
     if jobs is not None:
         raise click.UsageError(f"--jobs sizes this machine's pool, but the learners are graded on the cluster at {address} "
                                f"({origin}); pass --scheduler local to grade here")
-    from grader.course import cluster
+    from grader.course import cluster, credentials
     from grader.safe_text import for_terminal
 
-    return cluster.ClusterPool(address.strip(), say=lambda line: click.echo(f"  {for_terminal(line, one_line=True)}",
-                                                                             err=True))
+    folder = certs or the_course.scheduler_certs
+    try:
+        security = credentials.security(folder, "coordinator") if folder else None
+    except credentials.CredentialsError as exc:
+        raise click.BadParameter(for_terminal(str(exc), one_line=True),
+                                 param_hint="--certs" if certs else the_course.where("scheduler")) from None
+    except ImportError:
+        raise click.UsageError(f"grading on a cluster needs Dask: {cluster.INSTALL_HINT}") from None
+    return cluster.ClusterPool(address.strip(), security=security, open_cluster=open_cluster,
+                               say=lambda line: click.echo(f"  {for_terminal(line, one_line=True)}", err=True))
 
 
 @click.command("worker", context_settings={"ignore_unknown_options": True})
 @click.argument("scheduler")
+@click.option("--certs", type=click.Path(file_okay=False), default=None, metavar="DIR",
+              help="The cluster's certificates (`grade cluster certs DIR`: ca.pem and worker.pem here).")
 @click.option("--nworkers", type=click.IntRange(min=1), default=None,
               help="Worker processes, each grading one learner at a time (default: one per core).")
-@click.option("--no-sandbox", is_flag=True,
-              help="Start where learner code cannot run behind bubblewrap: then it grades only for `grade batch "
-                   "--no-sandbox` (each report's isolation line says so).")
+@click.option("--insecure-open-cluster", "open_cluster", is_flag=True,
+              help="Join a scheduler without TLS: anyone who reaches its port can then run code on this worker.")
+@click.option("--no-sandbox", is_flag=True, hidden=True)
 @click.argument("dask_options", nargs=-1, type=click.UNPROCESSED)
-def worker_command(scheduler: str, nworkers: int | None, no_sandbox: bool, dask_options: tuple[str, ...]) -> None:
+def worker_command(scheduler: str, certs: str | None, nworkers: int | None, open_cluster: bool, no_sandbox: bool,
+                   dask_options: tuple[str, ...]) -> None:
     """Grade for `grade batch --scheduler SCHEDULER` on this machine: join the Dask scheduler as worker processes
-    (`dask worker`; further options, e.g. --memory-limit 4GB, go to it). Refuses to start where learner code
-    cannot run behind the sandbox or where this grader is not the running coordinator's version."""
-    from grader.course import cluster
+    (`dask worker`; further options, e.g. --memory-limit 4GB, go to it), over TLS with the course's certificates.
+    Refuses to start where learner code cannot run behind a barrier (bubblewrap, or as root an unprivileged user
+    of its own), where the connection is not encrypted, or where this grader is not the running coordinator's
+    version."""
+    from pathlib import Path
+
+    from grader.course import cluster, credentials
     from grader.safe_text import for_terminal
 
-    try:
-        isolation = cluster.prepare_worker(scheduler, sandboxed=not no_sandbox)
-    except cluster.WorkerRefused as exc:
-        click.echo(f"grade worker: not started: {for_terminal(str(exc), one_line=True)}", err=True)
+    def refuse(why: str) -> None:
+        click.echo(f"grade worker: not started: {for_terminal(why, one_line=True)}", err=True)
         sys.exit(EXIT_USAGE)
+
+    if no_sandbox:
+        refuse("a worker never runs learner code without a barrier (learner code there could take over the cluster "
+               "and every grade on it); where bubblewrap cannot start, run the worker as root with a user "
+               "grader-learner of its own (`useradd --system --no-create-home --shell /usr/sbin/nologin grader-learner`)")
+    folder = Path(certs).expanduser() if certs else None
+    try:
+        isolation = cluster.prepare_worker(scheduler, folder, open_cluster)
+        command = cluster.worker_command(scheduler, nworkers, dask_options, folder)
+    except (cluster.WorkerRefused, credentials.CredentialsError) as exc:
+        refuse(str(exc))
     click.echo(f"grade worker: grader {cluster.grader_version()}, joining {scheduler}\n{isolation}", err=True)
-    cluster.become(cluster.worker_command(scheduler, nworkers, dask_options))
+    cluster.become(command, cluster.worker_environment(folder, open_cluster))
+
+
+@click.group("cluster")
+def cluster_group() -> None:
+    """A Dask cluster of the course's own: its certificates and its scheduler (mutual TLS: only machines holding the
+    course's certificates join it)."""
+
+
+@cluster_group.command("certs")
+@click.argument("folder", type=click.Path(file_okay=False))
+@click.option("--days", type=click.IntRange(min=1), default=365, show_default=True,
+              help="How long the certificates are valid.")
+@click.option("--force", is_flag=True, help="Replace the certificates FOLDER holds.")
+def cluster_certs_command(folder: str, days: int, force: bool) -> None:
+    """Make the cluster's certificates in FOLDER: a certificate authority of the course's own (ca.pem; its key is not
+    kept) and a certificate with its key for the scheduler, the workers and the coordinator (ROLE.pem, readable by
+    you only)."""
+    from pathlib import Path
+
+    from grader.course import credentials
+
+    try:
+        written = credentials.make(Path(folder).expanduser(), days=days, force=force)
+    except credentials.CredentialsError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(credentials.describe(written))
+
+
+@cluster_group.command("scheduler", context_settings={"ignore_unknown_options": True})
+@click.option("--certs", type=click.Path(file_okay=False), required=True, metavar="DIR",
+              help="The cluster's certificates (ca.pem and scheduler.pem here).")
+@click.option("--host", default="", help="The interface to listen on (default: every one).")
+@click.option("--port", type=click.IntRange(min=0, max=65535), default=8786, show_default=True)
+@click.argument("dask_options", nargs=-1, type=click.UNPROCESSED)
+def cluster_scheduler_command(certs: str, host: str, port: int, dask_options: tuple[str, ...]) -> None:
+    """Run the cluster's Dask scheduler: TLS only, every connection showing a certificate of the course's authority,
+    its dashboard on this machine only (127.0.0.1:8787). Further options go to `dask scheduler`."""
+    from pathlib import Path
+
+    from grader.course import cluster, credentials
+
+    try:
+        cluster.distributed_module()
+        tls = credentials.dask_options(Path(certs).expanduser(), "scheduler")
+    except (cluster.ClusterError, credentials.CredentialsError) as exc:
+        raise click.ClickException(str(exc)) from None
+    command = [sys.executable, "-m", "distributed.cli.dask_scheduler", "--protocol", "tls", "--port", str(port),
+               *(["--host", host] if host else []), "--dashboard-address", "127.0.0.1:8787", *tls, *dask_options]
+    cluster.become(command, credentials.require_encryption_environment())
 
 
 @click.command("gradescope")

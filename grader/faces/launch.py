@@ -33,7 +33,7 @@ def _prestart(args: list[str]) -> None:
             started = boundary.first_child(mode)
         prestart.hold(mode, *started)
         trace("child started")
-    except OSError:
+    except (OSError, RuntimeError):  # no child here as asked (grader.boundary.BoundaryUnavailable): the command says why
         pass
 
 

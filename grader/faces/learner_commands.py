@@ -10,6 +10,7 @@ import click
 from grader.chapters import CHAPTERS
 from grader.faces import prestart
 from grader.faces.options import (
+    EXIT_USAGE,
     chapter_and_submission_options,
     chapters_and_functions,
     chapters_from,
@@ -72,7 +73,7 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
 
     mode = SandboxMode.OFF if no_sandbox else SandboxMode.AUTO
     door = Door(mode, remember=True)
-    door.started = prestart.take(mode.value, door.boundary)
+    door.started = prestart.take(mode.value, _chosen(door))
     kept: dict = {}
 
     def prepare(session) -> None:
@@ -112,6 +113,19 @@ def run_command(chapters: tuple[str, ...], submission_dir: str | None, use_solut
     emit(report, output_format, verbose, graded.isolation, shown=shown[0] if shown else None)
 
 
+def _chosen(door):
+    """`door`'s boundary; where learner code cannot start here as asked (as root, none without a barrier), the
+    command ends with the reason (exit status 2), nothing graded."""
+    from grader.boundary import BoundaryUnavailable
+    from grader.safe_text import for_terminal
+
+    try:
+        return door.boundary
+    except BoundaryUnavailable as exc:
+        click.echo(f"grade: nothing was graded: {for_terminal(str(exc))}", err=True)
+        sys.exit(EXIT_USAGE)
+
+
 def _figures_likely_drawn(session, chapters: list[str], verdicts) -> bool:
     """Whether the HTML report will most likely draw a figure: unless every chapter's files are those a kept verdict
     was made from (so its plot data are too) and the figure cache holds a figure of each (then matplotlib is not
@@ -141,6 +155,7 @@ def _watch(submission: Submission, chapters: list[str], seed: int, learner: str 
 
     prestart.take("", None)  # stops a child grader.faces.launch started: the watch's come from its own door
     door = Door(SandboxMode.OFF if no_sandbox else SandboxMode.AUTO, resident=True)
+    _chosen(door)
     watcher = watch.Watcher(submission, chapters, Request(tuple(chapters), seed, learner=learner, quiz=not no_quiz,
                                                           functions=functions), door)
     stream = sys.stdout

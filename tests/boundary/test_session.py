@@ -15,6 +15,7 @@ from tests.support import (
     checks_by_id,
     grade_checks,
     grade_code,
+    not_root,
     open_session,
     replace_function,
 )
@@ -240,8 +241,9 @@ def test_the_grade_command_runs_no_blas_threads_beside_the_learners_child(submis
         f"    pathlib.Path({str(calling)!r}).touch()\n"
         "    time.sleep(0.2)\n"
         "    return float(np.hypot(x, y))\n")})
-    grade_process = subprocess.Popen([sys.executable, "-m", "grader", "ch00", "--submission", str(root), "--no-quiz",
-                                      "--no-sandbox"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    grade_process = subprocess.Popen(not_root([sys.executable, "-m", "grader", "ch00", "--submission", str(root),
+                                               "--no-quiz", "--no-sandbox"]),
+                                     stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                      env={k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")})
     threads = []
     try:

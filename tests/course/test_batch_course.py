@@ -304,13 +304,13 @@ def test_submit_refuses_without_an_id_or_with_one_that_disagrees(tmp_path):
 @pytest.fixture(scope="module")
 def solutions_report():
     """ch05 and ch06 of the references, graded once in a course whose ch06 quiz is practice."""
-    from grader import boundary
     from grader.core.pipeline import Request, build_report
     from grader.course_config import Course
     from grader.submission import solutions_submission
+    from tests.support import unbarred
 
     course = Course(id="practice-course", quiz_feedback="recorded", quiz_feedback_by={"ch06": "immediate"})
-    session = boundary.choose("off").open_session(solutions_submission())
+    session = unbarred().open_session(solutions_submission())
     return build_report(session, Request(("ch05", "ch06"), 20261122), course)
 
 

@@ -8,8 +8,10 @@ from __future__ import annotations
 import base64
 import json
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -24,6 +26,7 @@ from tests.support import (
     REAL_BWRAP,
     FakeBwrap,
     build_submission,
+    not_root,
     replace_function,
     run_grade,
 )
@@ -65,14 +68,17 @@ def _step(workflow: dict, name: str) -> dict:
     return next(s for s in steps if s.get("name") == name)
 
 
-def _run_grade_step(workflow: dict, cwd: Path, tmp_path: Path, env_extra: dict | None = None):
+def _run_grade_step(workflow: dict, cwd: Path, tmp_path: Path, env_extra: dict | None = None,
+                    as_runner: bool = False):
     """The workflow's Grade step as GitHub runs it: `bash -e -c`, with $GITHUB_OUTPUT a file and the
-    installed grader's `grade` on PATH; (the process, the reporter's results decoded)."""
+    installed grader's `grade` on PATH; `as_runner`: as GitHub's runner user, who is not root (not_root: where
+    bubblewrap is not started); (the process, the reporter's results decoded)."""
     outputs = tmp_path / "github_output"
     outputs.write_text("", encoding="utf-8")
     env = dict(os.environ, GITHUB_OUTPUT=str(outputs), **(env_extra or {}))
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env['PATH']}"
-    done = subprocess.run(["bash", "-e", "-c", _step(workflow, "Grade")["run"]], cwd=cwd, env=env,
+    command = ["bash", "-e", "-c", _step(workflow, "Grade")["run"]]
+    done = subprocess.run(not_root(command, real=True) if as_runner else command, cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=300)
     line = next((x for x in outputs.read_text(encoding="utf-8").splitlines() if x.startswith("result=")), None)
     results = None if line is None else json.loads(base64.b64decode(line.removeprefix("result=")).decode("utf-8"))
@@ -120,15 +126,22 @@ def test_the_grade_step_gives_each_check_its_points_as_the_reporter_reads_them(w
 
 @pytest.mark.slow
 @pytest.mark.skipif(REAL_BWRAP is None and not os.environ.get("CI"), reason="bubblewrap is not installed")
-def test_where_bubblewrap_cannot_start_the_step_grades_without_it_and_says_so(workflow, tmp_path):
-    root = build_submission(tmp_path / "learner-repo")
-    fake = FakeBwrap(tmp_path / "fake", failing=range(1, 1000))
-    done, results = _run_grade_step(workflow, root, tmp_path, {"PATH": fake.env["PATH"]})
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert "isolation: no sandbox: bubblewrap cannot run here" in results["message"]
-    assert "isolation: no sandbox" in done.stderr
-    code = [t for t in results["tests"] if " code: " in t["name"]]
-    assert code and all(t["status"] == "pass" for t in code)
-    required = run_grade("classroom", "ch06", "--submission", root, "--sandbox", "required", env=fake.env)
-    assert required.returncode == 2 and "the sandbox is required and does not start here" in required.stderr
-    assert required.stdout == ""
+def test_where_bubblewrap_cannot_start_the_step_grades_without_it_and_says_so(workflow):
+    """As GitHub's runner user (not root), in a folder it can reach."""
+    reachable = Path(tempfile.mkdtemp(prefix="runner-"))
+    try:
+        root = build_submission(reachable / "learner-repo")
+        fake = FakeBwrap(reachable / "fake", failing=range(1, 1000))
+        for path in [reachable, *reachable.rglob("*")]:
+            path.chmod(0o777 if path.is_dir() else 0o755)
+        done, results = _run_grade_step(workflow, root, reachable, {"PATH": fake.env["PATH"]}, as_runner=True)
+        assert done.returncode == 0, done.stderr[-3000:]
+        assert "isolation: no sandbox: bubblewrap cannot run here" in results["message"]
+        assert "isolation: no sandbox" in done.stderr
+        code = [t for t in results["tests"] if " code: " in t["name"]]
+        assert code and all(t["status"] == "pass" for t in code)
+        required = run_grade("classroom", "ch06", "--submission", root, "--sandbox", "required", env=fake.env)
+        assert required.returncode == 2 and "the sandbox is required and does not start here" in required.stderr
+        assert required.stdout == ""
+    finally:
+        shutil.rmtree(reachable, ignore_errors=True)

@@ -73,17 +73,26 @@ def free_port() -> int:
         return probe.getsockname()[1]
 
 
+def make_certs(folder: Path, env: dict) -> Path:
+    """The cluster's certificates made by `grade cluster certs`, in `folder`."""
+    done = grade(env, "cluster", "certs", folder, cwd=folder.parent)
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
 class Cluster:
-    """A real `dask scheduler` on 127.0.0.1 (a free port) and workers joining it, each started in a process group
-    of its own, its output in FOLDER/<name>.log; stop() ends each group (a worker's sandboxes die with it)."""
+    """A real Dask scheduler (`grade cluster scheduler`: TLS only) on 127.0.0.1 (a free port) and workers joining it,
+    each started in a process group of its own, its output in FOLDER/<name>.log; stop() ends each group (a
+    worker's sandboxes die with it). `certs`: the course's certificates (`grade cluster certs`)."""
 
     def __init__(self, folder: Path, env: dict) -> None:
         self.folder, self.env = folder, env
+        self.certs = make_certs(folder / "certs", env)
         self.port = free_port()
-        self.address = f"tcp://127.0.0.1:{self.port}"
+        self.address = f"tls://127.0.0.1:{self.port}"
         self.processes: dict[str, subprocess.Popen] = {}
-        self.start("scheduler", [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
-                                 "--port", str(self.port), "--no-dashboard"])
+        self.start("scheduler", [sys.executable, "-m", "grader", "cluster", "scheduler", "--certs", str(self.certs),
+                                 "--host", "127.0.0.1", "--port", str(self.port), "--no-dashboard"])
         deadline = time.monotonic() + 60
         while True:
             try:
@@ -104,13 +113,19 @@ class Cluster:
         """`grade worker` (or, `plain`, a `dask worker` without the grader's preload) of one process."""
         options = ["--no-dashboard", "--local-directory", str(self.folder / name)]
         if plain:
-            command = ["-m", "distributed.cli.dask_worker", self.address, "--nthreads", "1", "--nworkers", "1"]
+            command = ["-m", "distributed.cli.dask_worker", self.address, "--nthreads", "1", "--nworkers", "1",
+                       "--tls-ca-file", str(self.certs / "ca.pem"), "--tls-cert", str(self.certs / "worker.pem"),
+                       "--tls-key", str(self.certs / "worker.pem")]
         else:
-            command = ["-m", "grader", "worker", self.address, "--nworkers", "1"]
+            command = ["-m", "grader", "worker", self.address, "--certs", str(self.certs), "--nworkers", "1"]
         return self.start(name, [sys.executable, *command, *options], env)
 
     def client(self):
-        return distributed.Client(self.address, set_as_default=False)
+        """A client holding the coordinator's certificate."""
+        from grader.course import credentials
+
+        return distributed.Client(self.address, security=credentials.security(self.certs, "coordinator"),
+                                  set_as_default=False)
 
     def wait_for_workers(self, count: int) -> None:
         with self.client() as client:
@@ -227,7 +242,7 @@ def assert_same_outputs(local: Path, out: Path, isolation: str) -> None:
                        (local, out))
         assert list(there["batch"]) == list(here["batch"]) + ["isolation"]
         assert there["batch"]["isolation"]["line"] == isolation
-        assert re.fullmatch(r"tcp://127\.0\.0\.1:[0-9]+", there["batch"]["isolation"]["worker"])
+        assert re.fullmatch(r"tls://127\.0\.0\.1:[0-9]+", there["batch"]["isolation"]["worker"])
         assert comparable(out / learner / "report.html") == comparable(local / learner / "report.html")
         results = [json.loads(comparable(folder / learner / "results.json")) for folder in (out, local)]
         for data in results:
@@ -258,7 +273,7 @@ def test_a_worker_killed_mid_task_loses_nobody_and_the_outputs_are_a_local_batch
     submissions, local = graded_here
     out = folder / "on-the-cluster"
     coordinator = start_grade(env, folder, "batch", submissions, "--out", out, "--chapters", CHAPTERS,
-                              "--scheduler", cluster.address)
+                              "--scheduler", cluster.address, "--certs", cluster.certs)
 
     def grading(dask_worker) -> tuple[int, list[str]]:
         return os.getpid(), [str(task.key) for task in dask_worker.state.executing]
@@ -314,7 +329,7 @@ def test_a_killed_coordinator_resumes_grading_only_what_is_missing(place, cluste
     submissions, local = graded_here
     out = folder / "resumed"
     coordinator = start_grade(env, folder, "batch", submissions, "--out", out, "--chapters", CHAPTERS,
-                              "--scheduler", cluster.address)
+                              "--scheduler", cluster.address, "--certs", cluster.certs)
     try:
         wait_for_reports(out, COUNT // 3, coordinator)
     finally:
@@ -324,7 +339,7 @@ def test_a_killed_coordinator_resumes_grading_only_what_is_missing(place, cluste
                 if "hash" in json.loads(path.read_text(encoding="utf-8"))["batch"]}
     assert COUNT // 3 <= len(finished) < COUNT
     done = grade(env, "batch", submissions, "--out", out, "--chapters", CHAPTERS, "--scheduler", cluster.address,
-                 cwd=folder)
+                 "--certs", cluster.certs, cwd=folder)
     assert done.returncode == 0, done.stderr[-3000:]
     assert (f"{COUNT} submissions: {COUNT - len(finished)} graded, {len(finished)} unchanged; "
             f"graded {COUNT - len(finished)} in") in done.stdout
@@ -351,7 +366,7 @@ def test_a_worker_whose_sandbox_cannot_start_never_grades_and_its_learners_are_g
         submissions = make_submissions(folder / "few", 8)
         out = folder / "with-a-broken-worker"
         done = grade(env, "batch", submissions, "--out", out, "--chapters", "ch06", "--no-html",
-                     "--scheduler", cluster.address, cwd=folder)
+                     "--scheduler", cluster.address, "--certs", cluster.certs, cwd=folder)
     finally:
         cluster.stop("broken")
     assert done.returncode == 0, done.stderr[-3000:]
@@ -371,12 +386,15 @@ def test_a_worker_refuses_to_start_beside_a_coordinator_of_another_grader_versio
     with cluster.client() as client:
         client.set_metadata(VERSION_KEY, "0.1.0+g000000000000")
         try:
-            done = grade(env, "worker", cluster.address, "--nworkers", "1", "--no-dashboard", cwd=folder)
+            done = grade(env, "worker", cluster.address, "--certs", cluster.certs, "--nworkers", "1", "--no-dashboard",
+                         cwd=folder)
             preloaded = subprocess.run([sys.executable, "-m", "distributed.cli.dask_worker", cluster.address,
                                         "--preload", "grader.course.cluster", "--nthreads", "1", "--no-dashboard",
-                                        "--local-directory", str(folder / "refused")], env=env, cwd=folder,
-                                       capture_output=True,
-                                       text=True, timeout=300, check=False)
+                                        "--tls-ca-file", str(cluster.certs / "ca.pem"), "--tls-cert",
+                                        str(cluster.certs / "worker.pem"), "--tls-key", str(cluster.certs / "worker.pem"),
+                                        "--local-directory", str(folder / "refused")],
+                                       env={**env, "DASK_DISTRIBUTED__COMM__REQUIRE_ENCRYPTION": "True"}, cwd=folder,
+                                       capture_output=True, text=True, timeout=300, check=False)
         finally:
             client.set_metadata(VERSION_KEY, None)
     assert done.returncode == 2, done.stderr
@@ -388,14 +406,17 @@ def test_a_worker_refuses_to_start_beside_a_coordinator_of_another_grader_versio
 
 
 @pytest.mark.slow
-def test_a_worker_whose_sandbox_cannot_start_refuses_to_start(place, tmp_path):
-    """`grade worker` on a machine where bubblewrap fails refuses before it joins anything, saying why."""
+def test_a_worker_whose_barrier_cannot_stand_refuses_to_start(place, tmp_path):
+    """`grade worker` on a machine where bubblewrap fails, and learner code cannot run as an unprivileged user of its
+    own either (the grader's files here are root's only), refuses before it joins anything, saying why."""
     folder, env = place
-    broken = FakeBwrap(tmp_path, failing=range(1, 1000))
-    done = grade({**env, "PATH": broken.env["PATH"]}, "worker", f"tcp://127.0.0.1:{free_port()}", cwd=folder)
+    broken = FakeBwrap(tmp_path / "bwrap", failing=range(1, 1000))
+    certs = make_certs(tmp_path / "certs", env)
+    done = grade({**env, "PATH": broken.env["PATH"]}, "worker", f"tls://127.0.0.1:{free_port()}", "--certs", certs,
+                 cwd=folder)
     assert done.returncode == 2
     assert "grade worker: not started: learner code cannot run on" in done.stderr
-    assert "bubblewrap" in done.stderr and "--no-sandbox" in done.stderr
+    assert "behind a barrier" in done.stderr and "bubblewrap" in done.stderr and "grader-learner" in done.stderr
 
 
 @pytest.mark.slow
@@ -431,6 +452,158 @@ def test_the_instructors_checkout_and_its_wheel_are_one_grader_version(place, tm
     assert wheel == checkout
 
 
+# ------------------------------------------------------------------------------------ closed to anyone else
+
+TAKEOVER = """def H_jacobian(x, y):
+    import socket
+    said = []
+    try:
+        import distributed
+        with distributed.Client({address!r}, timeout=5, set_as_default=False) as client:
+            client.set_metadata({key!r}, "0.1.0+gtaken")
+            client.run(lambda: open({marker!r}, "w").write("taken"))
+        said.append("distributed: connected")
+    except BaseException as exc:
+        said.append(f"distributed: {{type(exc).__name__}}")
+    try:
+        socket.create_connection(("127.0.0.1", {port}), timeout=5).close()
+        said.append("socket: connected")
+    except OSError as exc:
+        said.append(f"socket: {{type(exc).__name__}}")
+    print("takeover: " + "; ".join(said))
+    x, y = float(x), float(y)
+    r2 = x * x + y * y
+    if r2 == 0:
+        raise ValueError("H is undefined at r = 0")
+    r = np.sqrt(r2)
+    return np.array([[x / r, y / r], [-y / r2, x / r2]])
+"""
+
+
+ATTEMPTS = """
+import json, sys
+import distributed
+from distributed.security import Security
+
+address, certs, other, marker = sys.argv[1:5]
+attempts = {
+    "no certificate": (address, None),
+    "Dask's temporary certificate": (address, Security.temporary()),
+    "another authority's certificate": (address, Security(require_encryption=True, tls_ca_file=certs + "/ca.pem",
+                                                          tls_client_cert=other + "/coordinator.pem",
+                                                          tls_client_key=other + "/coordinator.pem")),
+    "plain tcp": (address.replace("tls://", "tcp://"), None),
+}
+said = {}
+for name, (where, security) in attempts.items():
+    try:
+        with distributed.Client(where, security=security, timeout=10, set_as_default=False) as client:
+            client.run(lambda: open(marker, "w").write("ran"))
+            said[name] = "connected"
+    except Exception as exc:
+        said[name] = f"{type(exc).__name__}: {exc}"
+print(json.dumps(said), flush=True)
+"""
+
+
+@pytest.mark.slow
+def test_only_holders_of_the_courses_certificates_reach_the_cluster(place, cluster, tmp_path):
+    """The scheduler refuses, from another process, a client without a certificate, one whose certificate another
+    authority signed (even holding the course's ca.pem), one with Dask's temporary certificate and a plain tcp://
+    connection to its port: none of them runs anything on a worker. The coordinator's certificate does."""
+    from grader.course import credentials
+
+    folder, env = place
+    marker = tmp_path / "ran-on-a-worker"
+    other = make_certs(tmp_path / "other-course", env)
+    done = subprocess.run([sys.executable, "-c", ATTEMPTS, cluster.address, str(cluster.certs), str(other),
+                           str(marker)], env=env, cwd=tmp_path, capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr[-3000:]
+    refused = json.loads(done.stdout.splitlines()[-1])
+    assert len(refused) == 4 and "connected" not in refused.values(), refused
+    assert not marker.exists()
+    assert "TLS" in refused["Dask's temporary certificate"] and "TLS" in refused["another authority's certificate"]
+    assert "unknown ca" in cluster.log("scheduler").lower()
+    with distributed.Client(cluster.address, security=credentials.security(cluster.certs, "coordinator"),
+                            set_as_default=False) as client:
+        assert set(client.run(os.getpid).values()) and client.scheduler.address == cluster.address
+
+
+@pytest.mark.slow
+def test_learner_code_on_a_worker_cannot_reach_the_scheduler(place, cluster, tmp_path):
+    """A learner given the scheduler's address tries, from inside the function being graded, what took a plain Dask
+    cluster over (a Client that rewrites the published version and runs a function on every worker): it gets
+    nowhere, and the classmates graded beside it get their own grades."""
+    folder, env = place
+    marker = tmp_path / "taken-over"
+    hostile = TAKEOVER.format(address=cluster.address, key=VERSION_KEY, marker=str(marker), port=cluster.port)
+    submissions = tmp_path / "submissions"
+    build_submission(submissions / "mallory", {"ch06_measurement": replace_function("ch06_measurement", "H_jacobian",
+                                                                                    hostile)})
+    build_submission(submissions / "ann")
+    build_submission(submissions / "bob", dict(BUGS[:1]))
+    out = tmp_path / "out"
+    done = grade(env, "batch", submissions, "--out", out, "--chapters", "ch06", "--no-html", "--scheduler",
+                 cluster.address, "--certs", cluster.certs, cwd=folder)
+    assert done.returncode == 0, done.stderr[-3000:]
+    said = json.loads((out / "mallory" / "report.json").read_text(encoding="utf-8"))["batch"]["learner_output"]
+    assert "takeover: distributed: " in said and "distributed: connected" not in said
+    assert "socket: connected" not in said
+    assert not marker.exists()
+    with cluster.client() as client:
+        assert client.get_metadata(VERSION_KEY, default=None) in (None, "")
+    with (out / "gradebook.csv").open(newline="", encoding="utf-8") as handle:
+        code = {row["learner"]: float(row["ch06_code"]) for row in csv.DictReader(handle)}
+    assert code["mallory"] == code["ann"] > code["bob"]
+
+
+def test_a_cluster_without_tls_is_refused_unless_the_instructor_opens_it(tmp_path):
+    """`grade batch --scheduler tcp://...` and `grade worker tcp://...` refuse, naming the option that opens the cluster
+    to its network; with it they go on (and meet no scheduler); a tls:// address needs the certificates; a worker
+    never starts without a barrier (--no-sandbox)."""
+    submissions = tmp_path / "submissions"
+    build_submission(submissions / "ann")
+    address = f"tcp://127.0.0.1:{free_port()}"
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"}
+    env.pop("DASK_SCHEDULER_ADDRESS", None)
+    batch = ["batch", submissions, "--out", tmp_path / "out", "--chapters", "ch00", "--scheduler"]
+    for done in (grade(env, *batch, address, cwd=tmp_path), grade(env, "worker", address, cwd=tmp_path)):
+        assert done.returncode == 2, done.stderr
+        assert f"{address} is a cluster without TLS: anyone who reaches its port" in done.stderr
+        assert "--insecure-open-cluster" in done.stderr and "grade cluster certs" in done.stderr
+    opened = grade(env, *batch, address, "--insecure-open-cluster", cwd=tmp_path)
+    assert opened.returncode == 2 and f"no Dask scheduler answers at {address}" in opened.stderr
+    secure = address.replace("tcp://", "tls://")
+    for done in (grade(env, *batch, secure, cwd=tmp_path), grade(env, "worker", secure, cwd=tmp_path)):
+        assert done.returncode == 2 and "needs the course's certificates: pass --certs DIR" in done.stderr
+    assert not (tmp_path / "out").exists()
+    unsandboxed = grade(env, "worker", secure, "--no-sandbox", cwd=tmp_path)
+    assert unsandboxed.returncode == 2
+    assert "a worker never runs learner code without a barrier" in unsandboxed.stderr
+
+
+@pytest.mark.slow
+def test_a_dask_worker_whose_connections_are_not_encrypted_refuses_to_start(place, tmp_path):
+    """`dask worker --preload grader.course.cluster` without the course's certificates and Dask's require-encryption
+    ends at once, saying how to start it."""
+    folder, env = place
+    port = free_port()
+    with (tmp_path / "scheduler.log").open("wb") as log:
+        scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                                      "--port", str(port), "--no-dashboard"], env=env, cwd=tmp_path, stdout=log,
+                                     stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        done = subprocess.run([sys.executable, "-m", "distributed.cli.dask_worker", f"tcp://127.0.0.1:{port}",
+                               "--preload", "grader.course.cluster", "--nthreads", "1", "--no-dashboard",
+                               "--local-directory", str(tmp_path)], env=env, cwd=folder, capture_output=True,
+                              text=True, timeout=300, check=False)
+    finally:
+        os.killpg(scheduler.pid, signal.SIGKILL)
+        scheduler.wait(timeout=30)
+    assert done.returncode != 0
+    assert "grade worker: not started: this worker's connections are not encrypted" in done.stderr
+
+
 # ------------------------------------------------------------------------------------ the coordinator alone
 
 def test_the_course_file_names_the_scheduler(tmp_path):
@@ -439,12 +612,18 @@ def test_the_course_file_names_the_scheduler(tmp_path):
     from grader import course_config
 
     good = tmp_path / "course_config.yaml"
-    good.write_text("course: c\nseed: 5\nscheduler: tcp://scheduler.example.org:8786\n", encoding="utf-8")
-    assert course_config._from_yaml(good).scheduler == "tcp://scheduler.example.org:8786"
+    good.write_text("course: c\nseed: 5\nscheduler: tls://scheduler.example.org:8786\n", encoding="utf-8")
+    assert course_config._from_yaml(good).scheduler == "tls://scheduler.example.org:8786"
+    assert course_config._from_yaml(good).scheduler_certs is None
+    good.write_text("course: c\nseed: 5\nscheduler:\n  address: tls://scheduler.example.org:8786\n  certs: certs\n",
+                    encoding="utf-8")
+    both = course_config._from_yaml(good)
+    assert (both.scheduler, both.scheduler_certs) == ("tls://scheduler.example.org:8786", str(tmp_path / "certs"))
     bad = tmp_path / "bad.yaml"
-    bad.write_text("course: c\nseed: 5\nscheduler: 8786\n", encoding="utf-8")
-    with pytest.raises(course_config.CourseError, match=r"bad.yaml, line 3: scheduler is the address"):
-        course_config._from_yaml(bad)
+    for wrong in ("8786", "{address: tls://h:8786, cert: certs}", "{certs: certs}"):
+        bad.write_text(f"course: c\nseed: 5\nscheduler: {wrong}\n", encoding="utf-8")
+        with pytest.raises(course_config.CourseError, match=r"bad.yaml, line 3: scheduler is the address"):
+            course_config._from_yaml(bad)
 
 
 @pytest.mark.slow
@@ -454,16 +633,18 @@ def test_the_scheduler_is_taken_from_the_option_the_environment_or_the_course_fi
     names, nobody is graded and the message names the address; --jobs beside a scheduler is a usage error."""
     submissions = tmp_path / "submissions"
     build_submission(submissions / "ann")
-    address = f"tcp://127.0.0.1:{free_port()}"
-    course = tmp_path / "course.yaml"
-    course.write_text("course: c\nseed: 5\n" + (f"scheduler: {address}\n" if where == "course file" else ""),
-                      encoding="utf-8")
+    address = f"tls://127.0.0.1:{free_port()}"
     env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"}
+    make_certs(tmp_path / "certs", env)
+    course = tmp_path / "course.yaml"
+    course.write_text("course: c\nseed: 5\n" + (f"scheduler: {{address: '{address}', certs: certs}}\n"
+                                                 if where == "course file" else ""), encoding="utf-8")
     env.pop("DASK_SCHEDULER_ADDRESS", None)
     if where == "DASK_SCHEDULER_ADDRESS":
         env[where] = address
     args = ["batch", submissions, "--out", tmp_path / "out", "--course", course, "--chapters", "ch00"]
     args += ["--scheduler", address] if where == "--scheduler" else []
+    args += ["--certs", tmp_path / "certs"] if where != "course file" else []
     done = grade(env, *args, cwd=tmp_path)
     assert done.returncode == 2
     assert f"no learner was graded: no Dask scheduler answers at {address}" in done.stderr
@@ -512,8 +693,8 @@ def test_a_batch_without_a_scheduler_never_imports_dask_and_a_result_arriving_tw
 def test_a_task_is_keyed_by_the_learner_its_content_hash_and_the_grader_version():
     """The same grading asked twice (a coordinator run again while the first one's task still runs) is one task;
     another learner, other files or another grader is another, and so is a try on another worker."""
-    from grader.course.workers import Staged
     from grader.course.cluster import task_key
+    from grader.course.workers import Staged
 
     def staged(learner: str, digest: str) -> Staged:
         return Staged(learner, "unused", digest, [], "", None, None, (), "f" * 64)

@@ -30,6 +30,7 @@ from tests.support import (
     CpuTime,
     GradescopeLayout,
     build_submission,
+    not_root,
     replace_function,
     run_grade,
 )
@@ -311,7 +312,7 @@ def _autograder(tmp_path: Path, metadata: dict) -> tuple[dict, subprocess.Comple
     (root / "submission" / "answers").mkdir()
     (root / "submission" / "answers" / "learner.yaml").write_text("learner: someone-else\n", encoding="utf-8")
     (root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
-    run = subprocess.run([sys.executable, "-m", "grader.course.gradescope", "run", str(root)], cwd=REPO,
+    run = subprocess.run(not_root([sys.executable, "-m", "grader.course.gradescope", "run", str(root)]), cwd=REPO,
                          capture_output=True, text=True, encoding="utf-8", timeout=600)
     return json.loads((root / "results" / "results.json").read_text(encoding="utf-8")), run
 

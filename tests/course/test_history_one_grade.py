@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import REPO, build_submission, grade_json, replace_function, run_grade
+from tests.support import REPO, build_submission, grade_json, not_root, replace_function, run_grade
 
 CHAPTERS = "ch05,ch06"
 DEADLINE = "2026-05-01T23:59:00+00:00"
@@ -122,8 +122,8 @@ def test_a_late_archive_scores_on_gradescope_as_in_the_batch(graded, tmp_path):
     metadata = {"id": 777, "created_at": CLASS["bo"][1], "assignment": {"due_date": DEADLINE},
                 "users": [{"email": "bo", "id": 1, "name": "Bo"}]}
     (root / "submission_metadata.json").write_text(json.dumps(metadata), encoding="utf-8")
-    done = subprocess.run([sys.executable, "-m", "grader.course.gradescope", "run", str(root)], cwd=REPO, capture_output=True,
-                          text=True, encoding="utf-8", timeout=600)
+    done = subprocess.run(not_root([sys.executable, "-m", "grader.course.gradescope", "run", str(root)]), cwd=REPO,
+                          capture_output=True, text=True, encoding="utf-8", timeout=600)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-3000:]
     results = json.loads((root / "results" / "results.json").read_text(encoding="utf-8"))
     assert results["score"] == _history(graded)["bo"]

@@ -358,7 +358,7 @@ def test_the_notebook_grading_process_grades_the_cells_the_kernel_ran(tmp_path, 
     monkeypatch.chdir(tmp_path)  # the server works in the kernel's folder: here an empty one, as in Colab
     server = notebook_server.Server()
     try:
-        answer = server.handle({"args": ["ch06", "--no-quiz", "--no-sandbox"], "cwd": str(tmp_path), "html": False,
+        answer = server.handle({"args": ["ch06", "--no-quiz"], "cwd": str(tmp_path), "html": False,
                                 "defined": magic.defined_functions(namespace), "cells": magic.kernel_cells(shell)})
     finally:
         server.close()

@@ -28,9 +28,8 @@ SCRIPT = textwrap.dedent("""
     spawn.kill_orphans()  # what ending a learner's child does: our own drawing process is not an orphan
 
     from grader.core.grading import judge_chapters
-    from grader.boundary import open_session
-    from grader.submission import Submission
-    session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+    from tests.support import open_session
+    session = open_session(Path(sys.argv[1]), "solutions")
     report = judge_chapters(session, ["ch01", "ch06", "ch08"], with_plots=True)
 
     def must_not_run(*args, **kwargs):
@@ -148,10 +147,9 @@ def test_the_pages_meanwhile_work_runs_once_the_figures_are_sent_to_be_drawn():
         from pathlib import Path
         from grader.render import drawer, html
         assert drawer.start()
-        from grader.boundary import open_session
         from grader.core.grading import judge_chapters
-        from grader.submission import Submission
-        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        from tests.support import open_session
+        session = open_session(Path(sys.argv[1]), "solutions")
         report = judge_chapters(session, ["ch06"], with_plots=True)
         sent = []
         page = html.render(report, meanwhile=lambda: sent.append(not drawer._STARTED))
@@ -220,9 +218,8 @@ def test_a_drawing_process_that_died_is_reaped_and_the_figures_drawn_all_the_sam
             pass  # dead and unreaped: a zombie until someone waits for it
 
         from grader.core.grading import judge_chapters
-        from grader.boundary import open_session
-        from grader.submission import Submission
-        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        from tests.support import open_session
+        session = open_session(Path(sys.argv[1]), "solutions")
         report = judge_chapters(session, ["ch06", "ch07"], with_plots=True)
         drawn = drawer.figures_due([c for c in report.chapters if c.plots])()
         print(os.path.exists(f"/proc/{process.pid}"), [len(f) for f in drawn],
@@ -245,9 +242,8 @@ def test_figures_due_here_draws_them_in_this_process_alone():
 
         assert drawer.start()
         from grader.core.grading import judge_chapters
-        from grader.boundary import open_session
-        from grader.submission import Submission
-        session = open_session(Submission(Path(sys.argv[1]), "solutions"), sandbox="off")
+        from tests.support import open_session
+        session = open_session(Path(sys.argv[1]), "solutions")
         report = judge_chapters(session, ["ch06", "ch07"], with_plots=True)
 
         def must_not_run(*args, **kwargs):
@@ -293,11 +289,10 @@ def test_the_lighter_import_changes_no_figure(tmp_path):
     what matplotlib imported as is draws."""
     import json
 
-    from grader.boundary import open_session
     from grader.core.grading import judge_chapters
-    from grader.submission import Submission
+    from tests.support import open_session
 
-    session = open_session(Submission(REPO, "solutions"), sandbox="off")
+    session = open_session(REPO, "solutions")
     report = judge_chapters(session, [f"ch{n:02d}" for n in range(10)], with_plots=True)
     chapters = tmp_path / "chapters.json"
     chapters.write_text(json.dumps([c.to_dict() for c in report.chapters if c.plots]), encoding="utf-8")

@@ -19,6 +19,7 @@ from grader.chapters import CHAPTERS
 from tests.support import (
     grade_json,
     run_grade,
+    unbarred,
 )
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
@@ -336,7 +337,6 @@ def notebook_page(path: Path, fragments: list[str], theme: str) -> Path:
 def in_process(repo_root, reports) -> dict:
     """Report objects with their plot data (what `%grade` would render), graded in this process's
     child like the CLI: the stubs, the reference solutions and the partly right submission."""
-    from grader import boundary
     from grader.chapters import CHAPTERS as chapters
     from grader.core.grading import DEFAULT_SEED
     from grader.core.pipeline import Request, build_report
@@ -344,7 +344,7 @@ def in_process(repo_root, reports) -> dict:
 
     partly = reports["partly"][0].parent / "partly"
     request = Request(tuple(c.id for c in chapters), DEFAULT_SEED, plots=True)
-    unsandboxed = boundary.choose("off")
+    unsandboxed = unbarred()
     return {name: build_report(unsandboxed.open_session(submission), request)
             for name, submission in (("stubs", Submission(repo_root, "exercises")),
                                      ("solutions", solutions_submission()),
