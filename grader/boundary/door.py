@@ -11,7 +11,7 @@ resident process kept between sessions), `choose` picks
   grader is root, a dropped uid (grader.boundary.dropped: learner code as an unprivileged user that cannot read
   the references, keys or course file), proved by a probe; else none, and the isolation line says which, and why.
   Learner code never runs as root where the answers are installed: there, whatever was asked, it runs behind
-  bubblewrap or as the dropped uid (with --no-sandbox: as that user, which may then read the answers), or not.
+  bubblewrap or as the dropped uid (with --no-sandbox: that user, without trying bubblewrap), or not at all.
 Environment overrides, for tests and benchmarks: GRADER_SANDBOX=off (no sandbox), GRADER_FORK_SERVER=off (a
 fresh interpreter per session even where a fork server would serve), GRADER_LAUNCHER=fork-server|spawn|portable
 (force one launcher).
@@ -160,7 +160,8 @@ def without_a_sandbox() -> str:
     """What --no-sandbox does here, for a refusal that names it."""
     if root_with_answers():
         return ("--no-sandbox grades without bubblewrap, learner code as the unprivileged user grader-learner (never "
-                "as root), which can then read whatever any user can, answers included where others may read them")
+                "as root) where that user can read none of the answers (the references, keys and course file "
+                "readable by root only)")
     return "--no-sandbox grades without it (learner code then runs as you and can read every file you can)"
 
 
@@ -185,8 +186,8 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
     `secrets`); `turned_off`: how "off" was asked, for the isolation line; `remember`: the one-off `grade` keeps the
     sandbox's command line for the next command's launcher, and uses the one kept (grader.boundary.kept). As root
     where the answers are installed (root_with_answers), whatever `sandbox` says, learner code runs behind
-    bubblewrap or as the dropped uid ("off": without proving that user reads no answer; "required": bubblewrap
-    only), or BoundaryUnavailable."""
+    bubblewrap or as the dropped uid, proved to read none of the answers ("off": that user without trying
+    bubblewrap; "required": bubblewrap only), or BoundaryUnavailable."""
     if sandbox not in SANDBOX_MODES:
         raise ValueError(f"sandbox must be one of {SANDBOX_MODES}, not {sandbox!r}")
     sandbox = SandboxMode(sandbox).value
@@ -219,9 +220,7 @@ def choose(sandbox: str = "auto", resident: bool = False, probe: bool = False,
             raise BoundaryUnavailable(reason)
     as_root = root_with_answers()
     if chosen.sandbox is None and (sandbox == "barrier" or as_root):
-        # "off" as root: the instructor waived the barrier around the answers, never the one around uid 0
-        off = turned_off if sandbox == "off" else ""
-        chosen = _dropped_user(launch, chosen, () if off else (*secrets, *answer_places()), off)
+        chosen = _dropped_user(launch, chosen, (*secrets, *answer_places()))
     if chosen.sandbox is None and as_root:
         raise BoundaryUnavailable(f"{chosen.why_not}. Learner code never runs as root where the answers are "
                                   "installed: install bubblewrap, or create the user grader-learner (`useradd --system "
@@ -264,17 +263,16 @@ def answer_places() -> list[str]:
     return places
 
 
-def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...], turned_off: str = "") -> Boundary:
+def _dropped_user(launch: Launch, without: Boundary, secrets: tuple[str, ...]) -> Boundary:
     """Learner code as an unprivileged user, where this process is root and the probe shows that user starts an
-    interpreter and reads none of `secrets` (`turned_off`: how the barrier around the answers was waived, then
-    none are given); else `without`, its reason extended."""
+    interpreter and reads none of `secrets`; else `without`, its reason extended."""
     from grader.boundary import dropped
     from grader.boundary.sandbox import probe as try_one
 
     setpriv = dropped.possible()
     if setpriv is None:
         return Boundary(launch, None, probe_failure=f"{without.why_not}; and {dropped.why_impossible()}")
-    user = dropped.DroppedUser(setpriv, turned_off=turned_off)
+    user = dropped.DroppedUser(setpriv)
     user.before_run()  # a process left by an earlier run could kill the probe
     try:
         reason = try_one(user, secrets=secrets)

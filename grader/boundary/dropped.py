@@ -36,11 +36,8 @@ class DroppedUser:
 
     available = False  # no private /tmp of its own: the child writes the learner's files to a host folder
 
-    def __init__(self, setpriv: str, memory_bytes: int = 1 << 30, turned_off: str = "") -> None:
-        """`turned_off`: how the barrier around the answers was waived (learner code as this user may read them: the
-        probe did not look), "" where the probe proved it reads none of them."""
+    def __init__(self, setpriv: str, memory_bytes: int = 1 << 30) -> None:
         self.setpriv = setpriv
-        self.turned_off = turned_off
         self.uid, self.gid, self.name = learner_ids()
         self.memory_bytes = memory_bytes
         self.watch: MemoryWatch | None = None
@@ -78,11 +75,10 @@ class DroppedUser:
             _machine_lock.give()
 
     def describe(self) -> str:
-        answers = (f"which may read the references, keys and course file (the barrier around them turned off "
-                   f"{self.turned_off})" if self.turned_off else
-                   "which cannot read the references, keys or course file (root's only)")
         return (f"isolation: no bubblewrap here; learner code runs as the unprivileged user {self.name} (uid {self.uid},"
-                f" no groups, no capabilities), never as root, {answers}, with resource limits per process, all its processes together within {self.memory_bytes >> 20} MiB "
+                " no groups, no capabilities), never as root, which cannot read the references, keys or course file "
+                f"(root's only), with resource limits per process, all its processes together within "
+                f"{self.memory_bytes >> 20} MiB "
                 f"(watched every {MemoryWatch.SECONDS * 1000:g} ms), its process tree killed on a timeout and every "
                 "process of that user killed after each run")
 
