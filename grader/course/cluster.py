@@ -323,6 +323,7 @@ class ClusterPool:
         self.wait_for_workers = wait_for_workers
         self.version = grader_version()
         self.good: list[str] = []  # the workers that checked out when the batch started
+        self.unable: set[str] = set()  # the workers that cannot grade: never sent a learner
         self._own_client = client is None
 
     def _connect(self):
@@ -381,6 +382,8 @@ class ClusterPool:
         lines: dict[str, list[str]] = {}
         refused = []
         for address, fact in sorted(facts.items()):
+            if isinstance(fact, BaseException) or fact["version"] != self.version or "problem" in fact:
+                self.unable.add(address)
             if isinstance(fact, BaseException):
                 refused.append(f"{address}: did not answer ({type(fact).__name__}: {fact})")
             elif fact["version"] != self.version:
@@ -415,7 +418,7 @@ class ClusterPool:
         flying: dict = {}  # future -> (staged, its files, attempt, the workers it could not run on)
         completed = distributed.as_completed(loop=client.loop)
         waiting = iter(entries)
-        told: set[str] = set()  # the workers said to be unable to grade
+        told: set[str] = set()  # the workers said to have failed a learner
         limit, counted = 8, 0.0
 
         def in_flight() -> int:
@@ -425,13 +428,28 @@ class ClusterPool:
                 limit, counted = max(8, 4 * sum(client.nthreads().values())), time.monotonic()
             return limit
 
-        def send(staged: workers.Staged, files: dict, attempt: int, avoid: tuple[str, ...]) -> None:
-            others = [w for w in client.scheduler_info(n_workers=-1)["workers"] if w not in avoid] if avoid else None
+        def send(staged: workers.Staged, files: dict, attempt: int, avoid: tuple[str, ...]) -> bool:
+            """Send `staged` to a worker that is neither unable to grade nor in `avoid` (a strict restriction: an
+            idle worker that cannot grade would otherwise take it back); False where no such worker is left."""
+            others = None
+            if self.unable or avoid:
+                others = [w for w in client.scheduler_info(n_workers=-1)["workers"]
+                          if w not in self.unable and w not in avoid]
+                if not others:
+                    return False
             future = client.submit(grade_task, staged, files, grading, self.version, key=task_key(staged, self.version,
                                                                                                    attempt),
-                                   workers=others or None, allow_other_workers=bool(others))
+                                   workers=others, allow_other_workers=False)
             flying[future] = (staged, files, attempt, avoid)
             completed.add(future)
+            return True
+
+        def unsent(staged: workers.Staged, attempt: int, why: str) -> workers.Outcome:
+            tried = f", on {attempt} worker{'s' * (attempt != 1)}," if attempt else ""
+            return workers.Outcome(staged.learner, "error", f"not graded{tried} for a reason outside the learner's "
+                                   f"code: {why}; the next run grades it again", staged, infrastructure=why)
+
+        no_worker = "no worker that can grade is left on the cluster"
 
         try:
             while True:
@@ -443,8 +461,8 @@ class ClusterPool:
                         entry, out, grading, tuple(overrides.get(entry.learner, ())), previous.get(entry.learner), force)
                     if isinstance(staged, workers.Outcome):
                         yield staged
-                    else:
-                        send(staged, staged.files(), 1, ())
+                    elif not send(staged, staged.files(), 1, ()):
+                        yield unsent(staged, 0, no_worker)
                 if not flying:
                     return
                 future = next(completed)
@@ -459,17 +477,16 @@ class ClusterPool:
                     future.release()
                 graded = outcome.get("graded")
                 why = outcome.get("refused") or (graded.infrastructure if graded else "")
+                if why and outcome["worker"] not in told:
+                    told.add(outcome["worker"])
+                    self.say(f"{why}; its learners are graded on other workers")
+                if outcome.get("refused"):
+                    self.unable.add(outcome["worker"])
                 if why and attempt < TRIES:
-                    if outcome["worker"] not in told:
-                        told.add(outcome["worker"])
-                        self.say(f"{why}; its learners are graded on other workers")
-                    send(staged, files, attempt + 1, (*avoid, outcome["worker"]))
-                    continue
-                if graded is None:
-                    graded = workers.Outcome(staged.learner, "error", f"not graded, on {attempt} workers, for a reason "
-                                                                     f"outside the learner's code: {why}; the next run "
-                                                                     "grades it again", staged, infrastructure=why)
-                yield graded
+                    if send(staged, files, attempt + 1, (*avoid, outcome["worker"])):
+                        continue
+                    why = f"{why}; {no_worker}"
+                yield graded if graded is not None else unsent(staged, attempt, why)
         finally:
             for future in flying:
                 future.release()

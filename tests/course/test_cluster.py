@@ -350,29 +350,39 @@ def test_a_killed_coordinator_resumes_grading_only_what_is_missing(place, cluste
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("first_failure", [1, 2], ids=["at-the-start-check", "while-grading"])
 def test_a_worker_whose_sandbox_cannot_start_never_grades_and_its_learners_are_graded_elsewhere(place, cluster,
-                                                                                             graded_here):
-    """A `dask worker` (without the grader's start checks) whose bubblewrap always fails joins the cluster: the
-    coordinator says it cannot grade; each learner it is sent comes back as an infrastructure failure and is
-    graded on another worker; no report names it."""
+                                                                                             graded_here,
+                                                                                             first_failure):
+    """A `dask worker` (without the grader's start checks) whose bubblewrap fails joins the cluster: where it fails
+    the coordinator's start check, no learner is sent to it; where it fails only once grading began, the learner it
+    failed is graded on another worker and it is sent no other. Either way the coordinator says it cannot grade and
+    no report names it."""
     folder, env = place
-    broken = FakeBwrap(folder / "broken-bwrap", failing=range(1, 10000))
+    here = folder / f"broken-from-call-{first_failure}"
+    broken = FakeBwrap(here / "bwrap", failing=range(first_failure, 10000))
     cluster.worker("broken", env={**env, "PATH": broken.env["PATH"]}, plain=True)
     try:
         cluster.wait_for_workers(3)
         with cluster.client() as client:
             addresses = client.run(lambda dask_worker: os.environ["PATH"])
-        broken_address = next(a for a, path in addresses.items() if path.startswith(str(folder / "broken-bwrap")))
-        submissions = make_submissions(folder / "few", 8)
-        out = folder / "with-a-broken-worker"
+        broken_address = next(a for a, path in addresses.items() if path.startswith(str(here)))
+        submissions = make_submissions(here / "few", 8)
+        out = here / "out"
         done = grade(env, "batch", submissions, "--out", out, "--chapters", "ch06", "--no-html",
                      "--scheduler", cluster.address, "--certs", cluster.certs, cwd=folder)
     finally:
         cluster.stop("broken")
     assert done.returncode == 0, done.stderr[-3000:]
     assert "8 submissions: 8 graded;" in done.stdout
-    assert f"{broken_address}: learner code cannot run on" in done.stderr
-    assert broken.calls > 0 and "its learners are graded on other workers" in done.stderr
+    if first_failure == 1:
+        assert (f"a worker that cannot grade (the learners sent to it are graded by another): {broken_address}: "
+                "learner code cannot run on") in done.stderr
+        assert broken.calls == 1  # its start check only
+    else:
+        assert f"learner code cannot run on worker {broken_address}: " in done.stderr
+        assert "its learners are graded on other workers" in done.stderr
+        assert broken.calls > 1
     for path in reports(out).values():
         data = json.loads(path.read_text(encoding="utf-8"))
         assert data["infrastructure"] is None and data["batch"]["isolation"]["worker"] != broken_address
