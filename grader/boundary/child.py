@@ -199,6 +199,90 @@ def _pin_package(root: str, package: str) -> None:
         raise
 
 
+def _helpers_of(chapter: dict) -> dict[str, frozenset[str]]:
+    """The chapter's functions with helpers to watch for (the request's `helpers`, grader.boundary.wire), each without
+    itself."""
+    asked = chapter.get("helpers")
+    if not isinstance(asked, dict):
+        return {}
+    return {function: frozenset(h for h in helpers if isinstance(h, str) and h != function)
+            for function, helpers in asked.items() if isinstance(helpers, list)}
+
+
+class _Watch:
+    """Calls a learner function while noting which of the learner's functions `names` it entered, at any depth: a
+    function of the submission's files (under `folder`) of that name, whichever module object holds it (an earlier
+    chapter's file imported as `from .ch06_measurement import ...` or as `from ch06_measurement import ...`). Only
+    during the calls of functions with helpers, and only function entries, never lines.
+
+    Python 3.12 and later: sys.monitoring's PY_START, on from the first call watched to the end of the request (turning
+    it on and off re-instruments every function run after, some 10 us a call), each code object that can be no helper
+    (numpy's, the grader's, a learner's function of another name) turned off for good the first time it starts: a
+    loop costs nothing after its first round, and an unwatched call nothing but its helpers' entries. Before 3.12: a
+    profile function during a watched call only, removed as soon as every one of `names` was entered; until then
+    each Python function's entry and each C call costs it one comparison."""
+
+    TOOL = 4  # a sys.monitoring tool id of no standard tool's (0, 1, 2 and 5: debuggers, coverage, profilers, optimizers)
+
+    def __init__(self, folder: str, anywhere: frozenset[str]) -> None:
+        self.folder = folder
+        self.anywhere = anywhere  # every helper of every chapter of the request: no code object of these is turned off
+        self.names: frozenset[str] = frozenset()  # those of the call watched now (none between calls)
+        self.reached: set[str] = set()
+        self.on = False  # sys.monitoring's events are on
+        self.monitoring = monitoring = getattr(sys, "monitoring", None)
+        if monitoring is not None:
+            if monitoring.get_tool(self.TOOL) != "grader":
+                try:
+                    monitoring.use_tool_id(self.TOOL, "grader")
+                except ValueError:  # another's (never learner code's: none has run yet): the profile function instead
+                    self.monitoring = None
+            if self.monitoring is not None:
+                self.disable = monitoring.DISABLE
+                monitoring.register_callback(self.TOOL, monitoring.events.PY_START, self._started)
+
+    def _started(self, code, offset: int):
+        name = code.co_name
+        if name in self.anywhere and code.co_filename.startswith(self.folder):
+            if name in self.names:
+                self.reached.add(name)
+            return None
+        return self.disable  # no helper of any function of this request: never again
+
+    def _profile(self, frame, event: str, arg) -> None:
+        if event == "call":
+            code = frame.f_code
+            if code.co_name in self.names and code.co_filename.startswith(self.folder):
+                self.reached.add(code.co_name)
+                if len(self.reached) == len(self.names):  # nothing more to learn: the rest of the call runs unwatched
+                    sys.setprofile(None)
+
+    def call(self, function, args: list, kwargs: dict, names: frozenset[str], reached: set[str]):
+        """function(*args, **kwargs), with `reached` filled with those of `names` it entered (also if it raises)."""
+        monitoring = self.monitoring
+        if monitoring is not None:
+            if not self.on:
+                monitoring.set_events(self.TOOL, monitoring.events.PY_START)
+                self.on = True
+            self.names, self.reached = names, reached
+            try:
+                return function(*args, **kwargs)
+            finally:
+                self.names = frozenset()
+        self.names, self.reached = names, reached
+        previous = sys.getprofile()
+        sys.setprofile(self._profile)
+        try:
+            return function(*args, **kwargs)
+        finally:
+            sys.setprofile(previous)
+
+    def close(self) -> None:
+        if self.monitoring is not None and self.on:
+            self.monitoring.set_events(self.TOOL, 0)
+            self.on = False
+
+
 def run(request: dict, out) -> None:
     root = os.path.realpath(request["root"])
     sys.path.insert(0, root)
@@ -206,6 +290,10 @@ def run(request: dict, out) -> None:
     sys.path.append(os.path.join(root, request["package"]))
     sys.dont_write_bytecode = True
     catalogue = _Catalogue()
+    helpers_of = {chapter["chapter"]: _helpers_of(chapter) for chapter in request["chapters"]}
+    anywhere = frozenset(h for helpers in helpers_of.values() for names in helpers.values() for h in names)
+    # the submission's files are under root (with the separator: not a sibling folder's)
+    watch = _Watch(os.path.join(root, ""), anywhere) if anywhere else None
     for chapter in request["chapters"]:
         name = chapter["chapter"]
         _emit(out, {"event": IMPORT, "chapter": name})
@@ -220,25 +308,36 @@ def run(request: dict, out) -> None:
             continue
         # the libraries that compile a function on its first call (jax.jit, torch.compile): its first call gets more time
         _emit(out, {"event": IMPORTED, "chapter": name, "compiling": sorted(COMPILING & set(sys.modules))})
+        helpers = helpers_of[name]
         for call in chapter["calls"]:
             index = call["index"]
             function = getattr(module, call["function"], None)
             if not callable(function):
                 _emit(out, {"event": MISSING_EVENT, "chapter": name, "index": index})
                 continue
+            watched = helpers.get(call["function"]) if helpers else None
+            reached: set[str] | None = set() if watched and watch is not None else None
             try:
                 args = [decode_argument(a, catalogue) for a in call.get("args", [])]
                 kwargs = {k: decode_argument(v, catalogue) for k, v in call.get("kwargs", {}).items()}
-                value = function(*args, **kwargs)
+                if reached is None:
+                    value = function(*args, **kwargs)
+                else:
+                    value = watch.call(function, args, kwargs, watched, reached)
                 record = {"event": RETURNED, "chapter": name, "index": index, "value": encode_value(value)}
             except BaseException as exc:
                 record = {"event": RAISED_EVENT, "chapter": name, "index": index,
                           "error": describe_exception(exc, root)}
+            if reached is not None:
+                record["reached"] = sorted(reached)
             try:
                 _emit(out, record)
             except (TypeError, ValueError, OverflowError):
                 _emit(out, {"event": RETURNED, "chapter": name, "index": index,
-                            "value": {"t": T_OTHER, "type": "a value that cannot be encoded"}})
+                            "value": {"t": T_OTHER, "type": "a value that cannot be encoded"},
+                            **({"reached": record["reached"]} if reached is not None else {})})
+    if watch is not None:
+        watch.close()
     _flush_learner_output()  # before DONE: the parent may stop the process as soon as it reads it
     _emit(out, {"event": DONE})
 

@@ -65,6 +65,9 @@ class ChapterRequest:
     chapter: str
     module: str
     calls: list[Call]
+    # function -> the learner's own functions it is usually written with (grader.checks.base.ChapterChecks.builds_on):
+    # the child says, for each call of such a function, which of them it entered (Returned.reached)
+    helpers: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
 @dataclass
@@ -225,6 +228,7 @@ class Progress:
     chapter: str | None = None  # the chapter being imported or called (None before the first)
     index: int | None = None  # the call in flight
     function: str = ""  # the function of the call in flight
+    watched: tuple[str, ...] = ()  # its helpers, which the child says the call entered or not (ChapterRequest.helpers)
     chapter_end: float = float("inf")
     compiling: tuple[str, ...] = ()  # what the chapter's module loaded that compiles on a first call (jax, torch)
     called: set[str] = field(default_factory=set)  # the chapter's functions called so far
@@ -242,6 +246,7 @@ class Progress:
         if self.call_at < len(calls):
             self.stage, self.index, self.call_started = Stage.CALL, calls[self.call_at], now
             self.function = function = request.calls[self.index].function
+            self.watched = request.helpers.get(function, ()) if request.helpers else ()
             if self.compiling:
                 self.first_call = function not in self.called
                 self.called.add(function)
@@ -279,7 +284,7 @@ class Progress:
         if self.stage is Stage.CALL:  # most lines: the result of the call in flight
             if kind in _RESULTS and name == self.chapter and event.get("index") == self.index:
                 function = self.function
-                runs[name].results[self.index] = from_event(function, event)
+                runs[name].results[self.index] = from_event(function, event, self.watched)
                 if now - self.call_started > self.slowest.get(function, 0.0):
                     self.slowest[function] = now - self.call_started
                 self.call_at += 1
@@ -380,8 +385,9 @@ class Session:
                 calls = req.calls.text
             else:
                 calls = json.dumps([c.to_json(i) for i, c in enumerate(req.calls) if results[i] is None])
+            helpers = f', "helpers": {json.dumps(req.helpers)}' if req.helpers else ""
             chapters.append(f'{{"chapter": {json.dumps(req.chapter)}, "module": {json.dumps(req.module)}, '
-                            f'"calls": {calls}}}')
+                            f'"calls": {calls}{helpers}}}')
         head = json.dumps({"package": self.submission.package, "files": self.prepared.files,
                            "limits": self.limits.rlimits()})
         return f'{head[:-1]}, "chapters": [{", ".join(chapters)}]}}'

@@ -1,14 +1,18 @@
 """The process boundary's one home: what crosses between the grading process and the child.
 
 Parent -> child, one JSON request: the learner's files (path -> base64), then per chapter the module
-to import and the calls to make. A call's arguments are plain JSON, or tagged forms: `Fn` (a
-catalogue callable by name), `Rng` (a numpy Generator from a seed), `Array` (a numpy array of a
-dtype), tuples and non-finite floats.
+to import, the calls to make and, optionally, `helpers`: {function: [helper, ...]}, the learner's own functions
+each function is usually written with (grader.checks.base.ChapterChecks.builds_on). A call's arguments are plain
+JSON, or tagged forms: `Fn` (a catalogue callable by name), `Rng` (a numpy Generator from a seed), `Array` (a numpy
+array of a dtype), tuples and non-finite floats.
 
 Child -> parent, one JSON line per event, in the order the request asks: IMPORT, then IMPORTED
 or IMPORT_FAILED, then one of RETURNED / RAISED / MISSING per call in order, ..., DONE. A returned
 value travels as type-tagged plain data (`encode_value`); the parent rebuilds only numbers from it
-(`Returned.as_array`), never an object. Nothing is ever pickled.
+(`Returned.as_array`), never an object. Nothing is ever pickled. The RETURNED or RAISED line of a call of a
+function with helpers also says which of them the call entered (`reached`: the names of those whose code ran
+during the call, at any depth, of whichever of the learner's files or import forms; grader.core.grading blames
+only a helper a check's calls reached).
 
 Light on purpose: the child and `grade`'s launcher import this before numpy (numpy loads lazily).
 """
@@ -325,6 +329,9 @@ class Returned:
     encoded: dict | None = None
     error: dict | None = None
     note: str = ""
+    # the function's helpers (ChapterRequest.helpers) the call entered; None: not known (no helpers asked about, no
+    # line from the child that says, a timeout or a crash)
+    reached: tuple[str, ...] | None = None
 
     @property
     def ok(self) -> bool:
@@ -454,14 +461,26 @@ def valid_value(encoded: object, depth: int = 0) -> bool:
     return kind in (T_NONE, T_STR, T_OTHER, T_TOO_LARGE, T_NDARRAY_OTHER)
 
 
-def from_event(function: str, event: dict) -> Returned:
-    """Build a Returned from one child result line (already parsed JSON)."""
+def _reached(event: dict, watched: tuple[str, ...]) -> tuple[str, ...] | None:
+    """Which of `watched` (the helpers the parent asked about) a result line says its call entered, in
+    `watched`'s order; None where nothing was asked or the line says nothing readable (a forged line names no more
+    than was asked)."""
+    said = event.get("reached")
+    if not watched or not isinstance(said, list) or not all(isinstance(name, str) for name in said):
+        return None
+    return tuple(name for name in watched if name in said)
+
+
+def from_event(function: str, event: dict, watched: tuple[str, ...] = ()) -> Returned:
+    """Build a Returned from one child result line (already parsed JSON); `watched`: the function's helpers the
+    request asked about (ChapterRequest.helpers)."""
     kind = event.get("event")
     if kind == RETURNED and valid_value(event.get("value")):
-        return Returned(VALUE, function, encoded=event["value"])
+        return Returned(VALUE, function, encoded=event["value"], reached=_reached(event, watched))
     if kind == RAISED_EVENT and isinstance(event.get("error"), dict):
         error = clean_error(event["error"])
-        return Returned(NOT_IMPLEMENTED if error["not_implemented"] else RAISED, function, error=error)
+        return Returned(NOT_IMPLEMENTED if error["not_implemented"] else RAISED, function, error=error,
+                        reached=_reached(event, watched))
     if kind == MISSING_EVENT:
         return Returned(MISSING, function)
     return Returned(CRASHED, function, note="the child sent a malformed result")

@@ -71,7 +71,8 @@ class ChapterChecks:
 
     def uses(self, function: str, *helpers: str) -> None:
         """Declare that a learner's `function` is usually written with their own `helpers` (maybe of an
-        earlier chapter): when both fail, the function's failures point at the helper first."""
+        earlier chapter): the child watches the function's calls for them, and where a failing check's calls
+        entered a helper that fails too, the check points at the helper first."""
         self.builds_on[function] = tuple(helpers)
 
     def check(self, function: str, points: float = 1, description: str | None = None,

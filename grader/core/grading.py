@@ -30,19 +30,26 @@ def _relocate(run: ChapterRun, sources: dict) -> None:
             relocate(returned.error, sources)
 
 
-def point_upstream(report: Report, builds_on: dict[str, dict]) -> None:
-    """Blame once: a failing check of a function usually written with the learner's own helpers (of this
-    chapter or an earlier one graded in the same report) says first that a helper fails its checks. `builds_on`:
-    per chapter, each function's helpers (grader.checks.base.ChapterChecks.builds_on)."""
+def point_upstream(report: Report, builds_on: dict[str, dict], reached: dict[str, dict]) -> None:
+    """Blame once: a failing check of a function whose calls in that check entered the learner's own helper (of this
+    chapter or an earlier one graded in the same report) says first that the helper fails its checks. `builds_on`:
+    per chapter, each function's helpers (grader.checks.base.ChapterChecks.builds_on); `reached`: per chapter, per
+    check, the helpers its calls of its function entered (grader.core.planning.ChapterPlan.reached, as the child
+    saw them run). A helper no call was seen to enter (a function that does not use it, a call that timed out) is
+    not blamed, however it fails."""
     failing = {c.function for ch in report.chapters for c in ch.checks if c.kind == "code" and c.status == Status.FAIL}
     for chapter in report.chapters:
         uses = builds_on.get(chapter.chapter, {})
+        entered = reached.get(chapter.chapter, {})
         for check in chapter.checks:
-            helpers = [h for h in uses.get(check.function, ()) if h in failing and h != check.function]
-            if check.status == Status.FAIL and helpers:
+            if check.status != Status.FAIL or check.kind != "code":
+                continue
+            seen = entered.get(check.id, ())
+            helpers = [h for h in uses.get(check.function, ()) if h in failing and h != check.function and h in seen]
+            if helpers:
                 check.upstream = helpers
                 named = " and ".join(helpers)
-                check.message = (f"{check.function} usually builds on your {named}, which "
+                check.message = (f"{check.function} calls your {named}, which "
                                  f"{'fails its' if len(helpers) == 1 else 'fail their'} own checks: fix "
                                  f"{'it' if len(helpers) == 1 else 'them'} first.\n{check.message}")
 
@@ -55,8 +62,9 @@ def _plan(chapter_id: str, seed: int, with_plots: bool, exclude: frozenset[str])
 
 
 def _answered(run: ChapterRun) -> list:
-    """Everything the child answered for one chapter, as plain data (a memo key's part)."""
-    return [run.import_error, [None if r is None else [r.kind, r.function, r.encoded, r.error, r.note]
+    """Everything the child answered for one chapter, as plain data (a memo key's part): with the helpers each call
+    entered, which decide where a failure is blamed (point_upstream)."""
+    return [run.import_error, [None if r is None else [r.kind, r.function, r.encoded, r.error, r.note, r.reached]
                                for r in run.results]]
 
 
@@ -83,14 +91,15 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
     for cid in chapter_ids:
         plan_keys[cid] = key_of(cid, seed, sorted(e for e in exclude if e.startswith(f"{cid}/")), with_plots)
         calls = memo.calls(cid, plan_keys[cid]) if memo is not None and plan_keys[cid] else None
-        if calls is not None:
+        helpers = memo.builds_on(cid) if calls is not None else None  # both kept, or planned again
+        if calls is not None and helpers is not None:
             kept_calls.add(cid)
         else:
             plans[cid] = _plan(cid, seed, with_plots, exclude)
-            calls = plans[cid].calls
+            calls, helpers = plans[cid].calls, plans[cid].chapter.builds_on
             if memo is not None and plan_keys[cid]:
-                memo.keep_calls(cid, plan_keys[cid], calls)
-        requests.append(ChapterRequest(cid, BY_ID[cid].module, calls))
+                memo.keep_calls(cid, plan_keys[cid], calls, helpers)
+        requests.append(ChapterRequest(cid, BY_ID[cid].module, calls, helpers))
     # one learner's runs: which files a kept verdict was made from says which chapters will most likely be judged
     files = key_of(session.prepared.files) if memo is not None and memo.one_learner else None
     unseen = [cid for cid in chapter_ids if cid not in plans and files is not None and not memo.seen(cid, files)]
@@ -108,6 +117,7 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
     prepared = session.prepared
     report = Report(submission_label or str(submission.root), seed=seed)
     builds_on: dict[str, dict] = {}
+    reached: dict[str, dict] = {}
     for request in requests:
         cid, module = request.chapter, request.module
         graded = prepared.graded.get(module)  # a notebook, or the cells a kernel ran
@@ -123,6 +133,7 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
         try:
             chapter = ChapterResult.from_dict(kept["chapter"]) if kept is not None else None
             uses = {str(f): tuple(map(str, h)) for f, h in dict(kept["builds_on"]).items()} if kept else {}
+            entered = {str(c): list(map(str, h)) for c, h in dict(kept.get("reached") or {}).items()} if kept else {}
         except (KeyError, TypeError, ValueError):
             chapter = None
         if chapter is None:
@@ -133,14 +144,15 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
                 _relocate(run, prepared.sources)
                 key = None
             chapter = plan.judge(run, module_file)
-            uses = plan.chapter.builds_on
+            uses, entered = plan.chapter.builds_on, plan.reached(run)
             if memo is not None and _settled(chapter, run):
-                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses}, files)
-        builds_on[cid] = uses
+                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses, "reached": entered},
+                                  files)
+        builds_on[cid], reached[cid] = uses, entered
         chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
         chapter.notes.extend(prepared.notes.get(module, []))
         report.chapters.append(chapter)
-    point_upstream(report, builds_on)
+    point_upstream(report, builds_on, reached)
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()
               if run.import_error and run.import_error.get("infrastructure")]

@@ -152,14 +152,27 @@ class Memo:
         self._calls[(chapter, plan_key)] = (calls, encoded)
         return encoded
 
-    def keep_calls(self, chapter: str, plan_key: str, calls: list[Call]) -> None:
+    def keep_calls(self, chapter: str, plan_key: str, calls: list[Call],
+                   builds_on: dict[str, tuple[str, ...]] | None = None) -> None:
+        """Keep a plan's calls, with the chapter's `builds_on` (its functions' helpers: what the child is asked to
+        watch for, grader.boundary.wire), which a run that reuses the calls needs without loading the checks."""
         if chapter not in _NAMES:
             return
         data = self._read(chapter)
         plans = data.get("plans") if isinstance(data.get("plans"), dict) else {}
         plans = {k: v for k, v in plans.items() if k != plan_key}
         data["plans"] = dict([*list(plans.items())[-(PLANS - 1):], (plan_key, [c.to_json(i) for i, c in enumerate(calls)])])
+        if builds_on is not None:
+            data["builds_on"] = {function: list(helpers) for function, helpers in builds_on.items()}
         self._write(chapter)
+
+    def builds_on(self, chapter: str) -> dict[str, tuple[str, ...]] | None:
+        """The chapter's builds_on kept with its calls (keep_calls), or None (then its calls are planned again)."""
+        kept = self._read(chapter).get("builds_on") if chapter in _NAMES else None
+        if not isinstance(kept, dict) or not all(isinstance(f, str) and isinstance(h, list) and
+                                                 all(isinstance(n, str) for n in h) for f, h in kept.items()):
+            return None
+        return {function: tuple(helpers) for function, helpers in kept.items()}
 
     def verdict(self, name: str, key: str | None, files: str | None = None) -> dict | None:
         """The verdict kept under `key` in `name`'s file (a chapter, or "quiz"), or None; found, it is marked as

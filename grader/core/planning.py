@@ -135,7 +135,22 @@ class ChapterPlan:
                              for name, body in (plots or [])]
 
     def request(self) -> ChapterRequest:
-        return ChapterRequest(self.chapter.info.id, self.chapter.info.module, self.calls)
+        return ChapterRequest(self.chapter.info.id, self.chapter.info.module, self.calls, self.chapter.builds_on)
+
+    def reached(self, run: ChapterRun) -> dict[str, list[str]]:
+        """Per check of a function with helpers (ChapterChecks.builds_on), the helpers that the calls of its own
+        function made by the check entered (Returned.reached; a call the child said nothing of counts for none):
+        the evidence grader.core.grading.point_upstream blames a helper on. Checks that reached none are left out."""
+        found: dict[str, list[str]] = {}
+        for check, pending in self.pending:
+            helpers = self.chapter.builds_on.get(check.function)
+            if not helpers or run.import_error is not None:
+                continue
+            entered = {name for i in pending.slots if (r := run.results[i]) is not None
+                       and r.function == check.function and r.reached for name in r.reached}
+            if entered:
+                found[check.id] = [h for h in helpers if h in entered]
+        return found
 
     def judge(self, run: ChapterRun, module_file: str) -> ChapterResult:
         info = self.chapter.info
