@@ -17,6 +17,7 @@ import numpy as np
 from grader.boundary.wire import call
 from grader.checks.base import chapter_checks
 from grader.checks.derivatives import planar_point, vector_form
+from grader.checks.confusions import other_norms
 from grader.checks.sampling import same_seed_same_value
 from grader.judging.compare import (
     all_of,
@@ -46,7 +47,7 @@ def _show(values) -> str:
 def range_reading_worked_example(ctx):
     """range_reading(3, 4) is 5"""
     got = yield call("range_reading", 3, 4)
-    return expect(got, 5.0, label="range_reading(3, 4)", rtol=1e-12)
+    return expect(got, 5.0, label="range_reading(3, 4)", rtol=1e-12, mistakes=other_norms((3, 4), 5.0))
 
 
 @CHECKS.check("range_reading", points=1)
@@ -56,9 +57,8 @@ def range_reading_random_points(ctx):
     calls.append(call("range_reading", -5, 12))
     expected = [REF.range_reading(*c.args) for c in calls]
     got = yield calls
-    return all_of([expect(g, want, label=c.label, rtol=1e-9, mistakes=[
-        Mistake("squared range", "range_reading returns x^2 + y^2: take the square root.", want ** 2)])
-        for g, want, c in zip(got, expected, calls)])
+    return all_of([expect(g, want, label=c.label, rtol=1e-9, mistakes=other_norms(c.args, want))
+                   for g, want, c in zip(got, expected, calls)])
 
 
 @CHECKS.check("superposition_gap", points=1)
@@ -86,17 +86,23 @@ def superposition_gap_random_points(ctx):
                    for g, (p, q, form, gap) in zip(got, cases)])
 
 
-def _shift_verdict(returned, law: tuple, n: int, label: str):
-    """Within STANDARD_ERRORS standard errors of the exact mean shift E[R] - r (law: REF.shift_law)."""
+def _shift_verdict(returned, law: tuple, n: int, label: str, variance_scale: float | None = None):
+    """Within STANDARD_ERRORS standard errors of the exact mean shift E[R] - r (law: REF.shift_law); a wrong one
+    named by the mean range, or by the shift of a cloud spread by sigma^2 (`variance_scale`, where known)."""
     problem = value_problem(returned, (), label)
     if problem:
         return fail(problem)
     shift, spread, approximation, r = law
-    mean_range = Mistake("mean range", "that is the mean range itself: subtract range(mean), the range of the mean "
-                                       "position.", shift + r)
+    slips = [Mistake("mean range", "that is the mean range itself: subtract range(mean), the range of the mean "
+                                   "position.", shift + r),
+             Mistake("range of the mean sample", "that is the range of the samples' mean, which is about range(mean): "
+                                                 "take the range of each sample first, then their mean.", 0.0)]
+    if variance_scale is not None:
+        slips.append(Mistake("variance as the scale", "the cloud spreads by sigma^2, not sigma: the samples are mean + "
+                                                      "sigma * rng.standard_normal((n, 2)).", variance_scale))
     return compare_arrays(returned.as_array(), shift, label=f"{label} (about sigma^2/(2r) = {fmt(approximation)}; "
                           f"statistical, {STANDARD_ERRORS:g} standard errors)",
-                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)), mistakes=[mean_range]) \
+                          rtol=0.0, atol=float(STANDARD_ERRORS * spread / np.sqrt(n)), mistakes=slips) \
         .also(exactly(returned, shift))
 
 
@@ -119,9 +125,10 @@ def mean_shift_random_inputs(ctx):
         sigma = float(rng.uniform(1.25, 1.6))  # never 1, and a shift sigma^2/2r >= 0.26 that few samples show
         cases.append((mean, sigma, int(rng.integers(6_000, 9_000)), int(rng.integers(2**31)), form))
     laws = [REF.shift_law(m, s) for m, s, *_ in cases]
+    squared = [REF.shift_law(m, s * s)[0] for m, s, *_ in cases]
     got = yield [call("mean_shift", vector_form(m, form), s, n, seed) for m, s, n, seed, form in cases]
-    return all_of([_shift_verdict(g, law, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})")
-                   for g, law, (m, s, n, seed, form) in zip(got, laws, cases)])
+    return all_of([_shift_verdict(g, law, n, f"mean_shift({_show(m)}, {fmt(s)}, {n}, seed={seed})", wide)
+                   for g, law, wide, (m, s, n, seed, form) in zip(got, laws, squared, cases)])
 
 
 @CHECKS.check("mean_shift", points=1)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from grader.boundary.wire import Array, Fn, call
+from grader.catalogue import CALLABLES
 from grader.checks.base import chapter_checks
 from grader.judging.compare import (
     Entries,
@@ -133,8 +134,16 @@ def linearization_error_random_inputs(ctx):
     return all_of([expect(g, want, rtol=1e-9, atol=1e-12, entries=ERROR,
                           label=_label("linearization_error", FUNCTIONS[fn], a, x),
                           mistakes=[Mistake("signed error", "the error is |f(x) - L(x)|: take the absolute value.",
-                                            value)])
+                                            value), _relative_error(fn, x, want)])
                    for g, want, value, (fn, a, x, _) in zip(got, expected, signed, cases)])
+
+
+def _relative_error(fn: str, x, error) -> Mistake:
+    """The error relative to |f(x)|, where the absolute one is asked."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        value = np.asarray(error, dtype=float) / np.abs(CALLABLES[FUNCTIONS[fn][0]](np.asarray(x, dtype=float)))
+    return Mistake("relative error", "that is the error relative to |f(x)|: linearization_error is the absolute "
+                                     "error |f(x) - L(x)|, not divided by anything.", value)
 
 
 @CHECKS.check("linearization_error", points=1)
@@ -178,7 +187,11 @@ def taylor_error_estimate_random_inputs(ctx):
     expected = [REF.estimate_of(FUNCTIONS[fn][2], a, delta) for fn, a, delta in cases]
     got = yield [call("taylor_error_estimate", Fn(FUNCTIONS[fn][2]), a, delta) for fn, a, delta in cases]
     return all_of([expect(g, want, rtol=1e-9, atol=1e-12, mistakes=[
-        Mistake("missing 0.5", "the estimate is 0.5 |f''(a)| delta^2: the factor 0.5 is missing.", 2 * want)],
+        Mistake("missing 0.5", "the estimate is 0.5 |f''(a)| delta^2: the factor 0.5 is missing.", 2 * want),
+        Mistake("delta not squared", "delta is not squared: the estimate is 0.5 |f''(a)| delta^2.", want / abs(delta)),
+        Mistake("f'' at a + delta", "f'' is taken at a + delta: the estimate uses the curvature at a, "
+                                    "0.5 |f''(a)| delta^2.",
+                0.5 * abs(float(CALLABLES[FUNCTIONS[fn][2]](a + delta))) * delta * delta)],
                           label=f"taylor_error_estimate({FUNCTIONS[fn][2]}, a={fmt(a)}, delta={fmt(delta)})")
                    for g, want, (fn, a, delta) in zip(got, expected, cases)])
 

@@ -107,11 +107,14 @@ def area_scale_is_r(ctx):
     rng = ctx.rng
     calls = [call("area_scale", float(r), float(t)) for r, t in _points(rng) + [(-rng.uniform(0.5, 3.0), angle(rng))]]
     expected = [REF.area_scale(*c.args) for c in calls]
+    jacobians = [REF.polar_to_cartesian_jacobian(*c.args) for c in calls]
     got = yield calls
     return all_of([expect(g, want, label=c.label, rtol=1e-9, atol=1e-12, mistakes=[
         Mistake("unsigned determinant", "area_scale is the signed determinant of J: a negative r gives a negative "
-                                        "value (no abs).", abs(want))])
-        for g, want, c in zip(got, expected, calls)])
+                                        "value (no abs).", abs(want)),
+        Mistake("determinant with a plus", "the determinant of [[a, b], [c, d]] is a d - b c: a minus between the "
+                                           "two products.", J[0, 0] * J[1, 1] + J[0, 1] * J[1, 0])])
+        for g, want, J, c in zip(got, expected, jacobians, calls)])
 
 
 @CHECKS.check("area_scale", points=1)

@@ -29,6 +29,7 @@ import numpy as np
 
 from grader.boundary.wire import Array, Fn, call
 from grader.checks.base import chapter_checks
+from grader.checks.confusions import STENCIL_HELP, backward_difference
 from grader.checks.derivatives import FD_ATOL, FD_RTOL, angle, vector_form
 from grader.judging.compare import (
     Entries,
@@ -43,6 +44,7 @@ from grader.judging.compare import (
 from grader.judging.compare import expect as _expect
 from grader.judging.diagnose import Evidence, Mistake, generated, weigh
 from grader.judging.expected import reference
+from grader.judging.relations import relations
 
 CHECKS = chapter_checks("ch05")
 CHECKS.uses("max_jacobian_error", "jacobian_fd")
@@ -94,8 +96,10 @@ def _difference_verdict(returned, name: str, x, h: float, function: str, law: di
     error = got - exact
 
     def evidence(only: set[str] | None = None) -> Evidence:  # to the quotient's last digits, as computed
-        slips = [_difference_slip(other, law), *generated(returned, only)]
-        return weigh(np.asarray(got), np.asarray(law[f"{own}_value"]), slips, 1e-9, 1e-9)
+        right = np.asarray(law[f"{own}_value"])
+        slips = [_difference_slip(other, law), *_stencil_slips(own, law, h),
+                 *relations(np.asarray(got), right, Entries("quotient")), *generated(returned, only)]
+        return weigh(np.asarray(got), right, slips, 1e-9, 1e-9)
     if low <= error <= high:
         return Verdict(True, "", exact, got, evidence=evidence)
     verdict = Verdict(False, f"{label}: got {fmt(got)}; the exact derivative is {fmt(exact)}, so the error is "
@@ -111,6 +115,17 @@ def _difference_slip(other: str, law: dict) -> Mistake:
                                              "f(x+h) - f(x-h) over 2h.", law["forward_value"])
     return Mistake("central difference", "That is the central difference; the forward one is (f(x+h) - f(x))/h.",
                    law["central_value"])
+
+
+def _stencil_slips(own: str, law: dict, h: float) -> list[Mistake]:
+    """The backward difference where `own` (forward or central) is asked, and for the central one the slip of
+    precedence, / 2 * h."""
+    formula = "(f(x+h) - f(x-h))/(2h)" if own == "central" else "(f(x+h) - f(x))/h"
+    slips = [Mistake("backward difference", STENCIL_HELP["backward difference"].format(own=own, formula=formula),
+                     backward_difference(law["forward_value"], law["central_value"]))]
+    if own == "central":
+        slips.append(Mistake("precedence", STENCIL_HELP["precedence"], law["central_value"] * h * h))
+    return slips
 
 
 def _scalar_cases(rng: np.random.Generator) -> list:
@@ -158,9 +173,10 @@ def _slope_check(function: str, order: int, ctx):
 @CHECKS.check("forward_difference", points=1)
 def forward_difference_worked_example(ctx):
     """forward_difference(sin, 1, 1e-3) = (sin 1.001 - sin 1)/0.001 = 0.539881 (cos 1 = 0.540302)"""
-    want = REF.difference_law("sin", 1.0, 1e-3)["forward_value"]
+    law = REF.difference_law("sin", 1.0, 1e-3)
     got = yield call("forward_difference", Fn("sin"), 1.0, 1e-3)
-    return expect(got, want, label="forward_difference(sin, 1, 0.001)", rtol=1e-8)
+    return expect(got, law["forward_value"], label="forward_difference(sin, 1, 0.001)", rtol=1e-8,
+                  mistakes=[_difference_slip("central", law), *_stencil_slips("forward", law, 1e-3)])
 
 
 @CHECKS.check("forward_difference", points=1)
@@ -180,9 +196,10 @@ def forward_difference_error_is_order_h(ctx):
 @CHECKS.check("central_difference", points=1)
 def central_difference_worked_example(ctx):
     """central_difference(sin, 1, 1e-5) is cos(1) = 0.5403023 to about 1e-10"""
-    want = REF.exact_derivative("sin", 1.0)
+    want, law = REF.exact_derivative("sin", 1.0), REF.difference_law("sin", 1.0, 1e-5)
     got = yield call("central_difference", Fn("sin"), 1.0, 1e-5)
-    return expect(got, want, label="central_difference(sin, 1, 1e-05)", rtol=0.0, atol=1e-10)
+    return expect(got, want, label="central_difference(sin, 1, 1e-05)", rtol=0.0, atol=1e-10,
+                  mistakes=[_difference_slip("forward", law), *_stencil_slips("central", law, 1e-5)])
 
 
 @CHECKS.check("central_difference", points=1)
@@ -199,7 +216,7 @@ def central_difference_uses_the_step_as_given(ctx):
     laws = [REF.difference_law(name, x, h) for name, x, h in cases]
     got = yield [call("central_difference", Fn(name), x, h) for name, x, h in cases]
     return all_of([expect(g, law["central_value"], label=f"central_difference({name}, {fmt(x)}, {fmt(h)})", rtol=1e-9,
-                          atol=1e-12, mistakes=[_difference_slip("forward", law)])
+                          atol=1e-12, mistakes=[_difference_slip("forward", law), *_stencil_slips("central", law, h)])
                    for g, law, (name, x, h) in zip(got, laws, cases)])
 
 
@@ -369,6 +386,9 @@ def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
     if chosen(h) is None:
         verdict = Verdict(False, f"{label} returned {fmt(h)}, which is not one of the steps in hs.", got=h,
                           evidence=evidence)
+        if any(abs(h - e) <= 1e-9 * abs(e) for e in errors):
+            verdict.name(Mistake("the error for the step", "that is an error of the central difference: return the "
+                                                           "step h in hs that gives the smallest one."))
     elif acceptable(h):
         return Verdict(True, "", got=h, evidence=evidence)
     else:

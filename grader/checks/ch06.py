@@ -6,6 +6,7 @@ import numpy as np
 
 from grader.boundary.wire import Array, call
 from grader.checks.base import chapter_checks
+from grader.checks.confusions import other_norms
 from grader.checks.derivatives import (
     INSIDE,
     Derivative,
@@ -53,6 +54,8 @@ BEARING_SLIPS = {
     "reversed bearing": "the bearing is off by pi everywhere: it is measured from the dish to the drone, "
                         "atan2(y, x), not from the drone to the dish.",
     "degrees": "the bearing is in degrees: keep it in radians, as atan2 returns it.",
+    "atan plus pi": "the bearing is atan(y/x) + pi: off by pi where x > 0 and by a whole turn where x and y are "
+                    "both negative; np.arctan2(y, x) is right in every quadrant.",
 }
 
 
@@ -61,7 +64,8 @@ def _bearing_slips(x: float, y: float) -> list[Mistake]:
     reversed_ = next(m for m in slips if m.name == "reversed bearing")
     # off by pi everywhere as a learner writes it, atan2(-y, -x) or atan2(y, x) +- pi: one mistake, either form
     return slips + [Mistake(reversed_.name, reversed_.help, reversed_.value + [0.0, turn]) for turn in (-2 * np.pi,
-                                                                                                     2 * np.pi)]
+                                                                                                     2 * np.pi)] + \
+        other_norms((x, y), REF.range_bearing(x, y), 0)
 
 
 def _H_slips(x: float, y: float, H: np.ndarray) -> list[Mistake]:
@@ -187,6 +191,8 @@ ELEVATION_SLIPS = {
     "colatitude": "the elevation is measured from the z-axis: it is the angle above the x-y plane, "
                   "atan2(z, sqrt(x^2 + y^2)).",
     "range without z": "the range leaves out z: it is the distance in 3-D.",
+    "elevation over the 3-D range": "the elevation is atan2(z, r) with the 3-D range r: its tangent is z over the "
+                                    "horizontal distance, atan2(z, sqrt(x^2 + y^2)) (or arcsin(z / r)).",
     "atan": "the bearing is atan(y/x), which is off by pi where x < 0: use np.arctan2(y, x).",
     "degrees": "the angles are in degrees: keep them in radians, as atan2 returns them.",
 }
@@ -225,7 +231,7 @@ def range_bearing_elevation_worked_example(ctx):
     want, slips = REF.range_bearing_elevation(3, 4, 0), REF.elevation_mistakes(3, 4, 0)
     got = yield call("range_bearing_elevation", 3, 4, 0)
     return expect(got, want, label="range_bearing_elevation(3, 4, 0)", entries=Z3, rtol=1e-9,
-                  mistakes=known(slips, ELEVATION_SLIPS))
+                  mistakes=known(slips, ELEVATION_SLIPS) + other_norms((3, 4, 0), want, 0))
 
 
 @CHECKS.check("range_bearing_elevation", points=2)
@@ -234,7 +240,8 @@ def range_bearing_elevation_random_points(ctx):
     rng = ctx.rng
     points = [_point_3d(rng, octant=k) for k in range(8)]
     expected = [REF.range_bearing_elevation(*p) for p in points]
-    slips = [known(REF.elevation_mistakes(*p), ELEVATION_SLIPS) for p in points]
+    slips = [known(REF.elevation_mistakes(*p), ELEVATION_SLIPS) + other_norms(p, want, 0)
+             for p, want in zip(points, expected)]
     got = yield [call("range_bearing_elevation", *(float(v) for v in p)) for p in points]
     return all_of([expect(g, want, label=_label3("range_bearing_elevation", p), entries=Z3, rtol=1e-9, atol=1e-12,
                           mistakes=s) for g, want, s, p in zip(got, expected, slips, points)])

@@ -179,9 +179,14 @@ def _dt_slips(function: str, state, v: float, omega: float, dt: float) -> list[M
         slips.append(Mistake("fixed dt", "a fixed time step of 0.1 is used: take dt from the argument "
                                          f"(here {fmt(dt)}).", reference(state, v, omega, 0.1)))
     if function == "motion_model":
-        slips.append(Mistake("arc model", "that is the exact constant-turn (arc) motion: the lesson's model is "
-                                          "the Euler step x + v cos(theta) dt, y + v sin(theta) dt, theta + omega dt.",
-                             REF.arc_motion(state, v, omega, dt)))
+        x, y, th = (float(value) for value in np.asarray(state, dtype=float))
+        slips += [Mistake("arc model", "that is the exact constant-turn (arc) motion: the lesson's model is "
+                                       "the Euler step x + v cos(theta) dt, y + v sin(theta) dt, theta + omega dt.",
+                          REF.arc_motion(state, v, omega, dt)),
+                  Mistake("sin and cos swapped", "x moves with sin(theta) and y with cos(theta): the heading is "
+                                                 "measured from the x-axis, so x + v cos(theta) dt, y + v sin(theta) "
+                                                 "dt.", np.array([x + v * np.sin(th) * dt, y + v * np.cos(th) * dt,
+                                                                  th + omega * dt]))]
     return slips
 
 
@@ -229,9 +234,18 @@ def propagate_random_matrices(ctx):
 def _propagate_slips(P, Fm, Q) -> list[Mistake]:
     slips = [Mistake("F^T P F", "your result equals F^T P F: propagation is F P F^T (F on the left).",
                      REF.propagate_covariance(P, np.asarray(Fm).T, Q))]
+    F, noise = np.asarray(Fm, dtype=float), 0.0 if Q is None else np.asarray(Q, dtype=float)
+    slips += [Mistake("F P", "your result is F P: the covariance of F x is F P F^T, F on both sides.",
+                      F @ np.asarray(P, dtype=float) + noise),
+              Mistake("F P F", "your result is F P F: the right factor is F^T, F P F^T.",
+                      F @ np.asarray(P, dtype=float) @ F + noise)]
     if Q is not None:
-        slips.append(Mistake("missing Q", "Q is missing: add the process noise, F P F^T + Q.",
-                             REF.propagate_covariance(P, Fm)))
+        Pf = np.asarray(P, dtype=float)
+        slips += [Mistake("missing Q", "Q is missing: add the process noise, F P F^T + Q.",
+                          REF.propagate_covariance(P, Fm)),
+                  Mistake("Q added twice", "Q is added twice: F P F^T + Q.", F @ Pf @ F.T + 2 * noise),
+                  Mistake("Q inside", "Q is propagated with P, F (P + Q) F^T: it is added after, F P F^T + Q.",
+                          F @ (Pf + noise) @ F.T)]
     return slips
 
 
@@ -304,6 +318,8 @@ BICYCLE_SLIPS = {
     "steer as turn rate": "the steering angle is used as the turn rate: the heading turns at v tan(steer) / wheelbase.",
     "missing wheelbase": "the turn rate is not divided by the wheelbase: a longer car turns more slowly.",
     "steer for tan(steer)": "the turn rate uses steer where the model has tan(steer).",
+    "times the wheelbase": "the turn rate is multiplied by the wheelbase: it is v tan(steer) / wheelbase, so a "
+                           "longer car turns more slowly.",
 }
 CONTROL_SLIPS = {
     "missing 1/cos^2": "d theta'/d steer is missing the derivative of tan: differentiate tan(steer) itself.",

@@ -46,7 +46,7 @@ from grader.judging.compare import (
     passed,
     value_problem,
 )
-from grader.judging.diagnose import Evidence, Mistake, generated, weigh_text
+from grader.judging.diagnose import Evidence, Mistake, generated, known, weigh_text
 from grader.judging.expected import reference
 
 CHECKS = chapter_checks("ch09")
@@ -218,16 +218,35 @@ def hessian_fd_is_symmetric(ctx):
         gap = np.abs(out - out.T)
         if not np.all(np.isfinite(out)) or gap.max() > 0:
             i, j = np.unravel_index(int(np.argmax(gap)), gap.shape)
-            return fail(f"{label} is not exactly symmetric: Hessian[{i},{j}] = {float(out[i, j])!r} but Hessian[{j},{i}] = "
-                        f"{float(out[j, i])!r}. A finite-difference Jacobian of the gradient is only nearly symmetric: "
-                        "return (J + J^T) / 2.", got=out)
+            verdict = fail(f"{label} is not exactly symmetric: Hessian[{i},{j}] = {float(out[i, j])!r} but "
+                           f"Hessian[{j},{i}] = {float(out[j, i])!r}.", got=out)
+            verdict.name(Mistake("not symmetrised", "a finite-difference Jacobian of the gradient is only nearly "
+                                                    "symmetric: return its symmetric part, (J + J^T) / 2."))
+            return verdict
     return passed()
 
 
 # ------------------------------------------------------------------------------ classify_critical_point
 
-def expect_text(returned, expected: str, *, label: str) -> Verdict:
-    """The call must return exactly the string `expected`."""
+CLASSIFY_SLIPS = {
+    "degenerate before saddle": "a zero eigenvalue is tested first: eigenvalues of both signs make a saddle "
+                                "whatever else is zero, so test for both signs before a zero.",
+    "no tolerance": "an eigenvalue is compared with 0 exactly: round-off leaves a zero eigenvalue at about 1e-16, "
+                    "so treat one as zero when its size <= 1e-8 max(1, largest size).",
+    "absolute tolerance": "the tolerance is an absolute 1e-8: it is relative, 1e-8 max(1, largest size), so that "
+                          "a large Hessian's round-off counts as zero too.",
+    "not symmetrised": "the matrix is classified as given: symmetrise it first, (A + A^T)/2; its eigenvalues "
+                       "decide.",
+}
+
+
+def _classify_slips(m: np.ndarray) -> list[Mistake]:
+    return known(REF.classify_mistakes(m), CLASSIFY_SLIPS)
+
+
+def expect_text(returned, expected: str, *, label: str, mistakes: list[Mistake] = ()) -> Verdict:
+    """The call must return exactly the string `expected`; a wrong one is named by the first of `mistakes` (then
+    of the slips generated from the reference) it equals."""
     if not returned.ok:
         return fail(returned.problem(), expected=expected)
     text = returned.text
@@ -236,7 +255,7 @@ def expect_text(returned, expected: str, *, label: str) -> Verdict:
         return fail(f"{label} returned {shown}; expected the string {expected!r}.", expected=expected)
 
     def evidence(only: set[str] | None = None) -> Evidence:
-        return weigh_text(text, expected, generated(returned, only))
+        return weigh_text(text, expected, [*mistakes, *generated(returned, only)])
     if text == expected:
         return Verdict(True, "", expected, text, evidence=evidence)
     hint = ""
@@ -266,9 +285,10 @@ def _classify_label(m: np.ndarray, eigenvalues=None) -> str:
 @CHECKS.check("classify_critical_point", points=1)
 def classify_worked_example(ctx):
     """classify_critical_point(np.array([[2, 1], [1, 0]])) is "saddle" (the Hessian of x^2 + x y)"""
-    want = REF.classify_critical_point(np.array([[2.0, 1.0], [1.0, 0.0]]))
+    example = np.array([[2.0, 1.0], [1.0, 0.0]])
+    want, slips = REF.classify_critical_point(example), _classify_slips(example)
     got = yield call("classify_critical_point", Array([[2, 1], [1, 0]], "int64"))
-    return expect_text(got, want, label="classify_critical_point(np.array([[2, 1], [1, 0]]))")
+    return expect_text(got, want, label="classify_critical_point(np.array([[2, 1], [1, 0]]))", mistakes=slips)
 
 
 @CHECKS.check("classify_critical_point", points=2)
@@ -286,8 +306,10 @@ def classify_all_kinds(ctx):
             ("maximum", [-v for v in spread(2, 20.0, 50.0)], "array")]
     cases = [(eig, with_eigenvalues(rng, eig)) for _, eig, _ in plan]
     expected = [REF.classify_critical_point(m) for _, m in cases]
+    slips = [_classify_slips(m) for _, m in cases]
     got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
-    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, kind, (eig, m) in zip(got, expected, cases)])
+    return all_of([expect_text(g, kind, label=_classify_label(m, eig), mistakes=s)
+                   for g, kind, s, (eig, m) in zip(got, expected, slips, cases)])
 
 
 @CHECKS.check("classify_critical_point", points=1)
@@ -299,8 +321,10 @@ def classify_zero_threshold(ctx):
             ("degenerate", [1e3, -5e-6, 2.0]), ("saddle", [1e3, -3e-5])]
     cases = [(eig, with_eigenvalues(rng, eig)) for _, eig in plan]
     expected = [REF.classify_critical_point(m) for _, m in cases]
+    slips = [_classify_slips(m) for _, m in cases]
     got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
-    return all_of([expect_text(g, kind, label=_classify_label(m, eig)) for g, kind, (eig, m) in zip(got, expected, cases)])
+    return all_of([expect_text(g, kind, label=_classify_label(m, eig), mistakes=s)
+                   for g, kind, s, (eig, m) in zip(got, expected, slips, cases)])
 
 
 @CHECKS.check("classify_critical_point", points=1)
@@ -315,11 +339,12 @@ def classify_symmetrises_its_input(ctx):
              ("maximum", np.array([[-1.0, 2.0], [-2.0, -1.0]])),  # symmetric part -I
              ("degenerate", symmetric + skew)]
     expected = [REF.classify_critical_point(m) for _, m in cases]
+    slips = [_classify_slips(m) for _, m in cases]
     got = yield [call("classify_critical_point", Array(m.tolist())) for _, m in cases]
     verdicts = []
-    for g, kind, (_, m) in zip(got, expected, cases):
+    for g, kind, s, (_, m) in zip(got, expected, slips, cases):
         sym = 0.5 * (m + m.T)
-        v = expect_text(g, kind, label=_classify_label(m))
+        v = expect_text(g, kind, label=_classify_label(m), mistakes=s)
         if not v.passed and g.ok:
             v.message += (f"\n  (the symmetric part (A + A^T)/2 = {_mat(sym)} has eigenvalues "
                           f"{', '.join(f'{e:.3g}' for e in np.linalg.eigvalsh(sym))})")

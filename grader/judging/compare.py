@@ -29,6 +29,7 @@ from grader.judging.diagnose import (
     weigh,
     within,
 )
+from grader.judging.relations import relations, tight
 from grader.numbers import fmt, fmt_array  # noqa: F401  (the checks' messages import them from here)
 
 SHOWN_ENTRIES = 3
@@ -249,8 +250,10 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
 
     def evidence(only: set[str] | None = None) -> Evidence:
         low, high = _tolerance(expected, rtol, atol, exact)
-        candidates = list(mistakes) + (generic(expected, named_entries) if named_entries is not None else []) + \
-            (generated(source, only) if source is not None else [])
+        candidates = [*mistakes, *(generic(expected, named_entries) if named_entries is not None else []),
+                      *(relations(got, expected, named_entries)
+                        if named_entries is not None and tight(expected, low, high) else []),
+                      *(generated(source, only) if source is not None else [])]
         return weigh(got, expected, candidates, low, high)
 
     if got.size <= SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
@@ -324,7 +327,11 @@ def expect_raises(returned: Returned, exception: str, *, label: str, why: str = 
         return Verdict(False, returned.problem())
     value = returned.as_array()
     shown = fmt_array(value) if value is not None else returned.type_name
-    return Verdict(False, f"{label} returned {shown}; expected it to raise {exception}{reason}.", got=value)
+    verdict = Verdict(False, f"{label} returned {shown}; expected it to raise {exception}{reason}.", got=value)
+    verdict.name(Mistake(f"no {exception}", f"check for this input first and raise {exception} there: a value "
+                                            "computed where the function is undefined (NaN, inf or a number) is not "
+                                            "an answer."))
+    return verdict
 
 
 def all_of(verdicts: list[Verdict]) -> Verdict:

@@ -1,12 +1,15 @@
 """Name the mistake: a wrong value compared with the known wrong versions of the right one.
 
 A `Mistake` is one misconception: a stable name, one sentence that says what to change, and the
-value a learner who makes it would return. Three kinds feed a diagnosis, in this order of precedence:
+value a learner who makes it would return. Four kinds feed a diagnosis, in this order of precedence:
 - the mistakes a check knows for its function (F^T P F, a missing dt, a forward difference, ...),
   their values asked of the reference while the check plans, like any expected value;
 - generic transforms of the right answer, which any vector or matrix can suffer (every sign, one
   row's or one column's or one entry's sign, transposed, rows or columns swapped), named with the
   result's own entry names (grader.judging.compare.Entries);
+- the relations between the learner's value and the right one, whatever code gave it (an angle off by whole
+  turns or in degrees in one entry, a constant factor, a square, a reciprocal, rows in another order:
+  grader.judging.relations), weighed by grader.judging.compare;
 - the mistakes generated from the reference (grader.judging.mutants: every single slip of its code), their
   values at the learner's own calls given by grader.judging.expected (live in the project, recorded in a
   handout) through `judging`, while a check judges.
@@ -34,7 +37,8 @@ class Mistake:
     name: str
     help: str
     value: object = None  # what a learner making this mistake returns (None: not known for this case)
-    origin: str = "known"  # "known" (the check's own), "generic" (a transform) or "generated" (grader.judging.mutants)
+    origin: str = "known"  # "known" (the check's own), "generic" (a transform), "relation" (grader.judging.relations)
+    #                        or "generated" (grader.judging.mutants)
     key: str = ""  # what identifies it across a check's inputs, when its name does not (a mutant's key)
 
     @property
@@ -202,8 +206,9 @@ def weigh_text(got: str, right: str, candidates) -> Evidence:
 
 def explain(failing: list[Evidence | None], passing: Iterable[Evidence | None] = ()) -> Mistake | None:
     """The mistake matched at every failing input and ruled out at none (the failing inputs' evidence, then,
-    drawn only if needed, the passing ones'): the first of the check's own or generic ones, else the generated
-    one, if only one generated sentence remains. None if nothing explains every failure."""
+    drawn only if needed, the passing ones'): the first of the check's own, generic ones or relations (a relation
+    only over RELATED_INPUTS failing inputs or more), else the generated one, if only one generated sentence
+    remains. None if nothing explains every failure."""
     if not failing or any(e is None for e in failing):
         return None
     common = [i for i in failing[0].matched if all(i in e.matched for e in failing[1:])]
@@ -217,8 +222,13 @@ def explain(failing: list[Evidence | None], passing: Iterable[Evidence | None] =
                 common = [i for i in common if i not in evidence.ruled_out]
     found = [failing[0].matched[i] for i in common]
     for mistake in found:
+        if mistake.origin == "relation" and len(failing) < RELATED_INPUTS:
+            continue  # one input may meet a relation by chance (r = 4 makes r^2 = 4 r)
         if mistake.origin != "generated":
             return mistake
+    found = [m for m in found if m.origin == "generated"]
+    if not found:
+        return None
     said = {(m.name, m.help) for m in found}
     if len(said) == 1:
         return found[0]
@@ -227,6 +237,8 @@ def explain(failing: list[Evidence | None], passing: Iterable[Evidence | None] =
         return Mistake(found[0].name, OF_A_KIND[found[0].name], None, "generated", f"kind: {found[0].name}")
     return None
 
+
+RELATED_INPUTS = 2  # failing inputs a relation (grader.judging.relations) must explain before it names the mistake
 
 # What slips of one kind (grader.judging.mutants) have in common, said when several such slips explain the values alike.
 OF_A_KIND = {
@@ -313,7 +325,14 @@ def within(values: list[float], reference: list[float], rtol: float, atol: float
 
 
 def shape_mistake(got_shape: tuple, expected_shape: tuple, symbol: str) -> Mistake | None:
-    """The mistake behind a wrong shape with the right number of entries, or None."""
+    """The mistake behind a wrong shape with the right number of entries, or a square matrix of another size; or
+    None."""
+    if len(got_shape) == len(expected_shape) == 2 and got_shape[0] == got_shape[1] and \
+            expected_shape[0] == expected_shape[1] and got_shape != expected_shape:
+        return Mistake("product in the wrong order", f"{symbol} is {got_shape[0]} x {got_shape[0]}, not "
+                                                     f"{expected_shape[0]} x {expected_shape[0]}: a product in the "
+                                                     "wrong order (A^T M A for A M A^T, or H^T H for H H^T) gives the "
+                                                     "other size.")
     if int(np.prod(got_shape)) != int(np.prod(expected_shape)) or got_shape == expected_shape:
         return None
     if len(expected_shape) == 1 and len(got_shape) == 2:

@@ -58,6 +58,11 @@ PRECEDENCE = {ast.Add: 1, ast.Sub: 1, ast.Mult: 2, ast.Div: 2, ast.MatMult: 2, a
 RENDER_LIMIT = 24  # a term longer than this, as the lesson writes it, is not quoted
 
 
+# a plus for a minus or the other way round: which one the learner's form has depends on their parentheses
+# (a - (b + c) slipped as a - b + c has a plus where the value needs a minus), so the sentence says neither
+SIGN = "one sign is wrong: one term enters with the opposite sign (mind the parentheses of a difference)."
+
+
 @dataclass(frozen=True)
 class Mutant:
     """One slip of a reference function: `function` computes what a learner making it returns."""
@@ -299,9 +304,7 @@ def _node_changes(shape: _Shape, node: ast.AST) -> Iterator[Change]:
                 said = f"the term {term} is missing in one place." if term else "a term is missing in one place."
             yield "missing term", said, keep
         other = ast.Sub() if isinstance(node.op, ast.Add) else ast.Add()
-        yield "sign", "one sign is wrong: " + ("a minus where a plus belongs." if isinstance(node.op, ast.Add)
-                                               else "a plus where a minus belongs."), \
-            lambda n, other=other: ast.BinOp(left=n.left, op=other, right=n.right)
+        yield "sign", SIGN, lambda n, other=other: ast.BinOp(left=n.left, op=other, right=n.right)
         if isinstance(node.op, ast.Sub):
             yield "sign", "a difference is taken the wrong way round.", \
                 lambda n: ast.BinOp(left=n.right, op=ast.Sub(), right=n.left)
@@ -330,7 +333,8 @@ def _node_changes(shape: _Shape, node: ast.AST) -> Iterator[Change]:
         norm = _callee(node.right) in NORMS or isinstance(node.right, ast.Name) and \
             _callee(shape.assigned.get(node.right.id, ast.Pass())) in NORMS
         if isinstance(node.op, ast.Div) and norm and shape.role(node)[0] == "whole":
-            yield "not normalised", "your vector is not normalised: divide it by its length.", lambda n: n.left
+            yield "not normalised", "your value is not normalised: divide it by the norm it is measured against (a " \
+                                    "vector by its length).", lambda n: n.left
         elif isinstance(node.op, ast.Div) and _is_two(node.right) is None:
             divisor = render(node.right)
             kind, _ = shape.role(node)

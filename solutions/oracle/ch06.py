@@ -8,10 +8,11 @@ from solutions.ch06_measurement import range_bearing
 
 
 def bearing_mistakes(x, y) -> dict:
-    """range_bearing with atan(y/x) for atan2, measured from the drone to the dish, or in degrees."""
+    """range_bearing with atan(y/x) for atan2 (or atan(y/x) + pi everywhere), measured from the drone to the dish,
+    or in degrees."""
     right = range_bearing(x, y)
     slips = {"atan": np.arctan(y / x) if x != 0 else np.nan, "reversed bearing": np.arctan2(-y, -x),
-             "degrees": np.degrees(right[1])}
+             "degrees": np.degrees(right[1]), "atan plus pi": np.arctan(y / x) + np.pi if x != 0 else np.nan}
     return {name: np.array([right[0], bearing]) for name, bearing in slips.items()}
 
 
@@ -23,6 +24,7 @@ def elevation_mistakes(x, y, z) -> dict:
     right = range_bearing_elevation(x, y, z)
     ground = float(np.hypot(x, y))
     slips = {"colatitude": [right[0], right[1], np.arctan2(ground, z)],
+             "elevation over the 3-D range": [right[0], right[1], np.arctan2(z, right[0])],
              "range without z": [ground, right[1], right[2]],
              "atan": [right[0], np.arctan(y / x) if x != 0 else np.nan, right[2]],
              "degrees": [right[0], np.degrees(right[1]), np.degrees(right[2])]}

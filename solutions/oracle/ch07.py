@@ -14,14 +14,15 @@ def arc_motion(state, v, omega, dt) -> np.ndarray:
 
 
 def bicycle_mistakes(state, v, steer, wheelbase, dt) -> dict:
-    """bicycle_model without dt, with the steering angle taken as a turn rate, without the wheelbase, or with
-    steer for tan(steer)."""
+    """bicycle_model without dt, with the steering angle taken as a turn rate, without the wheelbase or times it,
+    or with steer for tan(steer)."""
     from solutions.ch07_dynamics import bicycle_model
 
     x, y, th = np.asarray(state, dtype=float)
     right = bicycle_model(state, v, steer, wheelbase, dt)
     turned = {"steer as turn rate": th + steer * dt, "missing wheelbase": th + v * np.tan(steer) * dt,
-              "steer for tan(steer)": th + v * steer / wheelbase * dt}
+              "steer for tan(steer)": th + v * steer / wheelbase * dt,
+              "times the wheelbase": th + v * np.tan(steer) * wheelbase * dt}
     slips = {name: np.array([right[0], right[1], heading]) for name, heading in turned.items()}
     slips["missing dt"] = bicycle_model(state, v, steer, wheelbase, 1.0)
     return slips

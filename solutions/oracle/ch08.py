@@ -45,7 +45,8 @@ def cloud(mean, sigma: float, n: int, seed: int) -> np.ndarray:
 
 
 def ekf_mistakes(x, P, z, R) -> dict:
-    """(x_new, P_new) of the usual EKF slips: the bearing innovation not wrapped, R left out of S."""
+    """(x_new, P_new) of the usual EKF slips: the bearing innovation not wrapped or wrapped into [0, 2 pi), R left
+    out of S or squared in it (a variance taken for a standard deviation)."""
     from solutions.ch06_measurement import H_jacobian
 
     x, P, z, R = (np.asarray(a, dtype=float) for a in (x, P, z, R))
@@ -59,9 +60,13 @@ def ekf_mistakes(x, P, z, R) -> dict:
     raw = z - range_bearing(x[0], x[1])
     wrapped = raw.copy()
     wrapped[1] = (wrapped[1] + np.pi) % (2 * np.pi) - np.pi
+    one_turn = raw.copy()
+    one_turn[1] = one_turn[1] % (2 * np.pi)
     K_no_R = np.linalg.solve(H @ P @ H.T, H @ P).T
     return {"innovation not wrapped": update(raw, H @ P @ H.T + R),
-            "R missing": (x + K_no_R @ wrapped, (np.eye(2) - K_no_R @ H) @ P)}
+            "innovation wrapped into [0, 2 pi)": update(one_turn, H @ P @ H.T + R),
+            "R missing": (x + K_no_R @ wrapped, (np.eye(2) - K_no_R @ H) @ P),
+            "R as a standard deviation": update(wrapped, H @ P @ H.T + R @ R)}
 
 
 __all__ = ["cloud", "ekf_mistakes", "mismatch_distribution", "range_bearing", "raw_bearings"]

@@ -88,5 +88,28 @@ def hessian_fd_of(name: str, point, h: float) -> np.ndarray:
     return hessian_fd(CALLABLES[name], np.asarray(point, dtype=float), h)
 
 
-__all__ = ["classify_critical_point", "gradient_fd_of", "gradient_of", "gradient_of_example_f", "hessian_fd_of",
+def _classified(eigenvalues, tolerance: float) -> str:
+    positive, negative = bool(np.any(eigenvalues > tolerance)), bool(np.any(eigenvalues < -tolerance))
+    if positive and negative:
+        return "saddle"
+    if np.any(np.abs(eigenvalues) <= tolerance):
+        return "degenerate"
+    return "minimum" if positive else "maximum"
+
+
+def classify_mistakes(hessian) -> dict:
+    """classify_critical_point's answer with a zero eigenvalue tested before both signs, with no tolerance
+    (eigenvalues compared with 0 exactly), with an absolute 1e-8, or without symmetrising (np.linalg.eigvals of the
+    matrix as given, real parts)."""
+    A = np.asarray(hessian, dtype=float)
+    symmetric = np.linalg.eigvalsh(0.5 * (A + A.T))
+    as_given = np.real(np.linalg.eigvals(A))
+    tolerance = 1e-8 * max(1.0, float(np.max(np.abs(symmetric))))
+    zero_first = "degenerate" if np.any(np.abs(symmetric) <= tolerance) else _classified(symmetric, tolerance)
+    return {"degenerate before saddle": zero_first,
+            "no tolerance": _classified(symmetric, 0.0), "absolute tolerance": _classified(symmetric, 1e-8),
+            "not symmetrised": _classified(as_given, 1e-8 * max(1.0, float(np.max(np.abs(as_given)))))}
+
+
+__all__ = ["classify_critical_point", "classify_mistakes", "gradient_fd_of", "gradient_of", "gradient_of_example_f", "hessian_fd_of",
            "hessian_of", "hessian_tolerance"]

@@ -34,7 +34,8 @@ SLIPS = {
     "area_scale returning r^2": ("ch03_jacobian", "area_scale", """
         def area_scale(r, theta):
             return float(r) ** 2
-        """, "area_scale_is_r", "your value is the square of the right one: a power one too high."),
+        """, "area_scale_is_r", "your result is the right value squared: a power one too high (or a variance where a "
+                                "standard deviation belongs)."),
     "the tangent plane without f(a)": ("ch02_gradient", "tangent_plane", """
         def tangent_plane(f, grad, a, x):
             a, x = np.asarray(a, dtype=float), np.asarray(x, dtype=float)
@@ -43,7 +44,8 @@ SLIPS = {
     "a central difference over h": ("ch05_finite_differences", "central_difference", """
         def central_difference(f, x, h):
             return (f(x + h) - f(x - h)) / h
-        """, "central_difference_random_inputs", "your value is a factor of 2 too large."),
+        """, "central_difference_random_inputs", "your quotient is twice the right value: a factor 2 too many (or a "
+                                                 "division by 2 missing)."),
     "the mean Jacobian error": ("ch05_finite_differences", "max_jacobian_error", """
         def max_jacobian_error(jac, f, x, h=1e-5):
             x = np.asarray(x, dtype=float)
@@ -79,7 +81,8 @@ SLIPS = {
             if gx == 0 and gy == 0:
                 raise ValueError("no direction at the origin")
             return np.array([gy, -gx])
-        """, "contour_direction_is_unit_and_perpendicular", "your vector is not normalised: divide it by its length."),
+        """, "contour_direction_is_unit_and_perpendicular", "your value is not normalised: divide it by the norm it is "
+                                                            "measured against (a vector by its length)."),
     "gradient_fd with a halved step (statsmodels' form)": ("ch09_choose_your_tool", "gradient_fd", """
         def gradient_fd(f, x, h=1e-5):
             x = np.asarray(x, dtype=float)
@@ -240,8 +243,8 @@ def test_the_help_is_a_field_of_its_own_in_every_output():
 # Slips of the sampling functions that change the draw but not its distribution: graded statistically (the
 # contract), they are right answers, not weak inputs. (chapter, function, kind, sentence)
 SAME_DISTRIBUTION = {
-    ("ch00", "mean_shift", "sign", "one sign is wrong: a minus where a plus belongs."),  # mean - sigma N(0, 1)
-    ("ch08", "sample_positions", "sign", "one sign is wrong: a minus where a plus belongs."),
+    ("ch00", "mean_shift", "sign", mutants.SIGN),  # mean - sigma N(0, 1)
+    ("ch08", "sample_positions", "sign", mutants.SIGN),
     ("ch08", "linearization_mismatch", "arguments swapped",  # the cloud mirrored in x = y: the same mismatch
      "x and y are swapped: the arguments are (x, y, sigma, n, seed)."),
 }
