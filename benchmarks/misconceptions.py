@@ -14,8 +14,16 @@ a right answer (there must be none).
   equal at every input), or a check's own or generic entry (they take precedence). Target: at least 90%
   named, and no diagnosis on any right submission (the references at several seeds, and the submission
   written from the contract alone, tests/fixtures/contract_submission).
+- The realistic corpus (benchmarks/realistic_slips.py), written by hand from the contract and from the mistakes
+  learners of such courses make, independently of both the catalogue and the mutator: SLIPS, one wrong function
+  each with the words a good grader would say, and RIGHT, right functions written otherwise. Each is written
+  into the reference solutions and its chapter graded through the normal pipeline. Printed per slip: caught
+  (some check of its function loses points), named (a losing check of its function offers a diagnosis) and
+  the diagnosis beside the expected words: whether it is the right one is for a reader to judge; then the
+  totals, the collateral failures (checks of other functions) and, for RIGHT, full marks and the diagnoses
+  offered (there must be none).
 
-    python benchmarks/misconceptions.py [--corpus catalogue|generated|all] [--chapter ch05 ...] [--verbose]
+    python benchmarks/misconceptions.py [--corpus catalogue|generated|realistic|all] [--chapter ch05 ...] [--verbose]
 """
 
 from __future__ import annotations
@@ -675,7 +683,7 @@ def equivalent(chapter: str, function: str, mutant, calls: dict, copies: int = 3
     return not mutants.told_apart(chapter, mutant, probes)
 
 
-def run_generated(chapters: list[str], verbose: bool) -> None:
+def run_generated(chapters: list[str], verbose: bool) -> tuple[int, int]:
     from collections import Counter
 
     from grader.judging import mutants
@@ -735,6 +743,7 @@ def run_generated(chapters: list[str], verbose: bool) -> None:
                   f"{mutant.key:28} {mutant.name:18} {mutant.help[:70]!r}")
     print(f"diagnoses offered on right submissions (the references at {len(RIGHT_SEEDS)} seeds, the contract's "
           f"submission at 2): {len(offered)}" + (f" {offered}" if offered else ""))
+    return named, told
 
 
 def run_catalogue(verbose: bool) -> None:
@@ -772,16 +781,104 @@ def run_catalogue(verbose: bool) -> None:
           f"{len(quiz_offered)}" + (f" {quiz_offered}" if quiz_offered else ""))
 
 
+def _first_line(text: str) -> str:
+    """A message's first line, with the next one when it ends with a colon (`wrong at 6 of 6 inputs; the first:`)."""
+    lines = [line.strip() for line in str(text).splitlines() if line.strip()]
+    if len(lines) > 1 and lines[0].endswith(":"):
+        return f"{lines[0]} {lines[1]}"
+    return lines[0] if lines else ""
+
+
+def run_realistic(verbose: bool) -> tuple[int, int, int]:
+    """The hand-written corpus (benchmarks/realistic_slips.py): (named, caught, slips)."""
+    from benchmarks.realistic_slips import RIGHT, SLIPS
+
+    def lost(checks) -> list:
+        return [c for c in checks if c.points < c.max_points]
+
+    caught = named = 0
+    collateral, missed = [], []
+    by_chapter: dict[str, list[int]] = {}  # chapter -> [slips, caught, named]
+    with tempfile.TemporaryDirectory() as folder:
+        print(f"{'verdict':10} {'slip':44} what the learner did / the diagnosis given")
+        for i, (label, (module, function, source, wanted)) in enumerate(SLIPS.items()):
+            root = build_submission(Path(folder) / f"slip{i}", {module: replace_function(module, function, source)})
+            chapter = module[:4]
+            checks = grade_one(root, chapter).checks
+            losing = lost([c for c in checks if c.function == function])
+            others = lost([c for c in checks if c.function != function])
+            said = list(dict.fromkeys((c.mistake, c.help) for c in losing if c.mistake))
+            caught += bool(losing)
+            named += bool(said)
+            collateral += [(label, c.id, function in c.upstream) for c in others]
+            counts = by_chapter.setdefault(chapter, [0, 0, 0])
+            counts[0] += 1
+            counts[1] += bool(losing)
+            counts[2] += bool(said)
+            verdict = "named" if said else "unnamed" if losing else "NOT CAUGHT"
+            if not losing:
+                missed.append(label)
+            print(f"{verdict:10} {chapter} {label:39} expected: {wanted}")
+            for name, help_ in said:
+                print(f"{'':16} got {name!r}: {help_}")
+            if losing and (verbose or not said):
+                for c in losing:
+                    print(f"{'':16} [{c.points:g}/{c.max_points:g}] {c.id}: {_first_line(c.message)!r}"
+                          + (f" ({c.mistake})" if c.mistake else ""))
+            for c in others:
+                print(f"{'':16} collateral: {c.id} ({c.function}) lost points too"
+                      + (f", pointed to {function} (it calls it)" if function in c.upstream else ""))
+        full = 0
+        offered = []
+        for i, (label, (module, function, source)) in enumerate(RIGHT.items()):
+            root = build_submission(Path(folder) / f"right{i}", {module: replace_function(module, function, source)})
+            chapter = module[:4]
+            checks = grade_one(root, chapter).checks
+            losing = lost(checks)
+            given = [(c.id, c.mistake, c.help) for c in checks if c.mistake or c.help]
+            full += not losing
+            offered += [(label, *g) for g in given]
+            if verbose or losing or given:
+                print(f"{'full' if not losing else 'LOST':10} {chapter} right: {label}")
+            for c in losing:
+                print(f"{'':16} [{c.points:g}/{c.max_points:g}] {c.id}: {_first_line(c.message)!r}")
+            for check, name, help_ in given:
+                print(f"{'':16} diagnosis offered on {check}: {name!r}: {help_}")
+    n = len(SLIPS)
+    print(f"\nrealistic corpus: {n} hand-written slips; caught {caught}/{n} ({caught / n:.0%}), named {named}/{n} "
+          f"({named / n:.0%}; of the caught: {named}/{caught}, {named / max(caught, 1):.0%}); whether each name is "
+          "the right one is for the reader to judge from the table")
+    print(f"{'chapter':8} {'slips':>5} {'caught':>6} {'named':>6}")
+    for chapter, (total, told, said) in sorted(by_chapter.items()):
+        print(f"{chapter:8} {total:5} {told:6} {said:6}")
+    print(f"not caught: {len(missed)}" + (f" {missed}" if missed else ""))
+    unexplained = [(label, check) for label, check, upstream in collateral if not upstream]
+    print(f"collateral: {len(collateral)} checks of other functions lost points, in "
+          f"{len({label for label, _, _ in collateral})} slips; {len(collateral) - len(unexplained)} of them are "
+          f"pointed to the slipped function (their function calls it), {len(unexplained)} are not"
+          + (f" {unexplained}" if unexplained else ""))
+    print(f"right rewrites: full marks {full}/{len(RIGHT)}; diagnoses offered {len(offered)} (must be 0)"
+          + (f" {offered}" if offered else ""))
+    return named, caught, n
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--corpus", choices=("catalogue", "generated", "all"), default="all")
+    parser.add_argument("--corpus", choices=("catalogue", "generated", "realistic", "all"), default="all")
     parser.add_argument("--chapter", action="append", help="the generated corpus of these chapters only")
     parser.add_argument("--verbose", action="store_true")
     args = parser.parse_args()
     if args.corpus in ("catalogue", "all"):
         run_catalogue(args.verbose)
     if args.corpus in ("generated", "all"):
-        run_generated(args.chapter or [f"ch0{i}" for i in range(10)], args.verbose)
+        generated = run_generated(args.chapter or [f"ch0{i}" for i in range(10)], args.verbose)
+    if args.corpus in ("realistic", "all"):
+        realistic = run_realistic(args.verbose)
+    if args.corpus == "all":
+        (g_named, g_told), (r_named, r_caught, r_all) = generated, realistic
+        print(f"\nnamed: generated corpus {g_named}/{g_told} of the told ({g_named / max(g_told, 1):.1%}); "
+              f"realistic corpus {r_named}/{r_caught} of the caught ({r_named / max(r_caught, 1):.1%}), "
+              f"{r_named}/{r_all} of all its slips ({r_named / max(r_all, 1):.1%})")
 
 
 if __name__ == "__main__":
