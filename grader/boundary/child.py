@@ -220,7 +220,8 @@ class _Watch:
     (numpy's, the grader's, a learner's function of another name) turned off for good the first time it starts: a
     loop costs nothing after its first round, and an unwatched call nothing but its helpers' entries. Before 3.12: a
     profile function during a watched call only, removed as soon as every one of `names` was entered; until then
-    each Python function's entry and each C call costs it one comparison."""
+    each Python function's entry and each C call costs a call of it (a numpy-heavy call that never reaches its
+    helper runs about 1.4 times as long)."""
 
     TOOL = 4  # a sys.monitoring tool id of no standard tool's (0, 1, 2 and 5: debuggers, coverage, profilers, optimizers)
 

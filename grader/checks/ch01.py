@@ -189,6 +189,7 @@ def taylor_error_estimate_random_inputs(ctx):
     return all_of([expect(g, want, rtol=1e-9, atol=1e-12, mistakes=[
         Mistake("missing 0.5", "the estimate is 0.5 |f''(a)| delta^2: the factor 0.5 is missing.", 2 * want),
         Mistake("delta not squared", "delta is not squared: the estimate is 0.5 |f''(a)| delta^2.", want / abs(delta)),
+        Mistake("delta not squared", "delta is not squared: the estimate is 0.5 |f''(a)| delta^2.", want / delta),
         Mistake("f'' at a + delta", "f'' is taken at a + delta: the estimate uses the curvature at a, "
                                     "0.5 |f''(a)| delta^2.",
                 0.5 * abs(float(CALLABLES[FUNCTIONS[fn][2]](a + delta))) * delta * delta)],

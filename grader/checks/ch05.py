@@ -353,6 +353,10 @@ def max_jacobian_error_wrong_jacobian(ctx):
 
 # ------------------------------------------------------------------------------ best_step
 
+ERROR_FOR_STEP = Mistake("the error for the step", "that is an error of the central difference: return the step h "
+                                                   "in hs that gives the smallest one.")
+
+
 def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
     """The returned h must be one of hs, its error within BEST_STEP_FACTOR of the smallest
     (errors_and_floor: REF.best_step_errors)."""
@@ -387,8 +391,7 @@ def _best_step_verdict(returned, errors_and_floor: tuple, hs: list, label: str):
         verdict = Verdict(False, f"{label} returned {fmt(h)}, which is not one of the steps in hs.", got=h,
                           evidence=evidence)
         if any(abs(h - e) <= 1e-9 * abs(e) for e in errors):
-            verdict.name(Mistake("the error for the step", "that is an error of the central difference: return the "
-                                                           "step h in hs that gives the smallest one."))
+            verdict.also(lambda only: Evidence({ERROR_FOR_STEP.id: ERROR_FOR_STEP}))
     elif acceptable(h):
         return Verdict(True, "", got=h, evidence=evidence)
     else:

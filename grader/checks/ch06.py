@@ -37,7 +37,7 @@ REF = reference("ch06")
 
 Z = Entries("z", rows=("range", "bearing"))
 H = Entries("H", rows=("range", "bearing"), cols=("x", "y"), derivative=True)
-R = Entries("R", rows=("range", "bearing"), cols=("range", "bearing"))
+R = Entries("R", rows=("range", "bearing"), cols=("range", "bearing"), product=True)
 
 
 QUADRANTS = ((1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))

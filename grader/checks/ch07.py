@@ -58,7 +58,7 @@ TRANSPOSE_GAP = 0.1
 
 def _cov_entries(n: int) -> Entries:
     names = STATE if n == 3 else tuple(f"s{i}" for i in range(n))
-    return Entries("P'", rows=names, cols=names)
+    return Entries("P'", rows=names, cols=names, product=True)
 
 
 def _state(rng: np.random.Generator) -> np.ndarray:

@@ -60,7 +60,7 @@ SPREAD = 6.0
 SIMULATED_CLOUDS = 20  # clouds simulated for each case of the mismatch statistic (solutions/oracle/ch08.py)
 SYMMETRY = SINGLE_PRECISION  # relative to P: float32 round-off (jax, torch) is no asymmetry
 MEAS = ("range", "bearing")
-S_LIN = Entries("S_lin", rows=MEAS, cols=MEAS)
+S_LIN = Entries("S_lin", rows=MEAS, cols=MEAS, product=True)
 S_COV = Entries("S", rows=("column 0", "column 1"), cols=("column 0", "column 1"))
 X_NEW = Entries("x_new", rows=("x", "y"))
 P_NEW = Entries("P_new", rows=("x", "y"), cols=("x", "y"))
@@ -228,6 +228,7 @@ def linearized_cov_random_points(ctx):
 
 # ------------------------------------------------------------------------------ sample_covariance
 
+UNCENTRED = "the mean is not subtracted: a covariance is made of the samples' deviations from their mean."
 ROWS_AS_VARIABLES = Mistake("rows as variables", "np.cov takes each row as a variable: the columns are the "
                                                   "variables here, so pass z.T (or rowvar=False).")
 
@@ -256,10 +257,8 @@ def sample_covariance_matches_np_cov(ctx):
         verdicts.append(expect(g, want, label=label, rtol=RTOL, atol=ATOL, entries=S_COV, mistakes=[
             Mistake("n, not n - 1", f"that is the biased covariance: divide by n - 1 = {n - 1}, not by n = {n}.",
                     want * (n - 1) / n),
-            Mistake("mean not subtracted", "the mean is not subtracted: the covariance is the mean product of the "
-                                           "deviations from the mean, (z - mean)^T (z - mean) / (n - 1).", raw / (n - 1)),
-            Mistake("mean not subtracted", "the mean is not subtracted: the covariance is the mean product of the "
-                                           "deviations from the mean, (z - mean)^T (z - mean) / (n - 1).", raw / n),
+            Mistake("mean not subtracted", UNCENTRED, raw / (n - 1)),
+            Mistake("mean not subtracted", UNCENTRED, raw / n),
             Mistake(ROWS_AS_VARIABLES.name, ROWS_AS_VARIABLES.help, np.cov(z))]))
     return all_of(verdicts)
 
@@ -370,7 +369,7 @@ EKF_SLIPS = {"innovation not wrapped": "the bearing innovation z - h(x) is not w
                                        "before it multiplies the gain.",
              "innovation wrapped into [0, 2 pi)": "the bearing innovation is wrapped with % (2 pi), into [0, 2 pi): "
                                                   "a small negative residual becomes almost a whole turn; wrap it "
-                                                  "into [-pi, pi), (nu + pi) % (2 pi) - pi.",
+                                                  "into [-pi, pi).",
              "R missing": "R is missing from the innovation covariance: S = H P H^T + R.",
              "R as a standard deviation": "R is squared in the innovation covariance: R already holds variances "
                                           "(sigma^2), so S = H P H^T + R."}

@@ -21,6 +21,7 @@ STANDARD_ERRORS = 5.0
 UNIFORM_KURTOSIS = -0.8  # excess kurtosis: a normal cloud's is 0 (within 0.4 at n = 4000), a uniform one's -1.2
 
 DRAWS = {
+    "no spread": "every sample is the same point: draw each one, mean + sigma * rng.standard_normal((n, 2)).",
     "variance as the scale": "the draws spread by sigma^2, not sigma: the standard deviation multiplies "
                              "rng.standard_normal, mean + sigma * rng.standard_normal((n, 2)).",
     "square root of sigma as the scale": "the draws spread by sqrt(sigma), not sigma: sigma is already the "
@@ -59,7 +60,9 @@ def _holds(value: np.ndarray, want: float, error: float) -> bool:
 
 def draws_mistake(clouds: list[tuple[np.ndarray, np.ndarray, float]]) -> Mistake | None:
     """The mistake every cloud (samples, mean, sigma) of N(mean, sigma^2 I) draws shows alike by its moments and
-    shape, or None: each test within STANDARD_ERRORS of what that mistake gives, on both coordinates."""
+    shape, or None: a spread or a mean within STANDARD_ERRORS of what that mistake gives, an excess kurtosis below
+    UNIFORM_KURTOSIS (uniform), a correlation above 0.999 (one draw for both), no spread at all; on both
+    coordinates."""
     def shows(name: str, samples: np.ndarray, mean: np.ndarray, sigma: float) -> bool:
         n = len(samples)
         spread = samples.std(axis=0, ddof=1)
@@ -68,8 +71,12 @@ def draws_mistake(clouds: list[tuple[np.ndarray, np.ndarray, float]]) -> Mistake
             return _holds(spread, sigma * sigma, sigma * sigma / np.sqrt(2 * n)) and abs(sigma - 1) > 0.2
         if name == "square root of sigma as the scale":
             return _holds(spread, np.sqrt(sigma), np.sqrt(sigma) / np.sqrt(2 * n)) and abs(sigma - 1) > 0.2
+        if name == "no spread":
+            return bool(np.all(spread == 0))
         if name == "uniform draws":
-            centred = (samples - centre) / np.where(spread > 0, spread, 1.0)
+            if not np.all(spread > 0):
+                return False
+            centred = (samples - centre) / spread
             return bool(np.all((centred ** 4).mean(axis=0) - 3.0 < UNIFORM_KURTOSIS))
         if name == "mean left out":
             return (_holds(centre, 0.0, spread.max() / np.sqrt(n)) and bool(np.any(np.abs(mean) > 0.5))

@@ -100,6 +100,7 @@ class Entries:
     rows: tuple[str, ...] = ()
     cols: tuple[str, ...] = ()
     derivative: bool = False
+    product: bool = False  # a product A M A^T (a covariance carried through A): another square size is its order
 
     def name(self, index: tuple[int, ...]) -> str:
         if len(index) == 0:
@@ -201,8 +202,8 @@ def expect(returned: Returned, expected: object, *, label: str | Label, rtol: fl
            atol: float = 1e-9, entries: Entries | None = None, mistakes: tuple | list = (),
            exact: bool = False) -> Verdict:
     """Compare a learner's returned value with the expected number or array (see compare_arrays); a
-    wrong value is named by the first of `mistakes` (then of the generic slips, then of the slips generated
-    from the reference at this very call) it matches."""
+    wrong value is named by the first of `mistakes` (then of the generic slips, the relations, then the slips
+    generated from the reference at this very call) it matches."""
     expected = np.asarray(expected, dtype=np.float64)
     symbol = (entries or Entries("result")).symbol
     problem = value_problem(returned, expected.shape, label, symbol, with_help=False)
@@ -210,7 +211,8 @@ def expect(returned: Returned, expected: object, *, label: str | Label, rtol: fl
         got = returned.as_array() if returned.ok else None
         verdict = Verdict(False, problem, expected=expected,
                           details={"traceback": returned.traceback} if returned.traceback else {})
-        verdict.name(shape_mistake(got.shape, expected.shape, symbol) if got is not None else None)
+        verdict.name(shape_mistake(got.shape, expected.shape, symbol, bool(entries and entries.product))
+                     if got is not None else None)
         return verdict
     return compare_arrays(returned.as_array(), expected, label=label, rtol=rtol, atol=atol, entries=entries,
                           mistakes=mistakes, exact=exact, source=returned)

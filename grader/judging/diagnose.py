@@ -324,10 +324,10 @@ def within(values: list[float], reference: list[float], rtol: float, atol: float
     return all(abs(v - r) <= atol + rtol * abs(r) for v, r in zip(values, reference))
 
 
-def shape_mistake(got_shape: tuple, expected_shape: tuple, symbol: str) -> Mistake | None:
-    """The mistake behind a wrong shape with the right number of entries, or a square matrix of another size; or
-    None."""
-    if len(got_shape) == len(expected_shape) == 2 and got_shape[0] == got_shape[1] and \
+def shape_mistake(got_shape: tuple, expected_shape: tuple, symbol: str, product: bool = False) -> Mistake | None:
+    """The mistake behind a wrong shape with the right number of entries, or (a `product` A M A^T) a square matrix
+    of another size; or None."""
+    if product and len(got_shape) == len(expected_shape) == 2 and got_shape[0] == got_shape[1] and \
             expected_shape[0] == expected_shape[1] and got_shape != expected_shape:
         return Mistake("product in the wrong order", f"{symbol} is {got_shape[0]} x {got_shape[0]}, not "
                                                      f"{expected_shape[0]} x {expected_shape[0]}: a product in the "

@@ -36,6 +36,8 @@ def _entry(entries, index: int, matrix: bool) -> str:
     if not matrix:
         return entries.name((index,))
     name = entries.cols[index] if index < len(entries.cols) else ""
+    if name and entries.derivative:
+        name = f"d/d {name}"
     return f"column {index}" + (f" ({name})" if name else "") + f" of {entries.symbol}"
 
 
@@ -64,13 +66,12 @@ def whole_turns(got: np.ndarray, expected: np.ndarray, entries) -> list[Mistake]
         what = entries.symbol if index is None else _entry(entries, index, column)
         out.append(Mistake("whole turn", f"{what} is off by a whole turn (2 pi) at the inputs where it is wrong: "
                                          "the angle is right, but not brought into the range the function asks "
-                                         "for (a bearing from np.arctan2 is already in [-pi, pi]).", value,
-                           "relation"))
+                                         "for.", value, "relation"))
     return out
 
 
 def degrees(expected: np.ndarray, entries) -> list[Mistake]:
-    """Each entry (column) in degrees where the rest is right; each in radians where degrees were due."""
+    """Each entry (column) in degrees where the rest is right."""
     out = []
     parts = _parts(expected)
     if len(parts) < 2:
@@ -101,8 +102,10 @@ def scaled(expected: np.ndarray, entries) -> list[Mistake]:
                                               "low (or a standard deviation where a variance belongs).",
                                np.sqrt(expected), "relation"))
         if np.all(expected != 0):
+            with np.errstate(all="ignore"):
+                inverted = 1.0 / expected
             out.append(Mistake("reciprocal", f"your {symbol} is the reciprocal of the right value: a ratio is upside "
-                                             "down.", 1.0 / expected, "relation"))
+                                             "down.", inverted, "relation"))
     return out
 
 
@@ -135,29 +138,33 @@ def within_a_line(expected: np.ndarray, entries) -> list[Mistake]:
     if expected.ndim != 2 or expected.size > LISTED * LISTED:
         return out
     rows, cols = expected.shape
+    jacobian = entries.derivative
     if cols == 2:
         for i in range(rows):
             if expected[i, 0] != expected[i, 1]:
                 value = expected.copy()
                 value[i] = expected[i, ::-1]
                 out.append(Mistake("row's entries swapped", f"the two entries of {_row(entries, i)} of "
-                                                            f"{entries.symbol} are swapped: column j is the derivative "
-                                                            f"by input j.", value, "relation"))
+                                                            f"{entries.symbol} are swapped" +
+                                   (": column j is the derivative by input j." if jacobian else "."), value,
+                                   "relation"))
     if rows == 2:
         for j in range(cols):
             if expected[0, j] != expected[1, j]:
                 value = expected.copy()
                 value[:, j] = expected[::-1, j]
                 out.append(Mistake("column's entries swapped", f"the two entries of {_entry(entries, j, True)} are "
-                                                               "swapped: row i is output i.", value, "relation"))
+                                                               "swapped" + (": row i is output i." if jacobian else "."),
+                                   value, "relation"))
     for i in range(rows):
         for j in range(cols):
             if expected[i, j] != 0:
                 value = expected.copy()
                 value[i, j] = 0.0
-                out.append(Mistake("entry left out", f"{entries.name((i, j))} is 0: that derivative is missing.",
-                                   value, "relation"))
-    if rows == cols:
+                out.append(Mistake("entry left out", f"{entries.name((i, j))} is 0: " +
+                                   ("that derivative is missing." if jacobian else "that term is missing."), value,
+                                   "relation"))
+    if rows == cols and jacobian:
         out.append(Mistake("identity left out", f"your {entries.symbol} is the right one minus the identity: the "
                                                 "map keeps its input and adds a change (x + ...), so its Jacobian "
                                                 "starts from I.", expected - np.eye(rows), "relation"))
@@ -171,9 +178,11 @@ def proportional(got: np.ndarray, expected: np.ndarray, entries) -> list[Mistake
     out = []
 
     def factor(part_got: np.ndarray, part_expected: np.ndarray) -> float | None:
-        if np.count_nonzero(part_expected) < 2 or not np.all(np.isfinite(part_got)):
+        if np.count_nonzero(part_expected) < 2 or not (np.all(np.isfinite(part_got))
+                                                       and np.all(np.isfinite(part_expected))):
             return None
-        c = float(part_got.ravel() @ part_expected.ravel() / (part_expected.ravel() @ part_expected.ravel()))
+        with np.errstate(all="ignore"):
+            c = float(part_got.ravel() @ part_expected.ravel() / (part_expected.ravel() @ part_expected.ravel()))
         return c if math.isfinite(c) and abs(abs(c) - 1.0) > 1e-6 and c != 0.0 else None
 
     def scaled_where(where, c: float) -> np.ndarray:

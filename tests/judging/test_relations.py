@@ -72,10 +72,17 @@ def test_rows_of_a_three_by_three_jacobian_in_another_order():
 
 @pytest.mark.parametrize(("transform", "name"), [
     (lambda v: 2 * v, "factor 2"), (lambda v: v / 2, "factor 0.5"), (lambda v: v * v, "squared"),
-    (np.sqrt, "square root"), (lambda v: 1 / v, "reciprocal"), (lambda v: v - np.eye(2), "identity left out")])
+    (np.sqrt, "square root"), (lambda v: 1 / v, "reciprocal")])
 def test_a_scaled_value_is_named_by_its_relation(transform, name):
     pairs = [(transform(m), m) for m in (np.array([[0.04, 0.3], [0.3, 2.5]]), np.array([[1.7, 0.2], [0.2, 0.9]]))]
     assert _named(pairs, Entries("S")).name == name
+
+
+def test_the_identity_left_out_is_said_of_a_jacobian_only():
+    """F - I for F is the increment's Jacobian; the same difference in a covariance is no such mistake."""
+    pairs = [(m - np.eye(2), m) for m in (np.array([[1.0, 0.3], [0.0, 1.0]]), np.array([[1.0, -0.7], [0.0, 1.0]]))]
+    assert _named(pairs, Entries("F", rows=("x'", "y'"), cols=("x", "y"), derivative=True)).name == "identity left out"
+    assert _named(pairs, Entries("S")) is None or _named(pairs, Entries("S")).name != "identity left out"
 
 
 def test_no_relation_in_a_statistical_band():
