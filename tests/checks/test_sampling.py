@@ -53,3 +53,9 @@ def test_right_draws_show_no_mistake():
         clouds.append((mean + sigma * rng.standard_normal((4000, 2)), mean, sigma))
     assert draws_mistake(clouds) is None
     assert draws_mistake([(m + s * rng.uniform(-1, 1, (4000, 2)), m, s) for _, m, s in clouds]).name == "uniform draws"
+
+
+def test_a_cloud_without_spread_is_no_uniform_draw():
+    mean = np.array([3.0, -1.0])
+    clouds = [(np.tile(mean, (4000, 1)), mean, sigma) for sigma in (0.4, 1.7)]
+    assert draws_mistake(clouds).name == "no spread"
