@@ -200,12 +200,16 @@ def without_outputs(data: bytes) -> bytes:
 
 
 _FRAME = re.compile(r'^(\s*File ")([^"]+)(", line )(\d+)', re.M)
+_FRAME_NAME = re.compile(r'^\s*File "([^"]+)", line (\d+), in (.+)$', re.M)
 
 
 def relocate(error: dict | None, sources: dict[str, ModuleSource]) -> None:
     """Point an error description from the child (grader.boundary.wire.clean_error) at notebook cells: every
     traceback frame in a module made from cells names the notebook and "cell N, line M", and
-    error["where"] says where the innermost frame of the learner's files is. In place."""
+    error["where"] says where the innermost frame of the learner's files is. Where the outermost frame is the
+    top level of a module made from cells and the error happened further in (a function defined in another
+    cell, a module it imports), error["statement"] says where that top-level statement is and error["inside"]
+    where the error happened ("boom, cell 2, line 3"): the cell to fix may be either. In place."""
     if not error or not sources:
         return
     trace = error.get("traceback") or ""
@@ -215,6 +219,15 @@ def relocate(error: dict | None, sources: dict[str, ModuleSource]) -> None:
     if innermost is not None and innermost.group(2) in sources:
         source = sources[innermost.group(2)]
         error["where"] = f"{source.shown}, {source.where(int(innermost.group(4)))}"
+    frames = [(m.group(1), int(m.group(2)), m.group(3).strip()) for m in _FRAME_NAME.finditer(trace)]
+    if len(frames) > 1 and frames[0][0] in sources and frames[0][2] == "<module>":
+        (outer_file, outer_line, _), (file, line, name) = frames[0], frames[-1]
+        outer = sources[outer_file]
+        error["statement"] = f"{outer.shown}, {outer.where(outer_line)}"
+        inner = sources.get(file)
+        at = inner.where(line) if file == outer_file else f"{inner.shown}, {inner.where(line)}" if inner else \
+            f"{file}, line {line}"
+        error["inside"] = at if name == "<module>" else f"{name}, {at}"
 
     def frame(match: re.Match) -> str:
         source = sources.get(match.group(2))

@@ -235,6 +235,38 @@ def decode_saved_text(data: bytes) -> tuple[str, str]:
     return data.decode("utf-8", "replace"), ""
 
 
+def not_utf8(data: bytes) -> tuple[int, int] | None:
+    """(line, byte) of the first byte that is not UTF-8 in a Python file that declares no other encoding (PEP 263),
+    which `python FILE` refuses ("Non-UTF-8 code starting with ..."); None for a file it reads. (An import takes such
+    bytes in a comment and refuses them in a string.)"""
+    try:
+        data.decode("utf-8")
+        return None
+    except UnicodeDecodeError as exc:
+        start = exc.start
+    import io
+    import tokenize
+
+    try:
+        declared, _ = tokenize.detect_encoding(io.BytesIO(data).readline)
+    except SyntaxError:  # a byte that is not UTF-8 in the first two lines, which declare nothing
+        declared = "utf-8"
+    if declared not in ("utf-8", "utf-8-sig"):
+        return None  # Python reads it as it declares (or says why not itself)
+    return data.count(b"\n", 0, start) + 1, data[start]
+
+
+def not_utf8_note(shown: str, line: int, byte: int) -> str:
+    """The sentence a learner reads about a Python file with a byte that is not UTF-8 on `line`."""
+    try:
+        seen = bytes([byte]).decode("cp1252")
+        guess = f', "{seen}" in Windows-1252' if seen.isprintable() and not seen.isspace() else ""
+    except UnicodeDecodeError:
+        guess = ""
+    return (f"{shown}, line {line} is not UTF-8 (byte 0x{byte:02X}{guess}): `python` refuses such a file; save it as "
+            "UTF-8 (in Notepad: Save as, Encoding: UTF-8)")
+
+
 def encoding_note(shown: str, encoding: str) -> str:
     """The sentence a learner reads about a file saved in `encoding` instead of UTF-8."""
     return (f"{shown} is saved as {encoding}: it was read as such; save it as UTF-8 (in Notepad: Save as, Encoding: "

@@ -71,6 +71,7 @@ class Submission(NamedTuple):
                 source = notebook.convert(path.read_bytes(), shown)
             except notebook.NotebookError as exc:
                 prepared.problems[module] = f"{shown} could not be read: {exc}"
+                prepared.graded[module] = shown  # the chapter's file, though no module came of it
                 continue
             texts[relative] = source.text.encode("utf-8")
             prepared.sources[relative] = source
@@ -82,7 +83,7 @@ class Submission(NamedTuple):
                     prepared.sources[relative] = source
             prepared.graded[module] = notebook.KERNEL
             prepared.problems.pop(module, None)
-        from grader.safe_text import decode_saved_text, encoding_note
+        from grader.safe_text import decode_saved_text, encoding_note, not_utf8, not_utf8_note
 
         for relative, data in list(texts.items()):
             if relative.endswith(".py") and relative not in prepared.sources:
@@ -90,6 +91,8 @@ class Submission(NamedTuple):
                 if encoding:  # Python reads UTF-8 (a byte-order mark it skips; UTF-16 not at all)
                     texts[relative] = text.encode("utf-8")
                     prepared.notes.setdefault(Path(relative).stem, []).append(encoding_note(relative, encoding))
+                elif (bad := not_utf8(data)) is not None:  # graded as imported, as it is: `python FILE` refuses it
+                    prepared.notes.setdefault(Path(relative).stem, []).append(not_utf8_note(relative, *bad))
         for relative, data in texts.items():
             total += len(data)
             if total > MAX_FILES_BYTES:

@@ -6,13 +6,14 @@
         got = yield call("H_jacobian", 3, 4)
         return expect(got, [[0.6, 0.8], [-0.16, 0.12]], label="H_jacobian(3, 4)", entries=H)
 
-The docstring's first line is what the learner reads. Declaration order is report order.
+The docstring's first paragraph, on one line, is what the learner reads. Declaration order is report order.
 A check raises `Skip("why")` when something it depends on failed.
 """
 
 from __future__ import annotations
 
 import functools
+import re
 from dataclasses import dataclass, field
 from typing import Callable, Generator
 
@@ -79,7 +80,7 @@ class ChapterChecks:
               id: str | None = None, exact_derivative: bool = False) -> Callable[[CheckBody], CheckBody]:
         """Register a check of learner function `function` worth `points`."""
         def register(body: CheckBody) -> CheckBody:
-            text = description or (body.__doc__ or body.__name__).strip().splitlines()[0]
+            text = description or first_paragraph(body.__doc__) or body.__name__
             check_id = id or body.__name__
             if any(c.id == check_id for c in self.checks):
                 raise ValueError(f"duplicate check id {check_id} in {self.info.id}")
@@ -95,6 +96,11 @@ class ChapterChecks:
     @property
     def max_score(self) -> float:
         return sum(c.points for c in self.checks)
+
+
+def first_paragraph(doc: str | None) -> str:
+    """A docstring's first paragraph on one line: a description wrapped over two lines stays whole."""
+    return " ".join(re.split(r"\n\s*\n", (doc or "").strip())[0].split())
 
 
 def chapter_checks(chapter_id: str) -> ChapterChecks:

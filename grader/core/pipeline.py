@@ -29,6 +29,7 @@ class Request:
     chapters: tuple[str, ...]
     seed: int
     learner: str | None = None  # whose per-learner quiz numbers (None: learner.yaml, else 'anonymous')
+    learner_from: str = "--learner"  # where `learner` came from, for the report (a batch: its roster, a name...)
     quiz: bool = True
     plots: bool = False  # gather the HTML report's plot data in the same round trip
     label: str | None = None  # how the report names the submission (default: its folder)
@@ -211,7 +212,8 @@ def quiz_report(session: Session, request: Request, course: courses.Course, chap
 
     submission = session.submission
     report = Report(request.label or str(submission.root), [ChapterResult(c, "") for c in chapters])
-    add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end)
+    add_quiz_results(report, submission.root, submission.package, request.learner, deadline=session.learner_end,
+                     learner_from=request.learner_from)
     folder = answers_dir(submission.root, submission.package)
     report.learner_id = quiz_learner(folder, request.learner)[0]
     report.flags += other_ids.explain(report, folder, f"{submission.package}/answers", report.learner_id,

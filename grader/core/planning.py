@@ -158,7 +158,8 @@ class ChapterPlan:
         if run.import_error is not None:
             message = import_problem(run.import_error, module_file)
             result.problems.append(message)
-            short = f"not graded: {module_file} could not be imported (see the chapter's message)"
+            failed = "read" if run.import_error.get("exception") == "NotebookError" else "imported"  # a notebook or not
+            short = f"not graded: {module_file} could not be {failed} (see the chapter's message)"
             result.checks = [_result(check, Status.ERROR, 0.0, short) for check in self.checks]
             return result
         for check, pending in self.pending:
@@ -240,6 +241,9 @@ def import_problem(error: dict, module_file: str) -> str:
         module_file = f"{Path(error['file'])} (imported by {module_file})"
     if error.get("where"):  # a notebook: "exercises/ch06_measurement.ipynb, cell 4, line 2"
         module_file, line = error["where"], ""
+    inside = ""
+    if error.get("statement"):  # a notebook's top-level statement (its cell runs it), the error further in
+        module_file, line, inside = error["statement"], "", f" (in {error.get('inside')})"
     if exception == "SyntaxError" or exception == "IndentationError":
         head = f"{module_file}{line}: {exception}: {error.get('message')}"
     elif exception == "ModuleNotFoundError" and "No module named" in error.get("message", "") and not error.get("traceback", "").count("File"):
@@ -247,9 +251,9 @@ def import_problem(error: dict, module_file: str) -> str:
     elif exception in ("TimeoutError", "ProcessExit"):
         head = f"{module_file} could not be imported: {error.get('message')}"
     elif exception == "SystemExit":
-        head = f"{module_file}{line} called sys.exit() while being imported; remove it (or put it under if __name__ == '__main__':)"
+        head = f"{module_file}{line} called sys.exit(){inside} while being imported; remove it (or put it under if __name__ == '__main__':)"
     else:
-        head = f"{module_file}{line} raised {exception} while being imported: {error.get('message')}"
+        head = f"{module_file}{line} raised {exception} while being imported{inside}: {error.get('message')}"
     trace = error.get("traceback", "")
     return head + (f"\n{trace}" if trace and exception not in ("TimeoutError", "ProcessExit") else "") + \
         import_hint(error)

@@ -9,8 +9,9 @@ the course config (its secret course seed and hidden checks) and `autograder.jso
 module reads back).
 
 Each run (`python -m grader.course.gradescope run /autograder`) grades /autograder/submission exactly as
-`grade batch` grades one learner: staged the same way, at the course seed, hidden checks included, in
-bubblewrap where it starts (else, with --sandbox barrier, as an unprivileged user; the output says which), and always
+`grade batch` grades one learner: staged the same way, hidden checks included, at a seed of the submission's own
+drawn from the course seed (submission_seed), in bubblewrap where it starts (else, with --sandbox barrier, as an
+unprivileged user; the output says which), and always
 writes /autograder/results/results.json: a submission without chapter files gets score 0 and the reason;
 a failure outside the learner's code gets score 0 with "NOT GRADED", the reason, and a non-zero exit so
 the instructor sees the run failed. The learner id (their quiz numbers) comes from
@@ -35,6 +36,7 @@ from datetime import datetime
 from pathlib import Path
 
 SETTINGS_FILE = "autograder.json"
+TRY_TIME = "2026-05-01T12:00:00+00:00"  # the submission time README.txt's try gives where the course has no deadline
 COURSE_FILE = "course.yaml"
 LEARNER_FIELDS = ("email", "sid", "id", "name")
 SANDBOX_MODES = ("barrier", "required", "off")  # grader.boundary.SandboxMode: never a silent "auto" here
@@ -96,7 +98,8 @@ python3 -m venv "$SOURCE/venv"
 
 RUN_AUTOGRADER = r"""#!/usr/bin/env bash
 # Gradescope runs this for every submission: it grades submission/ into results/results.json (always
-# written) with the course's grader, at the course seed, hidden checks included.
+# written) with the course's grader, at a seed of the submission's own drawn from the course seed, hidden
+# checks included; the learner id comes from submission_metadata.json.
 ROOT="$(cd "$(dirname "$0")" && pwd)"
 PYTHON="$ROOT/source/venv/bin/python"
 if [ ! -x "$PYTHON" ]; then
@@ -114,16 +117,28 @@ Upload this zip as the autograder of a Gradescope programming assignment (Config
 Zip file upload). It holds the instructor's grader with the reference solutions and quiz keys, and the
 course config with its secret seed: never give it to learners.
 
-Every submission is graded at the course seed, hidden checks included (shown to the learner after
-grades are published), chapters {chapters}, {budget:g} s for a learner's code; the learner id (their
-quiz numbers and option letters) is the submitter's `{field}` in Gradescope's submission metadata.
-Learners submit their chapter files (exercises/chNN_*.py, or the files at the top of the upload) and
-quiz answers (answers/chNN.yaml).
+Each submission is graded at a seed of its own, drawn from the course seed, the learner and
+Gradescope's submission id (a regrade of the same submission draws the same), hidden checks included
+(shown to the learner after grades are published), chapters {chapters}, {budget:g} s for a learner's
+code; the learner id (their quiz numbers and option letters) is the submitter's `{field}` in
+Gradescope's submission metadata. Learners submit their chapter files (exercises/chNN_*.py, or the
+files at the top of the upload) and quiz answers (answers/chNN.yaml).
 
-Sandbox: {sandbox}. Try it on your machine as root (Linux, bubblewrap installed):
-  mkdir -p /tmp/ag/source && unzip {zipname} -d /tmp/ag/source && bash /tmp/ag/source/setup.sh
-  cp /tmp/ag/source/run_autograder /tmp/ag/ && cp -r SOME_SUBMISSION /tmp/ag/submission
-  /tmp/ag/run_autograder; cat /tmp/ag/results/results.json
+Sandbox: {sandbox}. Try it on your machine as root (Linux with python3 and unzip; bubblewrap, or the
+user grader-learner that setup.sh creates), in bash, beside {zipname}: set AG to a new folder (it
+stands for Gradescope's /autograder) and SUB to a submission folder, then run the lines below. They
+write submission_metadata.json as Gradescope does (its documented fields: the submitter in `users`,
+the submission's `id` and time `created_at`, the assignment's `due_date`); without it nothing is
+graded, as on Gradescope.
+  AG=/tmp/ag; SUB=path/to/a/submission
+  mkdir -p "$AG/source" && unzip -o -q "{zipname}" -d "$AG/source" && bash "$AG/source/setup.sh"
+  cp "$AG/source/run_autograder" "$AG/" && rm -rf "$AG/submission" && cp -r "$SUB" "$AG/submission"
+  printf '%s\\n' '{{"id": 1, "created_at": "{when}", "submission_method": "upload",
+    "assignment": {{"title": "Try", "due_date": "{when}", "late_due_date": null}},
+    "users": [{{"email": "learner@example.edu", "name": "A Learner", "sid": "s1", "id": 1}}],
+    "previous_submissions": []}}' > "$AG/submission_metadata.json"
+  "$AG/run_autograder"; cat "$AG/results/results.json"
+It grades SUB as that user (by their {field}), submitted on time.
 """
 
 
@@ -192,9 +207,10 @@ def build(out: Path, course, *, chapters: list[str], learner_field: str = "email
             add(wheel.name, wheel.read_bytes())
             add(COURSE_FILE, Path(course.source).read_bytes())
             add(SETTINGS_FILE, json.dumps(asdict(settings), indent=1) + "\n")
+            when = course.late.deadline.isoformat() if course.late else TRY_TIME  # on time: no late penalty
             add("README.txt", README.format(course=course.id, grader=wheel.name, chapters=", ".join(chapters),
                                             budget=time_budget, field=learner_field, sandbox=described,
-                                            zipname=out.name))
+                                            zipname=out.name, when=when))
         os.replace(partial, out)
     return out, settings
 
@@ -417,6 +433,7 @@ def run(root: Path) -> int:
             warnings = learner_yaml_warnings(staged, learner, "Gradescope's submission metadata") + packed
             late = metadata.deadline(course.late)
             request = Request(tuple(settings.chapters), seed, learner=learner, label=learner,
+                              learner_from=metadata.source,
                               other_ids=(str(manifest.get("learner")),) if manifest else ())
             try:
                 graded = grade_submission(Submission(staged, "exercises"), request, door,

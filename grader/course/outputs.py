@@ -198,7 +198,8 @@ class ClassOutputs:
     So the memory of a batch does not grow with its reports."""
 
     def __init__(self, out: Path, history: History, run: int, learners: list[str], chapters: list[str]) -> None:
-        self.out, self.history, self.run, self.learners = out, history, run, learners
+        self.out, self.history, self.run = out, history, run
+        self.learners = class_order(learners, history.settings(run))  # every class output's rows in this order
         self.position = 0  # learners[:position] are taken in
         self.waiting: dict[str, tuple | None] = {}  # recorded before their turn: (result, report), None to read again
         self.held: set[str] = set()  # those waiting with their report
@@ -264,6 +265,24 @@ class ClassOutputs:
         self.junit.add(learner, report, extra)
 
 
+def class_order(learners: list[str], settings: RunSettings | None) -> list[str]:
+    """The order of every class output's rows: the roster's (by the first row naming each learner) where the run had
+    one, then those it names not, by id; without a roster, by id. Never the order of the submissions' folders."""
+    from grader.csvtable import TableError, read_table
+
+    rank: dict[str, int] = {}
+    roster = settings.roster if settings is not None else None
+    if roster is not None and roster.text is not None:
+        try:
+            rows = read_table(Path(roster.path or "roster"), ("submission", "learner"), roster.text)
+        except TableError:
+            rows = []
+        for _, row in rows:
+            if row["submission"]:
+                rank.setdefault(row["learner"], len(rank))
+    return sorted(learners, key=lambda learner: (0, rank[learner], "") if learner in rank else (1, 0, learner))
+
+
 @dataclass
 class Rebuilt:
     """What a rebuild found for the instructor: the learners flagged, the changes since the last finished run (and
@@ -294,15 +313,14 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
     try:
         collected.finish()
         results, graded = collected.results.values(), collected.graded  # read one by one
-        moved = histories.changes(history, run, collected.results)
+        position = {learner: i for i, learner in enumerate(collected.learners)}  # changes.csv in the class's order too
+        moved = sorted(histories.changes(history, run, collected.results),
+                       key=lambda change: (position.get(change[0], len(position)), change[0]))
         first_run = history.previous(run) is None
         found = _keep_hand_edits(out, history, run)
         deadline = _has_deadline(settings)
         if deadline and collected.untimed:
-            untimed = collected.untimed
-            found.append(f"no trusted submission time for {len(untimed)} of {len(graded)} graded (no `submitted` in "
-                        "the roster for them; a time only from their own archive's manifest counts only with "
-                        f"manifest_time: accept): {', '.join(untimed[:20])}" + (" ..." if len(untimed) > 20 else ""))
+            found.append(_untimed_line(collected.untimed, len(graded), settings.roster.path))
         digest = hashlib.sha256()
 
         def gradebook(handle) -> None:
@@ -338,6 +356,17 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         if own:
             collected.close()
     return Rebuilt(collected.flagged, moved, first_run, similar, found)
+
+
+def _untimed_line(untimed: list[str], graded: int, roster: str | None) -> str:
+    """One line for every learner graded without a trusted submission time, and why (each learner's own reason, a
+    roster time that is not a time or a manifest's time not trusted, is flagged on that learner)."""
+    why = ("no roster was given, and a late penalty trusts only a roster's `submitted` column (or, with "
+           "manifest_time: accept, the learner's own archive manifest)" if roster is None else
+           "no usable `submitted` in the roster for them (a time only from their own archive's manifest counts only "
+           "with manifest_time: accept)")
+    names = ", ".join(untimed[:20]) + (" ..." if len(untimed) > 20 else "")
+    return f"no trusted submission time for {len(untimed)} of {graded} graded: {why}: {names}"
 
 
 def lms_layouts(out: Path, settings: RunSettings) -> list[str]:

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from grader.core.policy import Override
 from grader.csvtable import TableError, read_table
+from grader.render import plural
 
 COLUMNS = ("learner", "target", "points", "factor", "reason", "who")
 
@@ -95,7 +96,7 @@ def in_force(path: Path, learners: list[str], chapters: list[str], text: str | N
             problems.append(f"{row.source}: {row.target} is not a check of {chapter} (`grade list --checks` shows "
                             "the ids; a quiz question is quiz_<its id>); row not applied")
         elif row.points is not None and abs(row.points) > _most_points(row, chapters):
-            problems.append(f"{row.source}: {row.points:g} points is more than {row.target} can move "
+            problems.append(f"{row.source}: {plural(row.points, 'point')} is more than {row.target} can move "
                             f"(at most {_most_points(row, chapters):g}); row not applied")
         else:
             usable.append(row)

@@ -283,9 +283,11 @@ you submit (`%grade` says so when the two differ)."""
 
 
 def _write_readme(out: Path, wheel: Path, course: courses.Course, hidden: dict, notebooks: bool = False) -> None:
+    from grader.render import plural
+
     checks = sum(h["checks"] for h in hidden.values())
     points = sum(h["points"] for h in hidden.values())
-    hidden_text = (f", plus {checks} hidden check{'s' * (checks != 1)} worth {points:g} points" if checks else "")
+    hidden_text = f", plus {plural(checks, 'hidden check')} worth {plural(points, 'point')}" if checks else ""
     practice = [info.id for info in CHAPTERS if course.practice(info.id)]
     recorded = "read and format-checked here, and graded when you submit"
     quiz = (recorded if not practice else

@@ -180,12 +180,14 @@ def _grade_fresh(root: Path, learner: str, chapters: tuple[str, ...], timeout: f
 
 
 def write_learner_yaml(answers: Path, learner: str) -> None:
-    """Set `learner: <id>` in learner.yaml, keeping its comments."""
+    """Set `learner: <id>` in learner.yaml, keeping its comments (what `learner:` held, a block list's lines
+    included, is replaced)."""
     path = answers / "learner.yaml"
     text = path.read_text(encoding="utf-8") if path.is_file() else ""
     line = f"learner: {learner}"
-    if re.search(r"(?m)^learner:.*$", text):
-        text = re.sub(r"(?m)^learner:.*$", line, text, count=1)
+    held = r"(?m)^learner:.*$(?:\n(?:[ \t]+[^ \t\n#]|-).*$)*"
+    if re.search(held, text):
+        text = re.sub(held, lambda _: line, text, count=1)
     else:
         text = text + ("" if text.endswith("\n") or not text else "\n") + line + "\n"
     path.parent.mkdir(parents=True, exist_ok=True)

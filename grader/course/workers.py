@@ -88,6 +88,7 @@ class Staged:
     files_hash: str
     overrides: tuple[Override, ...] = ()
     seconds: float = 0.0
+    learner_from: str = ""  # where its id came from (the roster and line, the submission's name), for the report
 
     def files(self) -> dict[str, bytes]:
         """The staged files (relative path -> bytes): what travels to a worker that does not share this disk."""
@@ -155,7 +156,7 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
                     learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing, submitted,
                     _time_source(entry, submitted), _manifest_summary(manifest),
                     (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
-                    tuple(overrides), time.monotonic() - started)
+                    tuple(overrides), time.monotonic() - started, entry.origin)
     if staged.digest == previous and not force:
         return Outcome(learner, "unchanged", "already graded, files unchanged", staged)
     return staged
@@ -179,7 +180,8 @@ def submission_time(entry: Entry, manifest: dict | None, course: Course | None,
     """(the submission time that decides a late penalty, ISO 8601 or "", and what to flag about it). Trusted: the
     roster's `submitted` column (the LMS's time). The time in the archive's manifest is written on the learner's own
     machine: it is used only where the course accepts it (`manifest_time: accept`), never silently, and never where
-    the archive (staged in `package`) was edited after packing. An unparsable time is no time, and said."""
+    the archive (staged in `package`) was edited after packing. An unparsable time is no time, and said. A learner
+    with no time at all is not flagged: the run says once how many are untimed and why (grader.course.outputs)."""
     flags = []
     if entry.submitted:
         if parse_time(entry.submitted) is not None:
@@ -189,16 +191,17 @@ def submission_time(entry: Entry, manifest: dict | None, course: Course | None,
     packed = submit.packed_time(manifest)
     if not course or not course.late:
         return "", flags
-    edited = bool(packed and package is not None and submit.edits(package, manifest))
-    if packed and course.accepts_manifest_time and parse_time(packed) is not None and not edited:
+    if not packed:
+        return "", flags
+    edited = bool(package is not None and submit.edits(package, manifest))
+    if course.accepts_manifest_time and parse_time(packed) is not None and not edited:
         return packed, flags + [f"submission time {packed} from the learner's own archive manifest (the course accepts "
                                 "it: manifest_time: accept); the roster gives none"]
-    said = ("no time at all" if not packed else
-            f"its archive's manifest says {packed!r}, but the archive was edited after packing, so that time is not "
+    said = (f"its archive's manifest says {packed!r}, but the archive was edited after packing, so that time is not "
             "trusted" if edited else
             f"its archive's manifest says {packed!r}, written on the learner's own machine and not accepted "
             "(manifest_time: accept in the course file would)")
-    return "", flags + [f"no trusted submission time (no `submitted` in the roster): {said}; no late penalty applied"]
+    return "", flags + [f"no trusted submission time: {said}; no late penalty applied"]
 
 
 def _time_source(entry: Entry, submitted: str) -> str | None:
@@ -295,7 +298,7 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
     started = time.monotonic()
     learner, course = staged.learner, grading.course
     request = Request(tuple(grading.chapters), grading.seed, learner=learner, plots=grading.plots, label=learner,
-                      other_ids=staged.other_ids)
+                      other_ids=staged.other_ids, learner_from=staged.learner_from or "the batch")
     if course is not None and Path(course.source).is_file():
         secrets = (*secrets, course.source)
     graded = grade_submission(Submission(root or Path(staged.root), "exercises"), request,
@@ -376,4 +379,4 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
                   learner_yaml_warnings(root, learner) + manifest_flags + timing, submitted,
                   result.time_from if submitted else None, _manifest_summary(manifest),
                   (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
-                  tuple(overrides), result.seconds or 0.0)
+                  tuple(overrides), result.seconds or 0.0, "the history in gradebook.db")

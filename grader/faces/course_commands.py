@@ -11,7 +11,7 @@ from grader.faces.options import (
     EXIT_ALL_PASSED,
     EXIT_NOT_ALL_PASSED,
     EXIT_USAGE,
-    chapters_from,
+    chapters_option,
     handout_id,
     instructor_course,
     instructor_side,
@@ -108,7 +108,7 @@ def batch_command(submissions: str, out_dir: str, roster: str | None, chapter_li
     from grader.course import batch
     from grader.safe_text import for_terminal
 
-    picked = chapters_from(tuple(chapter_list.split(",")))
+    picked = chapters_option(chapter_list)
     the_course = instructor_course(course_file, "grade batch")
     if handout is not None:
         the_course = dataclasses.replace(the_course, current_handout=handout_id(handout))
@@ -342,7 +342,7 @@ def gradescope_command(out: str, course_file: str | None, chapter_list: str, lea
 
     from grader.course import gradescope
 
-    picked = chapters_from(tuple(chapter_list.split(",")))
+    picked = chapters_option(chapter_list)
     the_course = instructor_course(course_file, "grade gradescope")
     try:
         built, settings = gradescope.build(Path(out), the_course, chapters=[c.id for c in picked],
@@ -467,7 +467,7 @@ def selftest_command(count: int | None, only: int | None, chapter_list: str, cou
     from grader.course import selftest
     from grader.safe_text import for_terminal
 
-    picked = [c.id for c in chapters_from(tuple(chapter_list.split(",")))]
+    picked = [c.id for c in chapters_option(chapter_list)]
     the_course = instructor_course(course_file, "grade selftest")
     if only is not None and count is not None:
         raise click.UsageError("--seed checks one seed, --seeds many: give one of them")

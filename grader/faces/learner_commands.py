@@ -248,14 +248,13 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
 
     from grader.course import submit
     from grader.ids import id_problem
-    from grader.quiz import answers_dir, learner_id
+    from grader.quiz import answers_dir, learner_in_file
     from grader.render import text
     from grader.safe_text import for_terminal
 
     submission = find_submission(submission_dir, False)
     answers = answers_dir(submission.root, submission.package)
-    written, source = learner_id(answers, None, submission.package)
-    in_file = None if source.startswith("default") else written
+    in_file, unusable = learner_in_file(answers, submission.package)  # as grade quiz reads it
     given = learner.strip() if learner else None
     terminal = sys.stdin.isatty() and sys.stdout.isatty()
     if given and in_file and given != in_file:
@@ -268,11 +267,12 @@ def submit_command(learner: str | None, submission_dir: str | None, out_file: st
             raise click.Abort()
     chosen = given or in_file
     if chosen is None:
+        why = for_terminal(unusable) if unusable else f"{submission.package}/answers/learner.yaml names nobody"
         if not terminal:
-            raise click.UsageError(f"no learner id: {submission.package}/answers/learner.yaml names nobody, so your "
-                                   "quiz was graded with the numbers of 'anonymous'. Put `learner: your-id` in it "
-                                   "(as your course lists you), run `grade quiz chNN --show` to see your own numbers, "
-                                   "and submit again (or pass --learner your-id)")
+            raise click.UsageError(f"no learner id: {why}, so your quiz was graded with the numbers of 'anonymous'. "
+                                   "Put `learner: your-id` in it (as your course lists you), run `grade quiz chNN "
+                                   "--show` to see your own numbers, and submit again (or pass --learner your-id)")
+        click.echo(f"No learner id: {why}.")
         chosen = click.prompt("Your learner id, as your course lists you (your quiz numbers are drawn from it)",
                               value_proc=_learner_id_typed)
     problem = id_problem(chosen)

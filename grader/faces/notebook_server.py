@@ -149,41 +149,48 @@ class Server:
         return submission._replace(kernel=tuple((BY_ID[c].module, history) for c in from_kernel))
 
 
-def _definitions(code: str) -> dict[str, str]:
-    """Each top-level function `code` defines, the last definition of a name winning, as its syntax tree's dump
-    (so that spacing and comments do not count)."""
+def _definitions(cells: list[str]) -> dict[str, str]:
+    """Each top-level function the cells define, run in order, the last definition of a name winning, as its syntax
+    tree's dump (so that spacing, comments and line endings do not count). Each cell is read as the module made of
+    cells reads it (grader.notebook.python_lines: IPython's own lines left out); one that does not compile defines
+    nothing, as it did nothing in the kernel."""
     import ast
 
-    try:
-        tree = ast.parse(code)
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        return {}
-    return {node.name: ast.dump(node) for node in tree.body if isinstance(node, (ast.FunctionDef,
-                                                                               ast.AsyncFunctionDef))}
+    from grader.notebook import python_lines
+
+    found: dict[str, str] = {}
+    for code in cells:
+        try:
+            tree = ast.parse("\n".join(python_lines(code)) + "\n")
+        except (SyntaxError, ValueError, RecursionError, MemoryError):
+            continue
+        found.update((node.name, ast.dump(node)) for node in tree.body
+                     if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)))
+    return found
 
 
 def _unsaved(submission, chapter: str) -> str:
     """Where `chapter` was graded from the cells the kernel ran and its saved file exists: a note naming the
     functions whose code there differs from the kernel's (`grade chNN` and `grade submit` grade the saved file),
-    else ""."""
+    else "". Both sides are read alike: a saved notebook cell by cell, as the kernel's cells are, a .py as Python
+    reads it."""
     from grader.chapters import BY_ID
     from grader.notebook import NotebookError, code_cells
+    from grader.safe_text import decode_saved_text
 
     module = BY_ID[chapter].module
     cells = dict(submission.kernel).get(module)
     saved = submission.chapter_file(module)
     if cells is None or not saved.is_file():
         return ""
-    kernel: dict[str, str] = {}
-    for _, code in cells:
-        kernel.update(_definitions(code))
+    kernel = _definitions([code for _, code in cells])
     try:
         data = saved.read_bytes()
-        text = ("\n\n".join(source for _, source in code_cells(data)) if saved.suffix == ".ipynb"
-                else data.decode("utf-8", "replace"))
+        texts = ([source for _, source in code_cells(data)] if saved.suffix == ".ipynb"
+                 else [decode_saved_text(data)[0]])
     except (OSError, NotebookError):
         return ""
-    on_disk = _definitions(text)
+    on_disk = _definitions(texts)
     differ = sorted(name for name in _functions(chapter) if kernel.get(name) != on_disk.get(name)
                     and name in kernel)
     if not differ:

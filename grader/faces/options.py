@@ -45,17 +45,48 @@ def encode_what_the_console_can() -> None:
                 pass
 
 
-def chapters_from(names: tuple[str, ...]) -> list[ChapterInfo]:
-    """Chapter arguments ('ch06', '6', 'all') to chapters, in lesson order; BadParameter if unknown."""
+def chapters_from(names: tuple[str, ...], param_hint: str = "CHAPTER") -> list[ChapterInfo]:
+    """Chapter arguments ('ch06', 'ch6', '6', 'all') to chapters, in lesson order; BadParameter, for `param_hint`,
+    naming the unknown one and the valid ones."""
     if not names:
         raise click.UsageError("name a chapter (ch00-ch09, 0-9) or 'all'; `grade list` shows them")
-    if any(n.lower() == "all" for n in names):
+    if any(n.strip().lower() == "all" for n in names):
         return list(CHAPTERS)
     try:
         picked = {resolve(n).id for n in names}
     except KeyError as exc:
-        raise click.BadParameter(exc.args[0], param_hint="CHAPTER") from None
+        raise click.BadParameter(exc.args[0], param_hint=param_hint) from None
     return [c for c in CHAPTERS if c.id in picked]
+
+
+def chapters_option(text: str) -> list[ChapterInfo]:
+    """The instructor's `--chapters ch05,ch06` (also 5,6 or ch6, or 'all') to chapters, in lesson order; BadParameter
+    for --chapters naming the unknown one and the valid ones."""
+    return chapters_from(tuple(n for n in text.split(",") if n.strip()), "--chapters")
+
+
+def closest_function(name: str, owners: dict[str, str], picked: list[ChapterInfo]) -> str | None:
+    """The function a mistyped `name` most likely means, case aside: first among the chapters named (`picked`),
+    then among the others (`owners`: function -> its chapter); with its chapter where that is not one named."""
+    import difflib
+
+    named = {c.id for c in picked}
+    mine = [f for f in owners if owners[f] in named]
+    pools = [mine, [f for f in owners if f not in mine]]
+    lowered = name.lower()
+    for same in ([f for f in pool if f.lower() == lowered] for pool in pools):
+        if same:
+            return _with_chapter(same[0], owners, named)
+    for pool in pools:
+        by_lower = {f.lower(): f for f in pool}
+        close = difflib.get_close_matches(lowered, list(by_lower), n=1)
+        if close:
+            return _with_chapter(by_lower[close[0]], owners, named)
+    return None
+
+
+def _with_chapter(function: str, owners: dict[str, str], named: set[str]) -> str:
+    return function if not named or owners[function] in named else f"{function} (of {owners[function]})"
 
 
 def chapters_and_functions(names: tuple[str, ...]) -> tuple[list[ChapterInfo], tuple[str, ...]]:
@@ -76,10 +107,8 @@ def chapters_and_functions(names: tuple[str, ...]) -> tuple[list[ChapterInfo], t
             owners.setdefault(check.function, info.id)
     for function in functions:
         if function not in owners:
-            import difflib
-
-            close = difflib.get_close_matches(function, list(owners), n=1)
-            hint = f"; did you mean {close[0]}?" if close else ""
+            close = closest_function(function, owners, picked)
+            hint = f"; did you mean {close}?" if close else ""
             raise click.BadParameter(f"{function!r} is neither a chapter nor a function of one{hint} (`grade list` "
                                      "names every chapter's functions)", param_hint="CHAPTER... [FUNCTION...]")
         if picked and owners[function] not in {c.id for c in picked}:

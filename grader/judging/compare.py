@@ -261,6 +261,8 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
     if got.size <= SMALL and _all_within(got.ravel().tolist(), expected.ravel().tolist(), rtol, atol, exact):
         return Verdict(True, "", expected, got, evidence=evidence)
     rtol, atol = _tolerance(expected, rtol, atol, exact)
+    tiny = atol / 10  # below a tenth of the tolerance a number reads as 0, in this message and in the report's matrices
+    shown = {"zero_below": tiny, "digits": digits}  # how the renderers write got and expected: as the message does
     entries = entries or Entries("result")
     bad_got = ~np.isfinite(got)
     if bad_got.any() and not np.array_equal(bad_got, ~np.isfinite(expected)):
@@ -269,7 +271,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
             where = [entries.symbol]
         verdict = Verdict(False, f"{label} is not finite: {', '.join(where)} = "
                                  f"{fmt(got[tuple(np.argwhere(bad_got)[0])])}.", expected, got,
-                          {"wrong": np.argwhere(bad_got).tolist()}, evidence=evidence)
+                          {"wrong": np.argwhere(bad_got).tolist(), **shown}, evidence=evidence)
         return verdict  # its mistake is named when asked (Verdict.explain, all_of): the slips are weighed then
     diff = np.asarray(np.abs(got - expected))  # an array even for scalars (numpy returns a float64 there)
     diff[np.isnan(diff) & np.isnan(got) & np.isnan(expected)] = 0.0
@@ -280,7 +282,6 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
     order = np.argsort(-np.where(wrong, diff, -1.0), axis=None, kind="stable")
     worst = [tuple(int(i) for i in np.unravel_index(k, got.shape)) for k in order[: min(SHOWN_ENTRIES, int(wrong.sum()))]]
     lines = []
-    tiny = atol / 10  # below a tenth of the tolerance a number reads as 0
     if got.ndim == 0:
         lines.append(f"{label}: got {fmt(got, tiny, digits)}, {expected_name} {fmt(expected, tiny, digits)}")
     else:
@@ -289,7 +290,7 @@ def compare_arrays(got: np.ndarray, expected: np.ndarray, *, label: str | Label,
             lines.append(f"  {entries.name(idx)}: got {fmt(got[idx], tiny, digits)}, "
                          f"{expected_name} {fmt(expected[idx], tiny, digits)}")
     lines.append(f"  ({tolerance_text(rtol, atol)}; largest difference {fmt(diff.max())})")
-    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist()},
+    return Verdict(False, "\n".join(lines), expected, got, {"wrong": np.argwhere(wrong).tolist(), **shown},
                    evidence=evidence)  # its mistake is named when asked (Verdict.explain, all_of)
 
 

@@ -28,41 +28,54 @@ def answers_dir(root: Path, package: str) -> Path:
     return Path(root) / package / "answers"
 
 
-def _configured_learner(config: Path) -> tuple[str | None, str]:
-    """(the id in learner.yaml or None, a note on why it was not used)."""
+def _configured_learner(config: Path, shown: str) -> tuple[str | None, str]:
+    """(the id in learner.yaml or None, why it names no usable id: "" where it names nobody), the file
+    named as `shown` and, where one is to blame, its line."""
     import yaml
 
     if not config.exists():
         return None, ""
     if config.stat().st_size > MAX_BYTES:
-        return None, f"{config.name} is too large"
+        return None, f"{shown} is too large"
     try:
         node = yaml.compose(decode_saved_text(config.read_bytes())[0], Loader=LOADER)
     except (yaml.YAMLError, RecursionError) as exc:
         mark = getattr(exc, "problem_mark", None)
-        return None, f"{config.name} is not valid YAML{f' (line {mark.line + 1})' if mark else ''}"
+        return None, f"{shown} is not valid YAML{f' (line {mark.line + 1})' if mark else ''}"
     if node is None:
         return None, ""
     if not isinstance(node, yaml.MappingNode):
-        return None, f"{config.name} should hold one line `learner: your-id`"
+        return None, f"{shown} should hold one line `learner: your-id`"
     for key, value in node.value:
-        if isinstance(key, yaml.ScalarNode) and key.value == "learner" and isinstance(value, yaml.ScalarNode):
-            who = value.value.strip()
-            if not who:
-                return None, ""
-            problem = id_problem(who)
-            if problem:
-                return None, f"{config.name}: the learner id {who!r} {problem}"
-            return who, ""
+        if not (isinstance(key, yaml.ScalarNode) and key.value == "learner"):
+            continue
+        where = f"{shown}, line {value.start_mark.line + 1}"
+        if not isinstance(value, yaml.ScalarNode):
+            kind = "a list" if isinstance(value, yaml.SequenceNode) else "a mapping"
+            return None, f"{where}: `learner:` holds {kind}, not one id; write `learner: your-id`"
+        who = value.value.strip()
+        if not who:
+            return None, ""
+        problem = id_problem(who)
+        if problem:
+            return None, f"{where}: the learner id {who!r} {problem}"
+        return who, ""
     return None, ""
 
 
-def learner_id(answers_folder: Path, given: str | None, package: str = "exercises") -> tuple[str, str]:
-    """(learner id, where it came from): --learner, else <package>/answers/learner.yaml, else
-    'anonymous'."""
+def learner_in_file(answers_folder: Path, package: str = "exercises") -> tuple[str | None, str]:
+    """(the id <package>/answers/learner.yaml names, or None; why it names no usable id, with the file and line, or
+    "" where it names nobody): the one reading of learner.yaml, for every command that takes the id from it."""
+    return _configured_learner(answers_folder / "learner.yaml", f"{package}/answers/learner.yaml")
+
+
+def learner_id(answers_folder: Path, given: str | None, package: str = "exercises",
+               given_from: str = "--learner") -> tuple[str, str]:
+    """(learner id, where it came from): the id `given` (from `given_from`: --learner, or a batch's roster, a
+    submission's name, Gradescope's metadata), else <package>/answers/learner.yaml, else 'anonymous'."""
     if given is not None and given.strip():
-        return given.strip(), "--learner"
-    who, note = _configured_learner(answers_folder / "learner.yaml")
+        return given.strip(), given_from
+    who, note = learner_in_file(answers_folder, package)
     if who is not None:
         return who, f"{package}/answers/learner.yaml"
     return DEFAULT_LEARNER, f"default; {note}" if note else "default"
@@ -177,14 +190,15 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
 
 
 def add_quiz_results(report: Report, root: Path, package: str, learner: str | None = None,
-                     deadline: float | None = None) -> str:
-    """Append each chapter's quiz results to `report` and record whose variants were graded.
+                     deadline: float | None = None, learner_from: str = "--learner") -> str:
+    """Append each chapter's quiz results to `report` and record whose variants were graded (`learner`, from
+    `learner_from`, else learner.yaml's).
     Reads YAML only: no learner code runs, and sympy runs (in a separate process) only for an answer
     that needs it. Questions not judged by `deadline` (a time.monotonic() value: what is left of the
     learner's time) say that the time ran out. Nothing in an answer file raises out of here: the
     report's code results always stay."""
     folder = answers_dir(root, package)
-    who, source = learner_id(folder, learner, package)
+    who, source = learner_id(folder, learner, package, learner_from)
     report.learner = f"{who} (from {source})"
     report.learner_id, report.learner_unset = who, source.startswith("default")
     for chapter in report.chapters:

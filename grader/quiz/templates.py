@@ -66,7 +66,8 @@ def show_text(chapters: list[str], root: Path, package: str, learner: str | None
     for chapter in chapters:
         lines.append(f"{chapter}  {BY_ID[chapter].title}")
         for question in bank.questions(chapter):
-            lines.append(f"  [{question.id}] ({question.kind}, {question.points:g} points)")
+            worth = f"{question.points:g} point{'' if question.points == 1 else 's'}"
+            lines.append(f"  [{question.id}] ({question.kind}, {worth})")
             lines.append("    " + question.text_for(question.values_for(who, chapter)).replace("\n", "\n    "))
             lines.extend(f"      {letter}) {question.options[canonical]}"
                          for letter, canonical in question.lettering(who, chapter).items())

@@ -16,6 +16,7 @@ import io
 import numpy as np
 
 from grader.model import ChapterResult
+from grader.render import plural
 
 # Plot colours, each at least 5:1 on white (WCAG 2.1 1.4.11 asks 3:1 for graphics); series are also
 # told apart by marker or line style, never by colour alone.
@@ -313,7 +314,7 @@ def _gave_ch08(d) -> str:
             cloud = "your measure_samples gave nothing usable (the reference cloud is drawn)"
         else:
             z = np.asarray(case["z"], dtype=float)
-            cloud = (f"your measure_samples gave {len(z)} points, mean range {_g(z[:, 0].mean())}, "
+            cloud = (f"your measure_samples gave {plural(len(z), 'point')}, mean range {_g(z[:, 0].mean())}, "
                      f"mean bearing {_g(z[:, 1].mean())}")
         parts.append(f"{name} {_g(case['point'])}: {cloud}; your linearized_measurement_cov gave "
                      f"{_g(case['cov'])} (reference: {_g(case['cov_ref'])})")

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from grader.model import CheckResult, Report, not_written
+from grader.numbers import fmt
 from grader.render import plural
 from grader.render.figures import Figure
 
@@ -103,7 +104,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 {% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
 <figcaption>{{ fig.caption }}{% if fig.gave %}<span class="gave">{{ fig.gave }}</span>{% endif %}</figcaption></figure>{% endfor %}
 {% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
-{% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} points recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
+{% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} point{{ '' if ch.recorded_score_of(kind) == 1 else 's' }} recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
 {% set folded = not_written(checks) if kind == "code" else {} %}
 {% for c in checks %}{% if c.function in folded %}{% if c is sameas folded[c.function][0] %}<div class="check fail"><span class="status"><span aria-hidden="true">{{ marks["fail"] }} </span>fail</span>{{ c.function }}: not implemented yet ({{ folded[c.function] | length }} check{{ "s" if folded[c.function] | length != 1 }})
 <span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
@@ -135,9 +136,10 @@ def _num(value: float) -> str:
     return f"{value:g}"
 
 
-def _matrix_html(values, wrong: set, caption: str) -> str:
+def _matrix_html(values, wrong: set, caption: str, zero_below: float = 0.0, digits: int = 6) -> str:
     """A small matrix as a captioned table; each entry where got and expected differ is outlined and
-    marked with a cross and, for screen readers, the word "differs" (never by its colour alone)."""
+    marked with a cross and, for screen readers, the word "differs" (never by its colour alone). Each entry is
+    written as the check's message writes it (grader.numbers.fmt, with the comparison's `zero_below` and `digits`)."""
     array = np.atleast_1d(np.asarray(values, dtype=float))
     if array.ndim == 1:
         array = array[None, :]
@@ -146,8 +148,9 @@ def _matrix_html(values, wrong: set, caption: str) -> str:
         return ""
     rows = []
     for i, row in enumerate(array):
-        cells = "".join(f'<td class="wrong">{v:.6g}{WRONG_MARK}</td>' if (i, j) in wrong else f"<td>{v:.6g}</td>"
-                        for j, v in enumerate(row))
+        shown = [fmt(v, zero_below, digits) for v in row]
+        cells = "".join(f'<td class="wrong">{v}{WRONG_MARK}</td>' if (i, j) in wrong else f"<td>{v}</td>"
+                        for j, v in enumerate(shown))
         rows.append(f"<tr>{cells}</tr>")
     return f'<table class="matrix"><caption>{caption}</caption>{"".join(rows)}</table>'
 
@@ -163,7 +166,9 @@ def _values(check: CheckResult) -> str:
         if check.expected is None or check.got is None:
             return Markup("")
         wrong = {tuple(i) for i in check.details.get("wrong", [])}
-        got, expected = _matrix_html(check.got, wrong, "got"), _matrix_html(check.expected, wrong, "expected")
+        shown = {k: check.details[k] for k in ("zero_below", "digits") if k in check.details}  # as the message
+        got, expected = (_matrix_html(check.got, wrong, "got", **shown),
+                         _matrix_html(check.expected, wrong, "expected", **shown))
         if not got or not expected:
             return Markup("")
         legend = '<p class="legend">\u2717 marks each entry where got differs from expected.</p>' if wrong else ""

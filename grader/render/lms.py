@@ -206,7 +206,7 @@ def classroom_data(report: Report, *, message: str = "") -> dict:
                       "status": "pass", "score": adjustment.points, "max_score": 0, "message": adjustment.describe(),
                       "filename": "", "line_no": 0})
     pending = report.pending_score
-    said = [f"{report.score:g}/{report.max_score:g} points judged here"]
+    said = [f"{report.score:g}/{plural(report.max_score, 'point')} judged here"]
     if pending:
         said.append(f"{plural(pending, 'more point')} (recorded quiz answers, hidden checks) "
                     f"{'is' if pending == 1 else 'are'} graded when you submit")

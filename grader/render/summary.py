@@ -396,13 +396,13 @@ def html_parts(view: Summary) -> Iterator[str]:
         yield from (f"<li>{escape(h)}: {n}</li>" for h, n in sorted(handouts.items()))
         yield "</ul>"
     sections = (("flagged", "Flagged (graded; look at these)", view.flagged,
-                 ((k, "; ".join(v)) for k, v in sorted(view.flagged.items()))),
+                 ((k, "; ".join(v)) for k, v in view.flagged.items())),  # in the class's order, as the gradebook
                 ("roster", "The roster and the submissions disagree", view.roster.get("said"),
                  (("", said) for said in view.roster.get("said", []))),
                 ("changes", "First grades" if view.first_run else "Scores that moved since the last run",
                  view.changes, ((c[0], change_text(c)) for c in view.changes)),
                 ("notes", "For the instructor", view.notes, (("", n) for n in view.notes)),
-                ("not-graded", "Not graded", view.not_graded, sorted(view.not_graded.items())),
+                ("not-graded", "Not graded", view.not_graded, view.not_graded.items()),
                 ("skipped", "Skipped (not taken as submissions)", view.skipped, view.skipped))
     for section, title, present, items in sections:
         if present:

@@ -10,10 +10,14 @@ schema."""
 from __future__ import annotations
 
 import io
+import itertools
 import json
 import os
+import re
+import shlex
 import shutil
 import subprocess
+import tempfile
 import zipfile
 from pathlib import Path
 
@@ -225,6 +229,49 @@ def test_with_the_sandbox_required_and_not_starting_nothing_is_graded(autograder
     assert results["score"] == 0 and results["output"].startswith("NOT GRADED")
     assert "NOT GRADED" in results["output"] and "This is not your grade" in results["output"]
     assert "fake failure" in results["extra_data"]["not_graded"]
+
+
+def _recipe(readme: str, ag: Path, sub: Path) -> str:
+    """README.txt's try as a bash script, line by line as it stands, with AG and SUB set as it asks."""
+    lines = readme.split("Try it", 1)[1].splitlines()
+    block = [line[2:] for line in itertools.dropwhile(lambda line: not line.startswith("  "), lines)]
+    block = list(itertools.takewhile(lambda line: line.strip(), block))
+    assert re.fullmatch(r"AG=\S+; SUB=\S+", block[0]), block
+    return "\n".join([f"AG={shlex.quote(str(ag))}; SUB={shlex.quote(str(sub))}", *block[1:]]) + "\n"
+
+
+@pytest.mark.slow
+def test_the_zips_readme_try_done_as_it_says_grades_the_submission(tmp_path):
+    """The README.txt in the zip says how to try it: done as written (in bash, as root, beside the zip, with the
+    system's python3), the submission is graded, as the submitter its metadata names, at a seed of its own."""
+    if shutil.which("unzip", path=SYSTEM_PATH) is None or shutil.which("python3", path=SYSTEM_PATH) is None:
+        pytest.skip("no unzip or system python3, as the README's try asks")
+    base = Path(tempfile.mkdtemp(prefix="gradescope-readme-"))
+    base.chmod(0o755)  # as /tmp is: learner code run as an unprivileged user reaches the interpreter
+    try:
+        (base / "course.yaml").write_text(COURSE + "deadline: '2026-05-01T23:59:00+00:00'\nlate_penalty: {per_day: 0.5}\n",
+                                          encoding="utf-8")
+        built = run_grade("gradescope", base / "autograder.zip", "--course", base / "course.yaml",
+                          "--chapters", "ch00,ch06")
+        assert built.returncode == 0, built.stderr
+        with zipfile.ZipFile(base / "autograder.zip") as opened:
+            readme = opened.read("README.txt").decode("utf-8")
+        assert "graded at a seed of its own, drawn from the course seed" in readme and "at the course seed" not in readme
+        script = base / "try.sh"
+        script.write_text(_recipe(readme, base / "ag", build_submission(base / "sub")), encoding="utf-8")
+        done = subprocess.run(["bash", str(script)], cwd=base, capture_output=True, text=True, timeout=900,
+                              env={"PATH": SYSTEM_PATH, "HOME": str(base)})
+        results = json.loads((base / "ag" / "results" / "results.json").read_text(encoding="utf-8"))
+        _validate(results)
+        assert results["output"].startswith("Graded as learner@example.edu (the submitter's email in "
+                                            "submission_metadata.json), at a seed of this submission's own"), (
+            results["output"][:2000] + done.stderr[-3000:])
+        code = [t for t in results["tests"] if "code" in t["tags"]]
+        assert code and all(t["status"] == "passed" for t in code), results["output"]
+        assert results["score"] == sum(t["max_score"] for t in code) > 0  # on time: no late penalty
+        assert done.stdout.rstrip().endswith("}")  # the recipe's last step shows results.json
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
 
 
 def test_a_course_without_a_seed_builds_no_autograder(tmp_path):

@@ -289,3 +289,79 @@ def test_the_check_fails_when_one_export_is_left_out_of_the_rebuild(monkeypatch,
         assert disagreements(course.out) != []
     finally:
         course.close()
+
+
+# ------------------------------------------------------------------------------------ learners without a time
+
+def test_learners_without_a_submission_time_are_said_once_and_a_bad_roster_time_once(tmp_path):
+    """With a deadline and no roster, one line says how many learners are untimed and why (no line per learner); a
+    learner whose roster time is not a date is told that, and not also that the roster gives no `submitted`."""
+    for learner in LEARNERS:
+        chapter_submission(tmp_path / "submissions" / learner, learner)
+    (tmp_path / "course.yaml").write_text(textwrap.dedent("""\
+        course: untimed-course
+        seed: 424242
+        deadline: "2026-05-01T23:59:00+00:00"
+        late_penalty: {per_day: 0.1, max: 0.5}
+        """), encoding="utf-8")
+    course = from_text((tmp_path / "course.yaml").read_text(encoding="utf-8"), str(tmp_path / "course.yaml"))
+
+    def batch(out: str, roster: Path | None = None):
+        return run_batch(tmp_path / "submissions", tmp_path / out, chapters=[CHAPTER], roster=roster, jobs=1,
+                         seed=course.grading_seed, course=course, html=False, limits={"learner_seconds": 20})
+
+    done = batch("no-roster")
+    assert done.flagged == {}, done.flagged
+    told = [note for note in done.notes if "submission time" in note]
+    assert told == ["no trusted submission time for 3 of 3 graded: no roster was given, and a late penalty trusts "
+                    "only a roster's `submitted` column (or, with manifest_time: accept, the learner's own archive "
+                    "manifest): ann, bo, cy"], done.notes
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner,submitted\nann,ann,not a date\nbo,bo,2026-05-01T10:00:00+00:00\ncy,cy,\n",
+                      encoding="utf-8")
+    done = batch("roster", roster)
+    assert done.flagged == {"ann": ["the roster's submission time 'not a date' (the roster roster.csv, line 2) is not "
+                                    "a time (ISO 8601, e.g. 2026-05-01T23:59:00+02:00)"]}, done.flagged
+    told = [note for note in done.notes if "submission time" in note]
+    assert len(told) == 1 and told[0].startswith("no trusted submission time for 2 of 3 graded: no usable "
+                                                 "`submitted` in the roster for them") and told[0].endswith(": ann, cy")
+
+
+# ------------------------------------------------------------------------------------ the order of the rows
+
+def _rows_in_order(out: Path) -> dict[str, list[str]]:
+    """The learners of each class output, in the order its rows give them."""
+    def column(name: str, key: str, skip: int = 0) -> list[str]:
+        return [row[key] for row in csv.DictReader(io.StringIO((out / name).read_text(encoding="utf-8")))][skip:]
+
+    return {"gradebook.csv": column("gradebook.csv", "learner"),
+            "gradebook-canvas.csv": column("gradebook-canvas.csv", "SIS Login ID", skip=1),
+            "gradebook-moodle.csv": column("gradebook-moodle.csv", "Learner id"),
+            "junit.xml": [s.get("name") for s in ElementTree.parse(out / "junit.xml").getroot().iter("testsuite")],
+            "changes.csv": column("changes.csv", "learner")}
+
+
+def test_every_class_output_lists_the_learners_in_the_rosters_order_else_by_id(tmp_path):
+    """Rows follow the roster (a submission it names not after, by id), without one the ids; never the folders' names
+    (here the folders sort as cy, ann, bo, dee, then dee-x before dee)."""
+    subs = tmp_path / "submissions"
+    for folder, learner in (("a-folder", "cy"), ("b-folder", "ann"), ("c-folder", "bo")):
+        chapter_submission(subs / folder, learner)
+    shutil.make_archive(str(subs / "dee"), "zip", chapter_submission(tmp_path / "dee", "dee"))
+    roster = tmp_path / "roster.csv"
+    roster.write_text("submission,learner\nc-folder,bo\na-folder,cy\nb-folder,ann\n", encoding="utf-8")
+    lms_layouts = ("canvas", "moodle")
+    run_batch(subs, tmp_path / "out", chapters=[CHAPTER], roster=roster, jobs=1, seed=424242, html=False,
+              lms_layouts=lms_layouts, limits={"learner_seconds": 20})
+    in_order = _rows_in_order(tmp_path / "out")
+    assert in_order == dict.fromkeys(in_order, ["bo", "cy", "ann", "dee"]), in_order
+    found = regrade.regrade(tmp_path / "out", None, jobs=1)  # rebuilt from the history alone
+    regrade.apply(tmp_path / "out", found, "rebuilt")
+    assert _rows_in_order(tmp_path / "out")["gradebook.csv"] == ["bo", "cy", "ann", "dee"]
+    for folder, learner in (("a-folder", "cy"), ("b-folder", "ann"), ("c-folder", "bo")):
+        (subs / folder).rename(subs / learner)
+    chapter_submission(subs / "dee-x", "dee-x")  # the folder dee-x/ sorts before dee.zip, the id dee-x after dee
+    run_batch(subs, tmp_path / "no-roster", chapters=[CHAPTER], jobs=1, seed=424242, html=False,
+              lms_layouts=lms_layouts, limits={"learner_seconds": 20})
+    in_order = _rows_in_order(tmp_path / "no-roster")
+    assert in_order == dict.fromkeys(in_order, ["ann", "bo", "cy", "dee", "dee-x"]), in_order

@@ -84,6 +84,36 @@ def test_wrong_matrix_entries_are_marked(repo_root, tmp_path):
     assert "H[1,0] = d bearing/d x: got 0.16, expected -0.16" in text
 
 
+def _matrices(text: str) -> dict[str, list[list[str]]]:
+    """The first expected and got matrices in `text`, each entry as the page writes it (its marks left out)."""
+    found = {}
+    for caption, body in re.findall(r'<table class="matrix"><caption>(\w+)</caption>(.*?)</table>', text):
+        rows = [[re.sub(r"<span.*", "", cell) for cell in re.findall(r"<td[^>]*>(.*?)</td>", row)]
+                for row in re.findall(r"<tr>(.*?)</tr>", body)]
+        found.setdefault(caption, rows)
+    return found
+
+
+def test_a_matrix_writes_each_entry_as_the_checks_message_does(repo_root, tmp_path):
+    """An expected entry that rounding left at 6.5e-18 (sigma^2 H H^T off its diagonal) reads "0" in the message,
+    below a tenth of the tolerance: the matrices beside it write it so too, not 6.54248e-18."""
+    from tests.support import build_submission, replace_function
+
+    source = replace_function("ch06_measurement", "measurement_covariance",
+                              "def measurement_covariance(x, y, sigma):\n    H = H_jacobian(x, y)\n"
+                              "    return float(sigma) ** 2 * (H @ H.T) + 0.5\n")
+    root = build_submission(tmp_path / "sub", {"ch06_measurement": source})
+    out = tmp_path / "r.html"
+    data = grade_json("ch06", "--submission", root, html=out, cwd=repo_root)
+    message = next(c["message"] for c in data["chapters"][0]["checks"] if c["id"] == "covariance_random_points")
+    told = re.findall(r"R\[(\d),(\d)\] \([^)]*\): got (\S+), expected (\S+)", message)
+    assert ("0", "1", "0.5", "0") in told, message
+    matrices = _matrices(out.read_text(encoding="utf-8").split("&middot; ch06/covariance_random_points</span>")[1])
+    for i, j, got, expected in told:
+        assert matrices["got"][int(i)][int(j)] == got and matrices["expected"][int(i)][int(j)] == expected, matrices
+    assert not any("e-" in entry for rows in matrices.values() for row in rows for entry in row), matrices
+
+
 def test_learner_text_in_a_figure_is_cleaned_as_on_the_rest_of_the_page(repo_root, tmp_path):
     """The figures' data are cleaned (grader.safe_text.for_html) before they are sent to be drawn, apart from the
     rest of the report: a control character the learner returned shows as U+FFFD in the figure, as in the text."""

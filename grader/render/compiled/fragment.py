@@ -1,7 +1,7 @@
 # The report's fragment template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "a9938eeafbe6668d6a6bd35b517a293f1966b3a167a843bb34f6439ae9674d26"
+DIGEST = "77671bd89f2a4141d28087f81079e7d8cbe3ce3ccd332ea8364440c847d1a77e"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'fragment'
 
@@ -256,7 +256,9 @@ def root(context, missing=missing):
                     pass
                     yield ' (+'
                     yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
-                    yield ' points recorded, graded when you submit)'
+                    yield ' point'
+                    yield escape(('' if (context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars) == 1) else 's'))
+                    yield ' recorded, graded when you submit)'
                 yield '</h'
                 yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
                 yield '>\n'
@@ -339,4 +341,4 @@ def root(context, missing=missing):
     yield '>'
 
 blocks = {}
-debug_info = '1=60&2=62&3=68&4=74&5=82&6=86&9=96&10=107&11=113&12=119&13=127&14=133&15=149&17=153&18=159&19=175&20=181&21=189&22=197&23=207&24=223&25=232&26=241&27=259&28=262&29=280&30=293&31=303&32=307&33=313&34=319&35=325&38=334'
+debug_info = '1=60&2=62&3=68&4=74&5=82&6=86&9=96&10=107&11=113&12=119&13=127&14=133&15=149&17=153&18=159&19=175&20=181&21=189&22=197&23=207&24=223&25=232&26=241&27=261&28=264&29=282&30=295&31=305&32=309&33=315&34=321&35=327&38=336'

@@ -1,7 +1,7 @@
 # The report's page template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "ca291d8871e7ea874af5103f881bf2653da8f74404f6f3cdaec02a12df3ac5ff"
+DIGEST = "5edad0a76a9cb48fc421d5dfbf8842d469340831c441a1280bf04c5e755fd9f4"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'page'
 
@@ -256,7 +256,9 @@ def root(context, missing=missing):
                     pass
                     yield ' (+'
                     yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
-                    yield ' points recorded, graded when you submit)'
+                    yield ' point'
+                    yield escape(('' if (context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars) == 1) else 's'))
+                    yield ' recorded, graded when you submit)'
                 yield '</h'
                 yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
                 yield '>\n'
@@ -339,4 +341,4 @@ def root(context, missing=missing):
     yield '>\n</body></html>'
 
 blocks = {}
-debug_info = '6=60&8=62&9=68&10=74&11=82&12=86&15=96&16=107&17=113&18=119&19=127&20=133&21=149&23=153&24=159&25=175&26=181&27=189&28=197&29=207&30=223&31=232&32=241&33=259&34=262&35=280&36=293&37=303&38=307&39=313&40=319&41=325&44=334'
+debug_info = '6=60&8=62&9=68&10=74&11=82&12=86&15=96&16=107&17=113&18=119&19=127&20=133&21=149&23=153&24=159&25=175&26=181&27=189&28=197&29=207&30=223&31=232&32=241&33=261&34=264&35=282&36=295&37=305&38=309&39=315&40=321&41=327&44=336'
