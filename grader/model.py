@@ -38,6 +38,9 @@ class _RoundedPoints:
         instance.__dict__[self.key] = rounded_points(value)
 
 
+NOT_ANSWERED = "not answered yet"  # a blank quiz question's message (grader.quiz)
+
+
 @dataclass
 class CheckResult:
     """The verdict on one check: a code check or a quiz question."""
@@ -60,6 +63,12 @@ class CheckResult:
     # a judged quiz answer in the quiz's own terms, for the class summary: {"options": [canonical options
     # chosen]} (the letters are each learner's own) or {"form": the answer's form, its numbers by name}
     answer: dict = field(default_factory=dict)
+
+    @property
+    def unanswered(self) -> bool:
+        """A quiz question the learner left blank: no answer to judge (0 points), which the class statistics count
+        apart from a wrong one."""
+        return self.kind == "quiz" and self.status == Status.FAIL and self.message == NOT_ANSWERED
 
     def to_dict(self, chapter: str = "") -> dict:
         return {

@@ -14,8 +14,9 @@ class). The two tests are written out here (closed forms, exact for the tables t
 k - 1 <= 3 degrees of freedom) instead of imported from scipy.stats, whose import alone takes seconds per batch;
 tests/course/test_statistics.py checks them against scipy.stats on random tables.
 
-Computed for a class of MIN_LEARNERS or more; below RELIABLE_LEARNERS the numbers are rough and nothing is
-flagged. The rules that flag an item are the constants below, stated in the README. Reads only judged
+A quiz question left blank is no wrong answer: its learners are counted apart (`unanswered`) and left out of
+its numbers. Computed for a class of MIN_LEARNERS or more; below RELIABLE_LEARNERS the numbers are rough and
+nothing is flagged, nor is an item answered by fewer than MIN_LEARNERS, nor a code check for being easy. The rules that flag an item are the constants below, stated in the README. Reads only judged
 results (grader.model.Report) and the question banks (whose numbers each learner had); never a key.
 """
 
@@ -67,6 +68,7 @@ class ItemScores:
     positions: dict[str, int] = field(default_factory=dict)  # item -> its column
     learners: list[str] = field(default_factory=list)  # whose numbers each learner's quiz had
     rows: list[array] = field(default_factory=list)  # points per item (by its position in items), NaN: not judged
+    unanswered: dict[str, int] = field(default_factory=dict)  # item -> learners who left it blank (NaN in rows)
     chosen: dict[str, dict[int, tuple[str, ...]]] = field(default_factory=dict)  # item -> row -> options chosen
 
     def __len__(self) -> int:
@@ -86,6 +88,9 @@ class ItemScores:
                     self.items[key] = _Item(key, chapter.chapter, check.function, check.kind,
                                             asked.template if asked else check.description, check.max_points)
                     self.positions[key] = len(self.positions)
+                if check.unanswered:  # left blank: not a wrong answer; out of the item's numbers, counted apart
+                    self.unanswered[key] = self.unanswered.get(key, 0) + 1
+                    continue
                 points[self.positions[key]] = float(check.points)
                 if check.kind == "quiz" and check.status in (Status.PASS, Status.FAIL) and "options" in check.answer:
                     self.chosen.setdefault(key, {})[row] = tuple(str(o) for o in check.answer["options"])
@@ -153,7 +158,8 @@ def _item_statistics(item: _Item, column: np.ndarray, judged: np.ndarray, total:
     rest = total[judged] - x
     facility = float(np.mean(x) / item.max_points) if x.size else None
     entry = {"id": item.key, "chapter": item.chapter, "kind": item.kind, "description": item.description,
-             "max_points": item.max_points, "learners": int(x.size), "facility": _rounded(facility),
+             "max_points": item.max_points, "learners": int(x.size),
+             "unanswered": scores.unanswered.get(item.key, 0), "facility": _rounded(facility),
              "discrimination": _rounded(correlation(x, rest)),
              "upper_lower": _rounded(upper_lower(x / item.max_points, rest)), "options": [], "parameters": [],
              "flags": []}
@@ -328,6 +334,8 @@ def _holm(tested: list[dict]) -> None:
 
 def _flags(entry: dict) -> list[str]:
     """What the README's rules say about one item (the class is large enough to say anything)."""
+    if entry.get("learners", MIN_LEARNERS) < MIN_LEARNERS:
+        return []  # answered by too few to say anything (a blank answer is no evidence)
     flags = []
     facility, discrimination = entry["facility"], entry["discrimination"]
     if discrimination is not None and discrimination < DISCRIMINATION_LOW:
@@ -344,7 +352,7 @@ def _flags(entry: dict) -> list[str]:
             by_bin = ", ".join(f"{_values(b['low'], b['high'])}: {b['facility']:.2f}" for b in parameter["bins"])
             flags.append(f"harder for some learners' numbers: facility by {parameter['name']} {by_bin} "
                          f"({parameter['test']}, p = {parameter['p_holm']:.2g} after Holm's correction)")
-    if facility is not None and facility > FACILITY_HIGH:
+    if facility is not None and facility > FACILITY_HIGH and entry["kind"] == "quiz":  # passing is a check's goal
         flags.append(f"very easy: facility {facility:.2f} (above {FACILITY_HIGH:g})")
     if facility is not None and facility < FACILITY_LOW:
         flags.append(f"very hard: facility {facility:.2f} (below {FACILITY_LOW:g})")

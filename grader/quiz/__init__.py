@@ -15,7 +15,7 @@ from pathlib import Path
 
 from grader.chapters import BY_ID
 from grader.ids import id_problem
-from grader.model import ChapterResult, CheckResult, Report, Status
+from grader.model import NOT_ANSWERED, ChapterResult, CheckResult, Report, Status
 from grader.quiz import bank
 from grader.quiz.answers import LOADER, MAX_BYTES, TOO_LARGE, read
 from grader.quiz.symbolic import AnswerError
@@ -145,7 +145,7 @@ def grade_quiz(chapter: str, answers_folder: Path, learner: str, shown_folder: s
             result.message = answers.unreadable[question.id]
             continue
         if answer is None or answer.value is None or answer.text.strip() == "":
-            result.message = "not answered yet"
+            result.message = NOT_ANSWERED
             continue
         result.got = answer.text
         where = f"{shown}, line {answer.line}, question {question.id}"

@@ -83,6 +83,7 @@ class Tally:
         # texts and which are right; given by the batch, so that nothing here reads a bank or a key
         self.questions = questions or {}
         self.seen, self.own, self.upstream, self.errors = Counter(), Counter(), Counter(), Counter()
+        self.unanswered: Counter = Counter()  # quiz questions left blank: apart from the failures
         self.names: dict[str, str] = {}
         self.kinds: dict[str, str] = {}
         self.mistakes: dict[tuple, set] = defaultdict(set)
@@ -115,7 +116,9 @@ class Tally:
                 self.seen[key] += 1
                 caused_upstream = bool(check.upstream) or (check.status == Status.SKIP
                                                            and check.points < check.max_points)
-                if check.status == Status.ERROR:
+                if check.unanswered:
+                    self.unanswered[key] += 1
+                elif check.status == Status.ERROR:
                     self.errors[key] += 1
                 elif caused_upstream:
                     self.upstream[key] += 1
@@ -124,7 +127,7 @@ class Tally:
                     if check.mistake:
                         self.mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
                     if check.message:
-                        self.messages.add(chapter.chapter, check.message.splitlines()[0][:160])
+                        self.messages.add(chapter.chapter, first_line(check.message)[:160])
                 if check.kind == "quiz" and check.status in (Status.PASS, Status.FAIL):  # judged: `answer` says
                     for option in check.answer.get("options", ()):
                         self.chosen[(chapter.chapter, check.function, option)] += 1
@@ -144,11 +147,16 @@ class Tally:
             options.append({"question": f"{chapter}/quiz_{question_id}", "option": option,
                             "text": question.options.get(option, "") if question else "",
                             "right": option in question.right if question else False, "chosen": count})
+        blank = self.unanswered
+
+        def rate(key: str) -> float:  # among the learners who answered (a blank quiz question is no failure)
+            return own[key] / max(seen[key] - blank[key], 1)
+
         return {
             "checks": [{"id": key, "description": self.names[key], "kind": self.kinds[key], "seen": seen[key],
-                        "failed": own[key], "failed_upstream": upstream[key], "errors": errors[key]}
-                       for key in sorted(seen, key=lambda k: (-own[k] / seen[k], -(upstream[k] + errors[k]) / seen[k],
-                                                              k))],
+                        "unanswered": blank[key], "failed": own[key], "failed_upstream": upstream[key],
+                        "errors": errors[key]}
+                       for key in sorted(seen, key=lambda k: (-rate(k), -(upstream[k] + errors[k]) / seen[k], k))],
             "mistakes": [{"chapter": c, "function": f, "kind": k, "mistake": m, "learners": len(who)}
                          for (c, f, k, m), who in sorted(self.mistakes.items(), key=lambda kv: (-len(kv[1]), kv[0]))],
             "options": options,
@@ -161,6 +169,15 @@ class Tally:
 
     def close(self) -> None:
         self.messages.close()
+
+
+def first_line(message: str) -> str:
+    """A failure message's first line that says something: with the line after a lead-in that ends in a colon
+    ("wrong at 6 of 6 inputs; the first:"), so that messages group by what went wrong."""
+    lines = [line.strip() for line in message.splitlines() if line.strip()]
+    if len(lines) > 1 and lines[0].endswith(":"):
+        return f"{lines[0]} {lines[1]}"
+    return lines[0] if lines else ""
 
 
 class Messages:
@@ -284,7 +301,9 @@ def _statistics_parts(found: dict | None) -> Iterator[str]:
             image = (f"<img src='{figure.uri}' alt='{escape(figure.alt)}' width='{figure.width}' "
                      f"height='{figure.height}'>" if figure.uri else "")
             yield f"<figure>{image}<figcaption>{escape(figure.caption)}</figcaption></figure>"
-        rows = [[str(number), f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", str(i["learners"]),
+        rows = [[str(number), f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>",
+                 str(i["learners"]) + (f" <small>({i['unanswered']} left it blank)</small>"
+                                       if i.get("unanswered") else ""),
                  _number(i["facility"]), _number(i["discrimination"]), _number(i["upper_lower"]),
                  "flagged" if i["flags"] else ""]
                 for number, i in enumerate((i for i in items if i["chapter"] == name), 1)]
@@ -365,11 +384,14 @@ def html_parts(view: Summary) -> Iterator[str]:
                      [[escape(f"{m['chapter']}/{m['function']}") + f" <small>{m['kind']}</small>",
                        escape(m["mistake"]), str(m["learners"])] for m in counts["mistakes"]], {2})
         failing = [c for c in counts["checks"] if c["failed"] + c["failed_upstream"] + c["errors"]][:60]
-        yield _table("failure-rates", "Checks by failure rate (a helper's failure counted apart)",
-                     ["check", "failed", "rate", "because a helper fails", "could not be graded"],
+        yield _table("failure-rates", "Checks by failure rate among those who answered (a helper's failure and a "
+                                      "blank quiz question counted apart)",
+                     ["check", "failed", "rate", "because a helper fails", "could not be graded", "left blank"],
                      [[f"{escape(c['id'])}<br><small>{escape(c['description'])}</small>",
-                       f"{c['failed']}/{c['seen']}", f"{100 * c['failed'] / c['seen']:.0f}%",
-                       str(c["failed_upstream"]), str(c["errors"])] for c in failing], {1, 2, 3, 4})
+                       f"{c['failed']}/{c['seen'] - c['unanswered']}",
+                       f"{100 * c['failed'] / max(c['seen'] - c['unanswered'], 1):.0f}%",
+                       str(c["failed_upstream"]), str(c["errors"]), str(c["unanswered"])] for c in failing],
+                     {1, 2, 3, 4, 5})
         yield _table("options", "Options chosen (by option: each learner has their own letters)",
                      ["question", "option", "right", "chosen by"],
                      [[escape(o["question"]), f"{escape(o['option'])}) {escape(o['text'])}",

@@ -153,6 +153,69 @@ def _points(report: Report, key: str) -> float:
     return next(c.points for ch in report.chapters if ch.chapter == chapter for c in ch.checks if c.id == check_id)
 
 
+def _left_blank(report: Report, chapter: str, question: str | None = None) -> Report:
+    """The report with `chapter`'s quiz questions (or one of them) left blank, as grader.quiz says a blank one."""
+    from grader.model import NOT_ANSWERED
+
+    for ch in report.chapters:
+        for check in ch.checks:
+            if ch.chapter == chapter and check.kind == "quiz" and question in (None, check.function):
+                check.status, check.points, check.message, check.answer = Status.FAIL, 0.0, NOT_ANSWERED, {}
+    return report
+
+
+def test_a_blank_quiz_question_is_no_wrong_answer():
+    """Blank answers are counted apart and left out of an item's numbers: a question nobody answered is not
+    "very hard", a learner who skipped a chapter's quiz does not lower its facility, and a blank is no failure."""
+    reports = SimulatedClass(60, seed=3).reports()
+    chapter = CHAPTERS[0]
+    quiz = [c for c in next(iter(reports.values())).chapters[0].checks if c.kind == "quiz"]
+    nobody = quiz[0].function
+    answered = {learner: _points(report, f"{chapter}/{quiz[1].id}") / quiz[1].max_points
+                for i, (learner, report) in enumerate(reports.items()) if i % 2 == 0}
+    for i, report in enumerate(reports.values()):
+        _left_blank(report, chapter, nobody)
+        if i % 2:
+            _left_blank(report, chapter)
+    found = {item["id"]: item for item in _statistics(reports)["items"]}
+    blank = found[f"{chapter}/{quiz[0].id}"]
+    assert (blank["learners"], blank["unanswered"], blank["facility"], blank["flags"]) == (0, 60, None, [])
+    half = found[f"{chapter}/{quiz[1].id}"]
+    assert (half["learners"], half["unanswered"]) == (30, 30)
+    assert half["facility"] == pytest.approx(sum(answered.values()) / len(answered), abs=1e-4)
+    tally = outputs_tally(reports)
+    row = next(c for c in tally["checks"] if c["id"] == f"{chapter}/{quiz[0].id}")
+    assert (row["failed"], row["unanswered"]) == (0, 60)
+    assert not [m for m in tally["messages"] if "not answered" in m["message"]]
+
+
+def outputs_tally(reports: dict[str, Report]) -> dict:
+    from grader.render.summary import Tally
+
+    tally = Tally()
+    for learner, report in reports.items():
+        tally.add(learner, report)
+    try:
+        return tally.counts()
+    finally:
+        tally.close()
+
+
+def test_a_code_check_is_never_flagged_for_being_easy(class_of_200):
+    assert not [i["id"] for i in class_of_200["items"] if i["kind"] == "code" and
+                any(f.startswith("very easy") for f in i["flags"])]
+    assert statistics._flags({"kind": "code", "learners": 50, "facility": 0.99, "discrimination": 0.3,
+                              "options": [], "parameters": []}) == []
+
+
+def test_a_failure_message_is_grouped_by_what_it_says_after_its_lead_in():
+    from grader.render.summary import first_line
+
+    assert first_line("wrong at 6 of 6 inputs; the first:\nH(3, 4): 2 of 4 entries differ\n  H[0,0] ...") == \
+        "wrong at 6 of 6 inputs; the first: H(3, 4): 2 of 4 entries differ"
+    assert first_line("range_reading(3, 4): got 7, expected 5") == "range_reading(3, 4): got 7, expected 5"
+
+
 def test_cronbach_alpha_per_chapter_is_high_for_items_of_one_ability(class_of_200):
     alphas = {c["chapter"]: c["alpha"] for c in class_of_200["chapters"]}
     assert set(alphas) == set(CHAPTERS) and all(0.8 < a < 1 for a in alphas.values()), alphas
