@@ -126,7 +126,7 @@ def test_every_package_of_the_grader_is_installed_and_released():
 
 # Tests of the project as a whole, not of one module: its contracts, its platforms, the workflows it ships, the
 # JSON schemas (grader/schemas/, data) and the benchmarks.
-WHOLE_PROJECT_TESTS = {"test_architecture", "test_platforms", "test_workflows", "test_schemas", "test_benchmarks"}
+WHOLE_PROJECT_TESTS = {"test_architecture", "test_platforms", "test_workflows", "test_schemas", "test_benchmarks", "test_docs"}
 
 
 def test_the_tests_mirror_the_package_so_a_modules_tests_are_found_from_its_name():

@@ -16,8 +16,9 @@ tests/course/test_statistics.py checks them against scipy.stats on random tables
 
 A quiz question left blank is no wrong answer: its learners are counted apart (`unanswered`) and left out of
 its numbers. Computed for a class of MIN_LEARNERS or more; below RELIABLE_LEARNERS the numbers are rough and
-nothing is flagged, nor is an item answered by fewer than MIN_LEARNERS, nor a code check for being easy. The rules that flag an item are the constants below, stated in the README. Reads only judged
-results (grader.model.Report) and the question banks (whose numbers each learner had); never a key.
+nothing is flagged, nor is an item answered by fewer than MIN_LEARNERS, nor a code check for being easy. The
+rules that flag an item are the constants below, stated in the instructor's guide. Reads only judged results
+(grader.model.Report) and the question banks (whose numbers each learner had); never a key.
 """
 
 from __future__ import annotations
@@ -333,7 +334,7 @@ def _holm(tested: list[dict]) -> None:
 # ------------------------------------------------------------------------------------ flags
 
 def _flags(entry: dict) -> list[str]:
-    """What the README's rules say about one item (the class is large enough to say anything)."""
+    """What the rules (the instructor's guide states them) say about one item (the class is large enough to say anything)."""
     if entry.get("learners", MIN_LEARNERS) < MIN_LEARNERS:
         return []  # answered by too few to say anything (a blank answer is no evidence)
     flags = []

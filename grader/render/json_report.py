@@ -1,4 +1,4 @@
-"""The JSON renderer: the stable schema instructor tooling relies on (see README)."""
+"""The JSON renderer: the stable schema instructor tooling relies on (docs/pages/json.md)."""
 
 from __future__ import annotations
 

@@ -268,7 +268,7 @@ def _statistics_parts(found: dict | None) -> Iterator[str]:
            f"<p>From {_count(found['learners'], 'graded learner')}, every check and quiz question: its "
            "<em>facility</em> (the mean share of its points), its <em>discrimination</em> (the correlation of its "
            "points with the rest of the learner's score) and the upper-lower index (facility among the 27% with the "
-           "highest rest scores minus among the 27% with the lowest). Flagged (the README's rules): facility above "
+           "highest rest scores minus among the 27% with the lowest). Flagged (the instructor's guide's rules): facility above "
            f"{rules['facility_high']:g} or below {rules['facility_low']:g}, discrimination below "
            f"{rules['discrimination_low']:g}, a wrong option chosen more by strong learners (its discrimination above "
            f"{rules['distractor_high']:g}, chosen by {rules['distractor_learners']} or more), and facility that "
