@@ -143,6 +143,7 @@ class ChapterResult:
     hidden_checks: int = 0  # checks of this chapter not run here (graded on submission)
     hidden_points: float = 0.0
     source: str = ""  # the file graded ("exercises/ch06_measurement.ipynb"), or the code a notebook's kernel ran
+    unread: bool = False  # `source` could not be read (a notebook that is not one): nothing in it was graded
     notes: list[str] = field(default_factory=list)  # what the learner should know that is no problem of the code
     adjustments: list[Adjustment] = field(default_factory=list)  # overrides of its checks and of the chapter
 
@@ -211,12 +212,14 @@ class ChapterResult:
         return cls(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                    plots=dict(ch.get("plots") or {}), hidden_checks=int(ch.get("hidden_checks", 0)),
                    hidden_points=float(ch.get("hidden_points", 0.0)), source=ch.get("source") or "",
-                   notes=list(ch.get("notes") or []))
+                   unread=ch.get("unread") is True, notes=list(ch.get("notes") or []))
 
     def to_kept(self) -> dict:
-        """to_dict() with each check's details and the plot data: what from_dict() makes this chapter again from
-        (grader.core.memo)."""
+        """to_dict() with each check's details, the plot data and whether `source` could not be read: what
+        from_dict() makes this chapter again from (grader.core.memo, the history)."""
         data = self.to_dict()
+        if self.unread:
+            data["unread"] = True
         for check, kept in zip(self.checks, data["checks"]):
             if check.details:
                 kept["details"] = jsonable(check.details)

@@ -204,30 +204,29 @@ _FRAME_NAME = re.compile(r'^\s*File "([^"]+)", line (\d+), in (.+)$', re.M)
 
 
 def relocate(error: dict | None, sources: dict[str, ModuleSource]) -> None:
-    """Point an error description from the child (grader.boundary.wire.clean_error) at notebook cells: every
-    traceback frame in a module made from cells names the notebook and "cell N, line M", and
-    error["where"] says where the innermost frame of the learner's files is. Where the outermost frame is the
-    top level of a module made from cells and the error happened further in (a function defined in another
-    cell, a module it imports), error["statement"] says where that top-level statement is and error["inside"]
-    where the error happened ("boom, cell 2, line 3"): the cell to fix may be either. In place."""
-    if not error or not sources:
+    """Say where in the learner's files an error description from the child (grader.boundary.wire.clean_error)
+    happened. Where the outermost traceback frame is the top level of a module (the chapter's file being imported)
+    and the error happened elsewhere (a function it calls, a module it imports), error["statement"] says where
+    that top-level statement is and error["inside"] where the error happened ("boom, line 5"; "boom, cell 2,
+    line 3"): the line to fix may be either. Modules made from cells (`sources`, by the module's file) are named
+    by their notebook and "cell N, line M" there, in every traceback frame too, and error["where"] says where the
+    innermost frame of the learner's files is; any other file by itself and "line N". In place."""
+    if not error:
         return
     trace = error.get("traceback") or ""
+    frames = [(m.group(1), int(m.group(2)), m.group(3).strip()) for m in _FRAME_NAME.finditer(trace)]
+    if len(frames) > 1 and frames[0][2] == "<module>" and frames[0][:2] != frames[-1][:2]:
+        (outer_file, outer_line, _), (file, line, name) = frames[0], frames[-1]
+        error["statement"] = _place(outer_file, outer_line, sources)
+        at = _place(file, line, sources, within=outer_file)
+        error["inside"] = at if name == "<module>" else f"{name}, {at}"
+    if not sources:
+        return
     innermost = None
     for match in _FRAME.finditer(trace):
         innermost = match
     if innermost is not None and innermost.group(2) in sources:
-        source = sources[innermost.group(2)]
-        error["where"] = f"{source.shown}, {source.where(int(innermost.group(4)))}"
-    frames = [(m.group(1), int(m.group(2)), m.group(3).strip()) for m in _FRAME_NAME.finditer(trace)]
-    if len(frames) > 1 and frames[0][0] in sources and frames[0][2] == "<module>":
-        (outer_file, outer_line, _), (file, line, name) = frames[0], frames[-1]
-        outer = sources[outer_file]
-        error["statement"] = f"{outer.shown}, {outer.where(outer_line)}"
-        inner = sources.get(file)
-        at = inner.where(line) if file == outer_file else f"{inner.shown}, {inner.where(line)}" if inner else \
-            f"{file}, line {line}"
-        error["inside"] = at if name == "<module>" else f"{name}, {at}"
+        error["where"] = _place(innermost.group(2), int(innermost.group(4)), sources)
 
     def frame(match: re.Match) -> str:
         source = sources.get(match.group(2))
@@ -236,6 +235,14 @@ def relocate(error: dict | None, sources: dict[str, ModuleSource]) -> None:
         return f"{match.group(1)}{source.shown}\", {source.where(int(match.group(4)))}"
 
     error["traceback"] = _FRAME.sub(frame, trace)
+
+
+def _place(file: str, line: int, sources: dict[str, ModuleSource], within: str = "") -> str:
+    """"exercises/ch06_measurement.py, line 5", or for a module made from cells "exercises/ch06_measurement.ipynb,
+    cell 2, line 3"; without the file where it is `within`."""
+    source = sources.get(file)
+    at = source.where(line) if source is not None else f"line {line}"
+    return at if file == within else f"{source.shown if source is not None else file}, {at}"
 
 
 KERNEL = "the code this notebook's kernel ran"

@@ -235,15 +235,22 @@ def decode_saved_text(data: bytes) -> tuple[str, str]:
     return data.decode("utf-8", "replace"), ""
 
 
-def not_utf8(data: bytes) -> tuple[int, int] | None:
-    """(line, byte) of the first byte that is not UTF-8 in a Python file that declares no other encoding (PEP 263),
-    which `python FILE` refuses ("Non-UTF-8 code starting with ..."); None for a file it reads. (An import takes such
-    bytes in a comment and refuses them in a string.)"""
+def first_not_utf8(data: bytes) -> tuple[int, int] | None:
+    """(line, byte) of the first byte of `data` that is not UTF-8; None where all of it is."""
     try:
         data.decode("utf-8")
         return None
     except UnicodeDecodeError as exc:
-        start = exc.start
+        return data.count(b"\n", 0, exc.start) + 1, data[exc.start]
+
+
+def not_utf8(data: bytes) -> tuple[int, int] | None:
+    """(line, byte) of the first byte that is not UTF-8 in a Python file that declares no other encoding (PEP 263),
+    which `python FILE` refuses ("Non-UTF-8 code starting with ..."); None for a file it reads. (An import takes such
+    bytes in a comment and refuses them in a string.)"""
+    bad = first_not_utf8(data)
+    if bad is None:
+        return None
     import io
     import tokenize
 
@@ -253,17 +260,21 @@ def not_utf8(data: bytes) -> tuple[int, int] | None:
         declared = "utf-8"
     if declared not in ("utf-8", "utf-8-sig"):
         return None  # Python reads it as it declares (or says why not itself)
-    return data.count(b"\n", 0, start) + 1, data[start]
+    return bad
 
 
-def not_utf8_note(shown: str, line: int, byte: int) -> str:
-    """The sentence a learner reads about a Python file with a byte that is not UTF-8 on `line`."""
+PYTHON_REFUSES = "`python` refuses such a file"
+
+
+def not_utf8_note(shown: str, line: int, byte: int, consequence: str = PYTHON_REFUSES) -> str:
+    """The sentence a learner reads about a file with a byte that is not UTF-8 on `line` (the first such): what that
+    does (`consequence`: for a Python file, that `python` refuses it) and how to fix it."""
     try:
         seen = bytes([byte]).decode("cp1252")
         guess = f', "{seen}" in Windows-1252' if seen.isprintable() and not seen.isspace() else ""
     except UnicodeDecodeError:
         guess = ""
-    return (f"{shown}, line {line} is not UTF-8 (byte 0x{byte:02X}{guess}): `python` refuses such a file; save it as "
+    return (f"{shown}, line {line} is not UTF-8 (byte 0x{byte:02X}{guess}): {consequence}; save it as "
             "UTF-8 (in Notepad: Save as, Encoding: UTF-8)")
 
 

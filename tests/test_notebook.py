@@ -49,3 +49,17 @@ def test_a_statement_that_raised_itself_or_a_call_of_a_function_has_no_statement
     called = _error((MODULE, division - 1, "H_jacobian"), (MODULE, division, "boom"))  # a check's call
     relocate(called, sources)
     assert called["where"] == "exercises/ch06_measurement.ipynb, cell 3, line 3" and "statement" not in called
+
+
+def test_a_chapter_file_made_of_no_cells_names_its_statement_by_file_and_line():
+    error = _error((MODULE, 12, "<module>"), (MODULE, 5, "boom"))
+    relocate(error, {})
+    assert (error["statement"], error["inside"]) == ("exercises/ch06_measurement.py, line 12", "boom, line 5")
+    assert "where" not in error and error["traceback"].startswith('  File "exercises/ch06_measurement.py", line 12')
+
+
+def test_an_error_on_the_statements_own_line_names_that_line_alone():
+    sources, call, _ = _sources()
+    error = _error((MODULE, call, "<module>"), (MODULE, call, "<listcomp>"))  # a comprehension's frame (Python 3.11)
+    relocate(error, sources)
+    assert "statement" not in error and error["where"] == "exercises/ch06_measurement.ipynb, cell 5, line 2"

@@ -21,10 +21,11 @@ DEFAULT_SEED = PUBLIC_SEED
 
 
 def _relocate(run: ChapterRun, sources: dict) -> None:
-    """Errors of modules made from notebook cells say "cell N, line M" (grader.notebook.relocate)."""
+    """An import error names the chapter file's top-level statement that raised and where the error happened, when
+    that is elsewhere; errors of modules made from notebook cells say "cell N, line M" (grader.notebook.relocate)."""
+    relocate(run.import_error, sources)
     if not sources:
         return
-    relocate(run.import_error, sources)
     for returned in run.results:
         if returned is not None:
             relocate(returned.error, sources)
@@ -150,6 +151,7 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
                                   files)
         builds_on[cid], reached[cid] = uses, entered
         chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
+        chapter.unread = module in prepared.problems  # a notebook that could not be read: nothing of it was graded
         chapter.notes.extend(prepared.notes.get(module, []))
         report.chapters.append(chapter)
     point_upstream(report, builds_on, reached)

@@ -242,7 +242,7 @@ def import_problem(error: dict, module_file: str) -> str:
     if error.get("where"):  # a notebook: "exercises/ch06_measurement.ipynb, cell 4, line 2"
         module_file, line = error["where"], ""
     inside = ""
-    if error.get("statement"):  # a notebook's top-level statement (its cell runs it), the error further in
+    if error.get("statement"):  # the top-level statement that raised (a notebook: its cell), the error elsewhere
         module_file, line, inside = error["statement"], "", f" (in {error.get('inside')})"
     if exception == "SyntaxError" or exception == "IndentationError":
         head = f"{module_file}{line}: {exception}: {error.get('message')}"

@@ -16,7 +16,12 @@ from pathlib import Path
 
 import yaml
 
-from grader.safe_text import decode_saved_text, encoding_note
+from grader.safe_text import (
+    decode_saved_text,
+    encoding_note,
+    first_not_utf8,
+    not_utf8_note,
+)
 
 # libyaml's composer recurses in C and crashes the process on deeply nested input, while the pure-Python
 # one stops with a RecursionError. So libyaml (15 times faster) composes only a text that cannot nest
@@ -33,6 +38,8 @@ _ENTRY = re.compile(r"^([A-Za-z_][\w-]*)\s*:")
 _START = re.compile(r"^([A-Za-z_][\w-]*)")  # an entry's first line: a question id, with its ':' or without
 MAX_INT_BITS = 1000  # about 301 decimal digits: the integers a float can hold, with room to spare
 TOO_LARGE = "the number is too large"
+NOT_UTF8_READ = ("it was read with each such byte as an unknown character, so an answer that holds one is not what "
+                 "you wrote")
 
 
 @dataclass
@@ -160,9 +167,12 @@ def read(path: Path, shown: str) -> AnswerFile:
     if size > MAX_BYTES:
         out.problems.append(f"{shown} is {size} bytes; answer files are read up to {MAX_BYTES} bytes")
         return out
-    text, encoding = decode_saved_text(path.read_bytes())
+    data = path.read_bytes()
+    text, encoding = decode_saved_text(data)
     if encoding:
         out.notes.append(encoding_note(shown, encoding))
+    elif (bad := first_not_utf8(data)) is not None:  # read all the same, each such byte as an unknown character
+        out.notes.append(not_utf8_note(shown, *bad, NOT_UTF8_READ))
     try:
         node = compose(text)
         if node is not None:

@@ -97,7 +97,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 </section>
 {% for ch in report.chapters %}
 <section class="chapter" id="{{ pid }}{{ ch.chapter }}"{{ landmark(ch.chapter) }}><h{{ h + 1 }} class="chapter-title" id="{{ pid }}{{ ch.chapter }}-title">{{ ch.chapter }} &middot; {{ ch.title }}</h{{ h + 1 }}>
-{% if ch.source and (ch.source.endswith(".ipynb") or ch.source.startswith("the code")) %}<p class="note">graded: {{ ch.source }}</p>{% endif %}
+{% if ch.source and not ch.unread and (ch.source.endswith(".ipynb") or ch.source.startswith("the code")) %}<p class="note">graded: {{ ch.source }}</p>{% endif %}
 {% for note in ch.notes %}<p class="note">note: {{ note }}</p>{% endfor %}
 {% for problem in ch.problems %}<pre class="problem">{{ problem }}</pre>{% endfor %}
 {% if ch.hidden_checks %}<p class="note">{{ plural(ch.hidden_checks, "hidden check") }} ({{ plural(ch.hidden_points, "point") }}) run{{ "s" if ch.hidden_checks == 1 }} when you submit.</p>{% endif %}

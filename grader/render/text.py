@@ -125,8 +125,8 @@ def render(report: Report, *, colour: bool = False, unicode_ok: bool = True, ver
     for chapter in report.chapters:
         title = f"{chapter.chapter}  {chapter.title}"
         out.append(click.style(title, bold=True) if colour else title)
-        if chapter.source.endswith(".ipynb") or chapter.source.startswith("the code"):
-            out.append(f"  graded: {chapter.source}")
+        if not chapter.unread and (chapter.source.endswith(".ipynb") or chapter.source.startswith("the code")):
+            out.append(f"  graded: {chapter.source}")  # a file that could not be read: its problem says so
         for note in chapter.notes:
             out.append(f"  note: {note}")
         for problem in chapter.problems:

@@ -5,6 +5,7 @@ top-level statement that raised (the cell the kernel ran it in) and where, furth
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 from tests.support import build_submission, grade_code
@@ -38,6 +39,25 @@ def test_a_notebook_that_is_not_one_is_named_in_every_message_and_said_once(tmp_
     said = [*chapter.problems, *chapter.notes, *messages]
     assert not any("ch06_measurement.py" in m for m in said), said  # no file that does not exist
     assert sum("not valid JSON" in m for m in said) == 1, said
+
+
+def test_a_notebook_that_could_not_be_read_is_not_said_to_be_graded(tmp_path):
+    from grader.model import ChapterResult, Report
+    from grader.render import html, text
+
+    unread = grade_code(_as_notebook(build_submission(tmp_path / "unread"), '{"cells": ['), ["ch06"])
+    root = build_submission(tmp_path / "read")
+    read = grade_code(_as_notebook(root, _notebook([(root / "exercises" / "ch06_measurement.py").read_text(
+        encoding="utf-8")])), ["ch06"])
+    assert unread.chapters[0].unread and not read.chapters[0].unread
+    kept = ChapterResult.from_dict(unread.chapters[0].to_kept())  # as the memo and the history keep it
+    for report, graded in ((unread, False), (read, True), (Report(unread.submission, [kept]), False)):
+        said = {"text": text.render(report), "html": html.render_fragment(report)}
+        for kind, page in said.items():
+            shown = re.search(r"(^|>) *graded: exercises/ch06_measurement\.ipynb", page, re.MULTILINE)  # its own line
+            assert bool(shown) == graded, (kind, page)
+            assert ("exercises/ch06_measurement.ipynb could not be read: not a Jupyter notebook" in page) != graded, \
+                (kind, page)
 
 
 BOOM = "def boom(x):\n    y = x - x\n    return 1 / y\n"

@@ -194,6 +194,28 @@ def test_bytes_that_are_not_utf8_cost_only_their_answer(quiz):
     assert "ASCII" in results["dbearing_dx"].message
 
 
+
+def test_an_answer_file_in_windows_1252_is_read_with_a_note_at_its_line(quiz):
+    """As a chapter file that is not UTF-8 (tests/test_submission_encodings.py): read as before, with a note at the
+    line of the first such byte, in the report too; a UTF-16 or byte-order-mark file is read as such, with its own
+    note alone."""
+    text = f"bearing_near_dish: {RIGHT_CHOICE}\n# my answers, café\nH_facts: {RIGHT_FACTS}\ndbearing_dx: 2×x\n"
+    cp1252 = ('exercises/answers/ch06.yaml, line 2 is not UTF-8 (byte 0xE9, "é" in Windows-1252): it was read with '
+              "each such byte as an unknown character, so an answer that holds one is not what you wrote; save it as "
+              "UTF-8 (in Notepad: Save as, Encoding: UTF-8)")
+    for encoding, said in (("utf-16", "exercises/answers/ch06.yaml is saved as UTF-16"),
+                           ("utf-8-sig", "exercises/answers/ch06.yaml is saved as UTF-8 with a byte-order mark"),
+                           ("cp1252", cp1252)):
+        notes: list[str] = []
+        results, problems = quiz("ch06", text.encode(encoding), notes=notes)
+        assert results["bearing_near_dish"].status == Status.PASS and results["H_facts"].status == Status.PASS
+        assert not problems, problems
+        assert len(notes) == 1 and notes[0].startswith(said), (encoding, notes)
+    assert "line 4, question dbearing_dx" in results["dbearing_dx"].message  # × read as an unknown character
+    done = CliRunner().invoke(main, ["quiz", "ch06", "--submission", str(quiz.folder.parents[1]), "--format", "json"])
+    assert json.loads(done.output)["chapters"][0]["notes"] == [cp1252], done.output
+
+
 def test_a_file_of_hostile_answers_is_graded_quickly_without_errors(quiz, tmp_path):
     text = "\n".join([
         "bearing_near_dish: \"__import__('os').system('touch pwned')\"",

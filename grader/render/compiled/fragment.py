@@ -1,7 +1,7 @@
 # The report's fragment template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "77671bd89f2a4141d28087f81079e7d8cbe3ce3ccd332ea8364440c847d1a77e"
+DIGEST = "9deee1d1efe20bc2ba23e644610772dcd86ebc8b93d2c932f2c23dddaa5bf526"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'fragment'
 
@@ -176,7 +176,7 @@ def root(context, missing=missing):
         yield '</h'
         yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
         yield '>\n'
-        if (environment.getattr(l_1_ch, 'source') and (context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'endswith'), '.ipynb', _loop_vars=_loop_vars) or context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'startswith'), 'the code', _loop_vars=_loop_vars))):
+        if ((environment.getattr(l_1_ch, 'source') and (not environment.getattr(l_1_ch, 'unread'))) and (context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'endswith'), '.ipynb', _loop_vars=_loop_vars) or context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'startswith'), 'the code', _loop_vars=_loop_vars))):
             pass
             yield '<p class="note">graded: '
             yield escape(environment.getattr(l_1_ch, 'source'))

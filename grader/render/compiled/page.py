@@ -1,7 +1,7 @@
 # The report's page template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "5edad0a76a9cb48fc421d5dfbf8842d469340831c441a1280bf04c5e755fd9f4"
+DIGEST = "c2b714d74709a3388a61e0e8b5c24ff2c976887f78b7fb220ca69e9f29c7a0b6"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'page'
 
@@ -176,7 +176,7 @@ def root(context, missing=missing):
         yield '</h'
         yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 1))
         yield '>\n'
-        if (environment.getattr(l_1_ch, 'source') and (context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'endswith'), '.ipynb', _loop_vars=_loop_vars) or context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'startswith'), 'the code', _loop_vars=_loop_vars))):
+        if ((environment.getattr(l_1_ch, 'source') and (not environment.getattr(l_1_ch, 'unread'))) and (context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'endswith'), '.ipynb', _loop_vars=_loop_vars) or context.call(environment.getattr(environment.getattr(l_1_ch, 'source'), 'startswith'), 'the code', _loop_vars=_loop_vars))):
             pass
             yield '<p class="note">graded: '
             yield escape(environment.getattr(l_1_ch, 'source'))
