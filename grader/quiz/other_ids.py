@@ -6,6 +6,10 @@ learner.yaml names nobody), the id in the submission's learner.yaml, or the id i
 as. Then the learner did the work with the wrong numbers: the message says so, instead of "not
 within the tolerance of the right value", and how to fix it. Nothing is graded differently: the
 points stay those of the graded id.
+
+A fit on option letters alone is weak evidence: a wrong letter is another id's right one about one time in four.
+So another id is named only where a question with numbers of its own fits it, or at least LETTERS_ALONE
+questions of the chapter do; else the failures keep their own messages.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from grader.model import Report, Status
 from grader.quiz import DEFAULT_LEARNER, bank, grade_quiz
 
 MARK = "other_id"  # CheckResult.details key: the id whose numbers the answer fits
+LETTERS_ALONE = 3  # questions whose letters alone fit another id, needed to name it without a fit on numbers
 
 
 def _why(other: str) -> str:
@@ -31,9 +36,11 @@ def explain(report: Report, answers_folder: Path, shown_folder: str, graded: str
     found = []
     for chapter in report.chapters:
         try:
-            per_learner = {q.id for q in bank.questions(chapter.chapter) if q.params or q.options}
+            asked = [q for q in bank.questions(chapter.chapter) if q.params or q.options]
         except (FileNotFoundError, bank.BankError):
             continue
+        per_learner = {q.id for q in asked}
+        by_numbers = {q.id for q in asked if q.params}
         failed = {c.function: c for c in chapter.checks
                   if c.kind == "quiz" and c.status == Status.FAIL and c.function in per_learner and c.got is not None}
         fits: dict[str, str] = {}
@@ -45,7 +52,9 @@ def explain(report: Report, answers_folder: Path, shown_folder: str, graded: str
                 results, _ = grade_quiz(chapter.chapter, answers_folder, other, shown_folder, only=wanted)
             except Exception:  # noqa: BLE001  an explanation never costs the report
                 continue
-            fits.update({r.function: other for r in results if r.status == Status.PASS})
+            fitted = {r.function for r in results if r.status == Status.PASS}
+            if fitted & by_numbers or len(fitted) >= LETTERS_ALONE:  # else chance can explain it: not said
+                fits.update(dict.fromkeys(fitted, other))
         for question, other in fits.items():
             check = failed[question]
             check.details[MARK] = other
