@@ -16,9 +16,11 @@ tests/course/test_statistics.py checks them against scipy.stats on random tables
 
 A quiz question left blank is no wrong answer: its learners are counted apart (`unanswered`) and left out of
 its numbers. Computed for a class of MIN_LEARNERS or more; below RELIABLE_LEARNERS the numbers are rough and
-nothing is flagged, nor is an item answered by fewer than MIN_LEARNERS, nor a code check for being easy. The
-rules that flag an item are the constants below, stated in the instructor's guide. Reads only judged results
-(grader.model.Report) and the question banks (whose numbers each learner had); never a key.
+nothing is flagged. An item is flagged only with evidence: where its CONFIDENCE interval (Wilson's for a facility,
+Fisher's z for a correlation) lies wholly beyond a rule's bound, or a parameter's test is significant after Holm's
+correction; never an item answered by fewer than MIN_LEARNERS, nor a code check for being easy. The rules are the
+constants below, stated in the instructor's guide. Reads only judged results (grader.model.Report) and the
+question banks (whose numbers each learner had); never a key.
 """
 
 from __future__ import annotations
@@ -33,17 +35,18 @@ from grader.model import Report, Status
 
 MIN_LEARNERS = 5  # below this, no statistics at all
 RELIABLE_LEARNERS = 30  # below this, rough: shown, never flagged
-FACILITY_HIGH, FACILITY_LOW = 0.95, 0.2  # flagged: too easy above, too hard below
-DISCRIMINATION_LOW = 0.1  # flagged: an item that tells strong learners from weak ones less than this
-DISTRACTOR_HIGH = 0.1  # flagged: a wrong option whose choosers' rest score correlates more than this ...
-DISTRACTOR_LEARNERS = 5  # ... chosen by at least this many learners
-PARAMETER_ALPHA = 0.05  # flagged: facility differs between a parameter's bins, family-wise over the class (Holm)
+FACILITY_HIGH, FACILITY_LOW = 0.95, 0.2  # flagged: a quiz question surely easier than FACILITY_HIGH, an item harder than LOW
+DISCRIMINATION_LOW = 0.1  # flagged: an item that surely tells strong learners from weak ones less than this
+DISTRACTOR_LEARNERS = 5  # flagged: a wrong option surely chosen more by strong learners, chosen by at least this many
+CONFIDENCE = 0.95  # a flag's evidence: the item's CONFIDENCE interval lies wholly beyond the rule's bound
+PARAMETER_ALPHA = 0.05  # ... or, for facility by parameter, p below this after Holm's correction over the class's tests
 UPPER_LOWER_SHARE = 0.27  # the upper and lower groups of the upper-lower index
 MIN_EXPECTED = 5  # a chi-square test where every cell expects at least this many learners, else Fisher's on 2 bins
+_Z = 1.959963984540054  # the normal quantile of a two-sided CONFIDENCE interval
 
 RULES = {"facility_high": FACILITY_HIGH, "facility_low": FACILITY_LOW, "discrimination_low": DISCRIMINATION_LOW,
-         "distractor_high": DISTRACTOR_HIGH, "distractor_learners": DISTRACTOR_LEARNERS,
-         "parameter_alpha": PARAMETER_ALPHA, "min_learners": MIN_LEARNERS, "reliable_learners": RELIABLE_LEARNERS}
+         "distractor_learners": DISTRACTOR_LEARNERS, "confidence": CONFIDENCE, "parameter_alpha": PARAMETER_ALPHA,
+         "min_learners": MIN_LEARNERS, "reliable_learners": RELIABLE_LEARNERS}
 
 
 @dataclass
@@ -137,12 +140,16 @@ def compute(scores: ItemScores) -> dict | None:
     items = [_item_statistics(item, points[:, j], judged[:, j], total, scores)
              for j, item in enumerate(scores.items.values())]
     method = _parameter_tests(items, scores, points, judged)
-    for entry in items:
-        if rough:  # shown, never flagged
-            for parameter in entry["parameters"]:
-                parameter["differs"] = False
-        else:
-            entry["flags"] = _flags(entry)
+    tests = [test for entry in items for test in _tests(entry)]
+    by_parameter = [test for test in tests if test.target is not None]
+    holm([test.p for test in by_parameter], by_parameter)
+    for test in tests:
+        if test.target is not None:  # a parameter's own record of its test
+            test.target["p_holm"] = _rounded(test.p_holm, 6)
+            test.target["differs"] = not rough and test.flagged
+        if not rough and test.flagged:
+            test.entry["flags"].append(test.said())
+            test.entry["evidence"].append(test.evidence())
     chapters = []
     for chapter in dict.fromkeys(item.chapter for item in scores.items.values()):
         columns = [j for j, item in enumerate(scores.items.values()) if item.chapter == chapter]
@@ -163,7 +170,7 @@ def _item_statistics(item: _Item, column: np.ndarray, judged: np.ndarray, total:
              "unanswered": scores.unanswered.get(item.key, 0), "facility": _rounded(facility),
              "discrimination": _rounded(correlation(x, rest)),
              "upper_lower": _rounded(upper_lower(x / item.max_points, rest)), "options": [], "parameters": [],
-             "flags": []}
+             "flags": [], "evidence": []}
     chosen = scores.chosen.get(item.key)
     if chosen:
         rows = np.flatnonzero(judged)
@@ -227,7 +234,6 @@ def _bins(values: np.ndarray, learners: int) -> np.ndarray:
 def _parameter_tests(items: list[dict], scores: ItemScores, points: np.ndarray, judged: np.ndarray) -> str:
     """Fill in each parametrised question's `parameters`: its facility per bin of each parameter's values, and the
     test of whether full marks are as frequent in every bin; returns how it was tested."""
-    tested = []
     for j, (item, entry) in enumerate(zip(scores.items.values(), items)):
         question = scores.questions.get((item.chapter, item.question)) if item.kind == "quiz" else None
         if question is None or not question.params:
@@ -247,12 +253,9 @@ def _parameter_tests(items: list[dict], scores: ItemScores, points: np.ndarray, 
                 for b in np.unique(bins)], "test": None, "p": None, "p_holm": None, "differs": False}
             if len(result["bins"]) > 1:
                 result["test"], result["p"] = _test(bins, right, values)
-                tested.append(result)
             entry["parameters"].append(result)
-    _holm(tested)
     return ("a chi-square test of homogeneity of full marks across the bins, or Fisher's exact test on two bins "
-            f"(below and above the median) where a cell would expect fewer than {MIN_EXPECTED} learners; p-values "
-            f"corrected by Holm's method over every parameter tested in the class, flagged below {PARAMETER_ALPHA:g}")
+            f"(below and above the median) where a cell would expect fewer than {MIN_EXPECTED} learners")
 
 
 def _test(bins: np.ndarray, right: np.ndarray, values: np.ndarray) -> tuple[str, float]:
@@ -321,43 +324,121 @@ def fisher_exact(table: list[list[int]]) -> float:
     return min(1.0, sum(p for p in map(chance, range(low, high + 1)) if p <= observed * (1 + 1e-7)))
 
 
-def _holm(tested: list[dict]) -> None:
-    """Holm's step-down correction of the tests' p-values (`p_holm`), and `differs` where below PARAMETER_ALPHA."""
-    order = sorted(range(len(tested)), key=lambda i: tested[i]["p"])
+def holm(p_values: list[float], tests: list) -> None:
+    """Holm's step-down correction of `p_values` over their family: each test's `p_holm`, monotone in p."""
+    order = sorted(range(len(p_values)), key=lambda i: p_values[i])
     running = 0.0
     for rank, i in enumerate(order):
-        running = max(running, min(1.0, (len(tested) - rank) * tested[i]["p"]))
-        tested[i]["p_holm"] = running
-        tested[i]["differs"] = running < PARAMETER_ALPHA
+        running = max(running, min(1.0, (len(p_values) - rank) * p_values[i]))
+        tests[i].p_holm = running
 
 
-# ------------------------------------------------------------------------------------ flags
+# ------------------------------------------------------------------------------------ flags and their evidence
 
-def _flags(entry: dict) -> list[str]:
-    """What the rules (the instructor's guide states them) say about one item (the class is large enough to say anything)."""
-    if entry.get("learners", MIN_LEARNERS) < MIN_LEARNERS:
-        return []  # answered by too few to say anything (a blank answer is no evidence)
-    flags = []
+@dataclass
+class _Test:
+    """One rule's test of one item: its estimate, CONFIDENCE interval and one-sided p-value; flagged where the
+    interval lies wholly beyond the rule's bound (p below (1 - CONFIDENCE) / 2), a parameter's test where its p
+    after Holm's correction over every parameter tested in the class is below PARAMETER_ALPHA."""
+
+    entry: dict
+    rule: str  # a key of RULES (or "parameter")
+    estimate: float
+    interval: tuple[float, float] | None
+    p: float
+    words: str  # what is flagged, with the estimate: "very hard: facility 0.02"
+    advice: str = ""
+    detail: dict = field(default_factory=dict)  # the option or parameter tested
+    target: dict | None = None  # a parameter's record, which shows its p after Holm too
+    p_holm: float | None = None
+
+    @property
+    def flagged(self) -> bool:
+        if self.target is not None:
+            return self.p_holm is not None and self.p_holm < PARAMETER_ALPHA
+        return self.p < (1 - CONFIDENCE) / 2
+
+    def said(self) -> str:
+        if self.interval is None:
+            evidence = f"{self.entry['learners']} learners; p = {self.p_holm:.2g} after Holm's correction"
+        else:
+            evidence = (f"{CONFIDENCE:.0%} confidence interval {self.interval[0]:.2f} to {self.interval[1]:.2f}, "
+                        f"{self.entry['learners']} learners")
+        return f"{self.words} ({evidence})" + (f": {self.advice}" if self.advice else "")
+
+    def evidence(self) -> dict:
+        return {"rule": self.rule, "estimate": _rounded(self.estimate), "interval":
+                None if self.interval is None else [_rounded(self.interval[0]), _rounded(self.interval[1])],
+                "learners": self.entry["learners"], "p": _rounded(self.p, 8),
+                "p_holm": None if self.p_holm is None else _rounded(self.p_holm, 8), **self.detail}
+
+
+def _normal_below(z: float) -> float:
+    """P(Z <= z) for a standard normal Z."""
+    return 0.5 * math.erfc(-z / math.sqrt(2))
+
+
+def correlation_test(r: float, n: int, bound: float) -> tuple[float, tuple[float, float]]:
+    """(the one-sided p-value that the correlation behind r, of n pairs, is at least `bound`; r's CONFIDENCE
+    interval), by Fisher's z-transformation."""
+    z = math.atanh(max(-0.999999, min(0.999999, r)))
+    spread = 1 / math.sqrt(n - 3)
+    return _normal_below((z - math.atanh(bound)) / spread), (math.tanh(z - _Z * spread), math.tanh(z + _Z * spread))
+
+
+def share_test(share: float, n: int, bound: float) -> tuple[float, tuple[float, float]]:
+    """(the one-sided p-value that the share behind `share`, of n learners, is at least `bound` (a score test,
+    conservative for partial points); its Wilson CONFIDENCE interval)."""
+    p_value = _normal_below((share - bound) / math.sqrt(bound * (1 - bound) / n))
+    centre = (share + _Z * _Z / (2 * n)) / (1 + _Z * _Z / n)
+    half = _Z / (1 + _Z * _Z / n) * math.sqrt(max(0.0, share * (1 - share)) / n + _Z * _Z / (4 * n * n))
+    return p_value, (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def _tests(entry: dict) -> list[_Test]:
+    """Every rule's test of one item (the instructor's guide states the rules): none for an item answered by fewer
+    than MIN_LEARNERS (a blank answer is no evidence), none for a code check being easy (passing is its goal)."""
+    n = entry["learners"]
+    if n < MIN_LEARNERS:
+        return []
+    tests = []
     facility, discrimination = entry["facility"], entry["discrimination"]
-    if discrimination is not None and discrimination < DISCRIMINATION_LOW:
-        flags.append(f"does not tell strong learners from weak ones: discrimination {discrimination:.2f} "
-                     f"(below {DISCRIMINATION_LOW:g})")
+    code = entry["kind"] == "code"
+    if discrimination is not None and n > 3:
+        p, interval = correlation_test(discrimination, n, DISCRIMINATION_LOW)
+        tests.append(_Test(entry, "discrimination_low", discrimination, interval, p,
+                           f"does not tell strong learners from weak ones: discrimination {discrimination:+.2f}, "
+                           f"below {DISCRIMINATION_LOW:g}",
+                           "does the check fail right answers?" if code else "is the key right?"))
     for option in entry["options"]:
-        if not option["right"] and option["chosen"] >= DISTRACTOR_LEARNERS and \
-                (option["discrimination"] or 0) > DISTRACTOR_HIGH:
-            flags.append(f"the wrong option {option['option']}) is chosen more by strong learners (discrimination "
-                         f"{option['discrimination']:+.2f}, chosen by {option['chosen']}): is the key right, the "
-                         "option ambiguous?")
+        answered = round(option["chosen"] / option["share"]) if option["share"] else 0
+        if option["right"] or option["chosen"] < DISTRACTOR_LEARNERS or option["discrimination"] is None \
+                or answered <= 3:
+            continue
+        p, interval = correlation_test(-option["discrimination"], answered, 0.0)  # p that it is at most 0
+        tests.append(_Test(entry, "distractor", option["discrimination"], (-interval[1], -interval[0]), p,
+                           f"the wrong option {option['option']}) is chosen more by strong learners: its "
+                           f"discrimination {option['discrimination']:+.2f}, chosen by {option['chosen']}",
+                           "is the key right, the option ambiguous?", {"option": option["option"]}))
+    if facility is not None:
+        p, interval = share_test(facility, n, FACILITY_LOW)
+        tests.append(_Test(entry, "facility_low", facility, interval, p,
+                           f"very hard: facility {facility:.2f}, below {FACILITY_LOW:g}",
+                           "does the check fail right answers, or is the task unclear?" if code else ""))
+        if not code:
+            p, interval = share_test(1 - facility, n, 1 - FACILITY_HIGH)
+            tests.append(_Test(entry, "facility_high", facility, (1 - interval[1], 1 - interval[0]), p,
+                               f"very easy: facility {facility:.2f}, above {FACILITY_HIGH:g}"))
     for parameter in entry["parameters"]:
-        if parameter["differs"]:
-            by_bin = ", ".join(f"{_values(b['low'], b['high'])}: {b['facility']:.2f}" for b in parameter["bins"])
-            flags.append(f"harder for some learners' numbers: facility by {parameter['name']} {by_bin} "
-                         f"({parameter['test']}, p = {parameter['p_holm']:.2g} after Holm's correction)")
-    if facility is not None and facility > FACILITY_HIGH and entry["kind"] == "quiz":  # passing is a check's goal
-        flags.append(f"very easy: facility {facility:.2f} (above {FACILITY_HIGH:g})")
-    if facility is not None and facility < FACILITY_LOW:
-        flags.append(f"very hard: facility {facility:.2f} (below {FACILITY_LOW:g})")
-    return flags
+        if parameter["p"] is None:
+            continue
+        by_bin = ", ".join(f"{_values(b['low'], b['high'])}: {b['facility']:.2f}" for b in parameter["bins"])
+        spread = [b["facility"] for b in parameter["bins"] if b["facility"] is not None]
+        tests.append(_Test(entry, "parameter", max(spread) - min(spread), None, parameter["p"],
+                           f"harder for some learners' numbers: facility by {parameter['name']} {by_bin}, by "
+                           f"{parameter['test'].replace('chi-square', 'a chi-square test')}", "is the key right for every number drawn?",
+                           {"parameter": parameter["name"]}, target=parameter))
+    return tests
 
 
 def _values(low: float, high: float) -> str:

@@ -1,7 +1,8 @@
-"""The class summary's figure per chapter: each item's facility against its discrimination, items labelled (by their
-number in the chapter's table; a flagged one by its name too), the flagging rules as guide lines; drawn by matplotlib as the HTML report's figures are (grader.render.figures: an SVG
-data URI with a text alternative that says the same in numbers). It reads only the numbers grader.course.statistics
-computed."""
+"""The class summary's figure per chapter: each item's facility against its discrimination on axes fitted to the
+items, labelled (by their number in the chapter's table; a flagged one by its name too) where no label overlaps
+another or leaves the figure, the flagging rules' bounds in view as guide lines; drawn by matplotlib as the HTML
+report's figures are (grader.render.figures: an SVG data URI with a text alternative that says the same in
+numbers). It reads only the numbers grader.course.statistics computed."""
 
 from __future__ import annotations
 
@@ -44,7 +45,11 @@ def _short(item: dict) -> str:
     return item["id"].split("/", 1)[1]
 
 
-def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figure:
+def canvas(chapter: str, items: list[dict], rules: dict, learners: int):
+    """The chapter's figure as a matplotlib Figure, drawn: axes fitted to the items' range, the rules' guide lines
+    that fall inside it, and each label placed where it overlaps no other text, marker or the legend and stays inside
+    the figure (items at one spot share a label; one that fits nowhere is left to the table, and `unlabelled` says
+    which)."""
     preload()
     from matplotlib.figure import Figure as Canvas
 
@@ -56,25 +61,101 @@ def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figu
         if group:
             ax.scatter([i["facility"] for i in group], [i["discrimination"] for i in group], s=28, color=colour,
                        marker=marker, label=label, zorder=3)
-    for number, item in enumerate(items, 1):  # by number (the chapter's table has them), flagged ones by name too
-        if item in placed:
-            label = f"{number} {_short(item)}" if item["flags"] else str(number)
-            ax.annotate(label, (item["facility"], item["discrimination"]), xytext=(3, 2), textcoords="offset points",
-                        fontsize=7 if item["flags"] else 6, color="#111827" if item["flags"] else "#374151")
+    x_range = _fitted([i["facility"] for i in placed], 0.0, 1.0)
+    y_range = _fitted([i["discrimination"] for i in placed], -1.0, 1.0)
+    ax.set(xlim=x_range, ylim=y_range, xlabel="facility (mean share of the item's points)",
+           ylabel="discrimination (with the rest of the score)")
+    shown = []
     for x in (rules["facility_low"], rules["facility_high"]):
-        ax.axvline(x, color=GUIDE, linestyle=":", linewidth=1)
-    ax.axhline(rules["discrimination_low"], color=GUIDE, linestyle=":", linewidth=1)
-    low = min([-0.1] + [i["discrimination"] for i in placed])
-    high = max([0.5] + [i["discrimination"] for i in placed])
-    ax.set(xlim=(-0.02, 1.05), ylim=(low - 0.05, min(1.0, high + 0.1)), xlabel="facility (mean share of the item's points)",
-           ylabel="discrimination (with the rest of the score)",
-           title=f"{chapter}: facility against discrimination ({learners} learners)")
-    ax.legend(fontsize=8, loc="upper left")
-    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.12, top=0.92)
-    caption = (f"{chapter}: each item's facility against its discrimination; dotted lines at the flagging rules "
-               f"(facility {rules['facility_low']:g} and {rules['facility_high']:g}, discrimination "
-               f"{rules['discrimination_low']:g}); flagged items as triangles, with their names; the numbers are "
-               "those of the chapter's table of items")
+        if x_range[0] < x < x_range[1]:
+            ax.axvline(x, color=GUIDE, linestyle=":", linewidth=1)
+            shown.append(f"facility {x:g}")
+    if y_range[0] < rules["discrimination_low"] < y_range[1]:
+        ax.axhline(rules["discrimination_low"], color=GUIDE, linestyle=":", linewidth=1)
+        shown.append(f"discrimination {rules['discrimination_low']:g}")
+    ax.set_title(f"{chapter}: facility against discrimination ({learners} learners)", loc="left", fontsize=10)
+    if placed:
+        ax.legend(fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=2, frameon=False,
+                  borderaxespad=0.2)
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.12, top=0.9)
+    fig.unlabelled = _place_labels(fig, ax, items, placed)
+    fig.guides = shown
+    return fig
+
+
+def _fitted(values: list[float], lowest: float, highest: float) -> tuple[float, float]:
+    """Axis limits around `values` with a margin (at least a tenth of the scale wide), within lowest and highest
+    widened by the margin."""
+    if not values:
+        return lowest, highest
+    low, high = min(values), max(values)
+    width = max(high - low, 0.1 * (highest - lowest))
+    middle = (low + high) / 2
+    low, high = middle - width / 2, middle + width / 2
+    if low < lowest:
+        low, high = lowest, lowest + width
+    if high > highest:
+        low, high = highest - width, highest
+    margin = 0.08 * width
+    return low - margin, high + margin
+
+
+_OFFSETS = [(dx * r, dy * r) for r in (4, 10, 18) for dx, dy in
+            ((1, 0.5), (1, -1.5), (-1, 0.5), (-1, -1.5), (0, 1), (0, -2.5), (1.5, 1), (-1.5, -2.5))]
+
+
+def _place_labels(fig, ax, items: list[dict], placed: list[dict]) -> list[str]:
+    """Label the placed items (by number, a flagged one by its name too), each where its text overlaps nothing
+    already drawn and stays inside the figure; items whose markers fall within a few pixels of each other share a
+    label. Returns the labels that fit nowhere (their items are in the chapter's table)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.transforms import Bbox
+
+    renderer = FigureCanvasAgg(fig).get_renderer()  # matplotlib's own text extents, as the SVG's text is laid out
+    numbers = {id(item): number for number, item in enumerate(items, 1)}
+    at = {id(item): ax.transData.transform((item["facility"], item["discrimination"])) for item in placed}
+    groups: list[list[dict]] = []
+    for item in sorted(placed, key=lambda i: (not i["flags"], numbers[id(i)])):  # flagged ones first
+        near = next((g for g in groups if abs(at[id(g[0])] - at[id(item)]).max() < 5), None)
+        if near is None:
+            groups.append([item])
+        else:
+            near.append(item)
+    taken = [Bbox.from_extents(x - 4, y - 4, x + 4, y + 4) for x, y in at.values()]  # the markers
+    taken += [text.get_window_extent(renderer) for text in (ax.title, ax.xaxis.label, ax.yaxis.label)]
+    legend = ax.get_legend()
+    if legend is not None:
+        taken.append(legend.get_window_extent(renderer))
+    inside = fig.bbox.padded(-2)
+    unlabelled = []
+    for group in groups:
+        label = ", ".join(f"{numbers[id(i)]} {_short(i)}" if i["flags"] else str(numbers[id(i)]) for i in group)
+        flagged = any(i["flags"] for i in group)
+        note = ax.annotate(label, (group[0]["facility"], group[0]["discrimination"]), textcoords="offset points",
+                           xytext=(0, 0), fontsize=7 if flagged else 6, color="#111827" if flagged else "#374151",
+                           annotation_clip=False)
+        for offset in _OFFSETS:
+            note.set_position(offset)
+            box = note.get_window_extent(renderer)
+            if inside.contains(box.x0, box.y0) and inside.contains(box.x1, box.y1) and \
+                    not any(box.overlaps(other) for other in taken):
+                taken.append(box)
+                break
+        else:
+            note.remove()
+            unlabelled.append(label)
+    return unlabelled
+
+
+def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figure:
+    fig = canvas(chapter, items, rules, learners)
+    placed = [i for i in items if i["facility"] is not None and i["discrimination"] is not None]
+    guides = f"dotted lines at the flagging rules' bounds in view ({', '.join(fig.guides)})" if fig.guides else \
+        "no flagging rule's bound falls in view"
+    caption = (f"{chapter}: each item's facility against its discrimination, the axes fitted to the items; {guides}; "
+               "flagged items as triangles, with their names; the numbers are those of the chapter's table of items")
+    if fig.unlabelled:
+        caption += f"; not labelled where they would overlap: {'; '.join(fig.unlabelled)}"
     return Figure(svg_uri(fig), f"{caption}. {_in_numbers(items, placed)}", caption, 750, 460,
                   _in_numbers(items, placed))
 

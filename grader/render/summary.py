@@ -28,9 +28,10 @@ from html import escape as _escape
 from grader.model import Report, Status
 from grader.safe_text import for_html, for_json
 
-STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1000px;margin:24px auto;color:#1f2937}"
-         "table{border-collapse:collapse}td,th{padding:3px 10px;border-bottom:1px solid #e5e7eb;text-align:left;"
-         "vertical-align:top}.bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}"
+STYLE = ("body{font:15px/1.45 system-ui,sans-serif;max-width:1180px;margin:24px auto;padding:0 16px;"
+         "color:#1f2937}table{border-collapse:collapse;width:100%}td,th{padding:3px 10px;border-bottom:1px solid "
+         "#e5e7eb;text-align:left;vertical-align:top;overflow-wrap:break-word}td.num,th.num{white-space:nowrap}"
+         "ul.flagged>li{margin:0 0 10px}.bar{background:#2563eb;height:14px;display:inline-block}.num{text-align:right}"
          "pre{white-space:pre-wrap;background:#f3f4f6;padding:4px 6px;margin:2px 0;font-size:.85em}"
          "figure{border:1px solid #d1d5db;border-radius:6px;padding:10px;margin:12px 0}figure img{max-width:100%;"
          "height:auto;display:block}figcaption{font-size:.9em;color:#374151}.flag{color:#9a3412}")
@@ -127,7 +128,7 @@ class Tally:
                     if check.mistake:
                         self.mistakes[(chapter.chapter, check.function, check.kind, check.mistake)].add(learner)
                     if check.message:
-                        self.messages.add(chapter.chapter, first_line(check.message)[:160])
+                        self.messages.add(key, check.mistake or "", first_line(check.message)[:160])
                 if check.kind == "quiz" and check.status in (Status.PASS, Status.FAIL):  # judged: `answer` says
                     for option in check.answer.get("options", ()):
                         self.chosen[(chapter.chapter, check.function, option)] += 1
@@ -164,7 +165,8 @@ class Tally:
                              for (c, q, form, _), entry in sorted(self.forms.items(),
                                                                    key=lambda kv: (kv[0][:2], -kv[1]["learners"],
                                                                                    kv[0]))],
-            "messages": [{"chapter": c, "message": m, "count": n} for (c, m), n in self.messages.most_common(25)],
+            "messages": [{"check": key, "chapter": key.split("/", 1)[0], "mistake": mistake or None, "message": m,
+                          "count": n} for (key, mistake, m), n in self.messages.most_common(25)],
         }
 
     def close(self) -> None:
@@ -181,24 +183,24 @@ def first_line(message: str) -> str:
 
 
 class Messages:
-    """How often each (chapter, message) was seen, as a Counter counts them, kept in a private temporary
-    SQLite database (its cache small, the rest on disk) instead of in memory; most_common gives what
-    Counter.most_common gives: the most frequent first, ties in the order first seen."""
+    """How often each failure message was seen per check and named mistake, as a Counter counts them, kept in a
+    private temporary SQLite database (its cache small, the rest on disk) instead of in memory; most_common gives
+    what Counter.most_common gives: the most frequent first, ties in the order first seen."""
 
     def __init__(self) -> None:
         self.db = sqlite3.connect("")  # "": a temporary database of its own, deleted when closed
-        self.db.execute("CREATE TABLE seen (chapter TEXT, message BLOB, n INTEGER, first INTEGER, "
-                        "PRIMARY KEY (chapter, message))")
+        self.db.execute("CREATE TABLE seen (item TEXT, mistake TEXT, message BLOB, n INTEGER, first INTEGER, "
+                        "PRIMARY KEY (item, mistake, message))")
         self.order = 0
 
-    def add(self, chapter: str, message: str) -> None:
+    def add(self, item: str, mistake: str, message: str) -> None:
         self.order += 1  # the message as UTF-8, lone surrogates as they are (a text column refuses them)
-        self.db.execute("INSERT INTO seen VALUES (?, ?, 1, ?) ON CONFLICT (chapter, message) DO UPDATE SET n = n + 1",
-                        (chapter, message.encode("utf-8", "surrogatepass"), self.order))
+        self.db.execute("INSERT INTO seen VALUES (?, ?, ?, 1, ?) ON CONFLICT (item, mistake, message) "
+                        "DO UPDATE SET n = n + 1", (item, mistake, message.encode("utf-8", "surrogatepass"), self.order))
 
-    def most_common(self, count: int) -> list[tuple[tuple[str, str], int]]:
-        return [((chapter, message.decode("utf-8", "surrogatepass")), n) for chapter, message, n in self.db.execute(
-            "SELECT chapter, message, n FROM seen ORDER BY n DESC, first LIMIT ?", (count,))]
+    def most_common(self, count: int) -> list[tuple[tuple[str, str, str], int]]:
+        return [((item, mistake, message.decode("utf-8", "surrogatepass")), n) for item, mistake, message, n in
+                self.db.execute("SELECT item, mistake, message, n FROM seen ORDER BY n DESC, first LIMIT ?", (count,))]
 
     def close(self) -> None:
         self.db.close()
@@ -268,22 +270,27 @@ def _statistics_parts(found: dict | None) -> Iterator[str]:
            f"<p>From {_count(found['learners'], 'graded learner')}, every check and quiz question: its "
            "<em>facility</em> (the mean share of its points), its <em>discrimination</em> (the correlation of its "
            "points with the rest of the learner's score) and the upper-lower index (facility among the 27% with the "
-           "highest rest scores minus among the 27% with the lowest). Flagged (the instructor's guide's rules): facility above "
-           f"{rules['facility_high']:g} or below {rules['facility_low']:g}, discrimination below "
-           f"{rules['discrimination_low']:g}, a wrong option chosen more by strong learners (its discrimination above "
-           f"{rules['distractor_high']:g}, chosen by {rules['distractor_learners']} or more), and facility that "
-           f"differs between the learners' own numbers beyond chance ({escape(found['parameter_test'])}).</p>")
+           "highest rest scores minus among the 27% with the lowest). An item is flagged only with evidence (the "
+           "instructor's guide states the rules): where its "
+           f"{rules['confidence']:.0%} confidence interval lies wholly beyond a rule's bound: facility below "
+           f"{rules['facility_low']:g}, or above {rules['facility_high']:g} for a quiz question (passing is a check's "
+           f"goal), discrimination below {rules['discrimination_low']:g}, a wrong option chosen by "
+           f"{rules['distractor_learners']} or more whose choice goes with a higher rest score; and where facility "
+           f"differs between the learners' own numbers beyond chance ({escape(found['parameter_test'])}, p below "
+           f"{rules['parameter_alpha']:g} after Holm's correction over every parameter tested).</p>")
     if found["rough"]:
         yield (f"<p id='statistics-rough'><strong>Rough:</strong> fewer than {rules['reliable_learners']} learners; "
                "these numbers move a lot by chance, so nothing is flagged and no figure is drawn.</p>")
     items = found["items"]
     flagged = [item for item in items if item["flags"]]
     if flagged:
-        yield _table("flagged-items", "Flagged items", ["item", "facility", "discrimination", "why"],
-                     [[f"{escape(i['id'])}<br><small>{escape(i['description'])}</small>", _number(i["facility"]),
-                       _number(i["discrimination"]),
-                       "<br>".join(f"<span class='flag'>{escape(flag)}</span>" for flag in i["flags"])]
-                      for i in flagged], {1, 2})
+        yield "<h2 id='flagged-items'>Flagged items: what a course author should look at</h2><ul class='flagged'>"
+        for i in flagged:
+            yield (f"<li><strong>{escape(i['id'])}</strong>: facility {_number(i['facility'])}, discrimination "
+                   f"{_number(i['discrimination'])}, {_count(i['learners'], 'learner')}<br><small>"
+                   f"{escape(i['description'])}</small><ul>"
+                   + "".join(f"<li class='flag'>{escape(flag)}</li>" for flag in i["flags"]) + "</ul></li>")
+        yield "</ul>"
     elif not found["rough"]:
         yield "<p id='flagged-items'>No item is flagged.</p>"
     drawn = {}
@@ -400,9 +407,10 @@ def html_parts(view: Summary) -> Iterator[str]:
                      [[escape(f["question"]), f"<code>{escape(f['form'])}</code>",
                        escape(f["verdict"] + (f" ({f['mistake']})" if f["mistake"] else "")),
                        str(f["learners"])] for f in counts["answer_forms"]], {3})
-        yield _table("messages", "Most common failure messages", ["count", "chapter", "message"],
-                     [[str(m["count"]), escape(m["chapter"]), escape(m["message"])] for m in counts["messages"]],
-                     {0})
+        yield _table("messages", "Most common failures, by check and named mistake",
+                     ["learners", "check", "named mistake", "message"],
+                     [[str(m["count"]), escape(m["check"]), escape(m["mistake"] or "none named"),
+                       escape(m["message"])] for m in counts["messages"]], {0})
         yield from _statistics_parts(view.statistics)
     if view.similar:
         rows = []

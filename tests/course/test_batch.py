@@ -301,17 +301,18 @@ def test_class_outputs_do_not_depend_on_the_order_learners_finish_in(submissions
 
 
 def test_the_summary_counts_failure_messages_as_a_counter_does():
-    """summary.Messages keeps the messages on disk, and ranks them as Counter.most_common: by count, ties in the
-    order first seen (a lone surrogate kept)."""
+    """summary.Messages keeps the messages per check and named mistake on disk, and ranks them as
+    Counter.most_common: by count, ties in the order first seen (a lone surrogate kept)."""
     from collections import Counter
 
     from grader.render.summary import Messages
 
-    seen = [("ch06", "b"), ("ch06", "a"), ("ch03", "b"), ("ch06", "a"), ("ch06", "lone \udcff"), ("ch06", "b"),
-            *[("ch07", f"wrong at {i}") for i in range(30)], ("ch06", "lone \udcff")]
+    seen = [("ch06/x", "", "b"), ("ch06/x", "", "a"), ("ch03/y", "", "b"), ("ch06/x", "", "a"),
+            ("ch06/x", "sign", "a"), ("ch06/x", "", "lone \udcff"), ("ch06/x", "", "b"),
+            *[("ch07/z", "", f"wrong at {i}") for i in range(30)], ("ch06/x", "", "lone \udcff")]
     counted = Messages()
-    for chapter, message in seen:
-        counted.add(chapter, message)
+    for check, mistake, message in seen:
+        counted.add(check, mistake, message)
     assert counted.most_common(25) == Counter(seen).most_common(25)
     counted.close()
 
