@@ -224,6 +224,12 @@ def _staged(target: str, data: bytes) -> bytes:
 def stage(entry: Entry, staging: Path) -> Path:
     """Copy the submission's chapter and answer files into staging/<folder>/exercises/ (a file
     already staged with the same bytes is left as it is; files no longer submitted are removed)."""
+    return stage_files(entry, staging)[0]
+
+
+def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
+    """stage(), and every file staged by its path in exercises/ (posix) with its bytes, exactly what is on disk
+    there now: what the hashes of the staged files are made from without reading them again."""
     root = staging / folder_name(entry.learner)
     package = root / "exercises"
     files: dict[str, bytes] = {"__init__.py": b""}
@@ -286,4 +292,4 @@ def stage(entry: Entry, staging: Path) -> Path:
         except OSError:
             pass
         path.write_bytes(data)
-    return root
+    return root, files

@@ -28,6 +28,7 @@ import sys
 import tempfile
 import zipfile
 from datetime import datetime, timezone
+from collections.abc import Mapping
 from pathlib import Path
 
 from grader.course.staging import MANIFEST
@@ -39,18 +40,22 @@ class SubmitError(RuntimeError):
     """The archive cannot be made (the message says why and what to do)."""
 
 
-def staged_hashes(package: Path) -> dict[str, str]:
+def staged_hashes(package: Path, files: Mapping[str, bytes] | None = None) -> dict[str, str]:
     """SHA-256 of every file of a staged package (relative path -> hex), but the manifest and the
-    __init__.py grade batch adds."""
-    return {path.relative_to(package).as_posix(): hashlib.sha256(path.read_bytes()).hexdigest()
-            for path in sorted(package.rglob("*"))
-            if path.is_file() and path.name != MANIFEST and path.relative_to(package).as_posix() != "__init__.py"}
+    __init__.py grade batch adds; from `files` (posix path in the package -> bytes: what staging wrote) where
+    given, else read from disk. In the order of their paths' parts, as sorted Paths are."""
+    if files is None:
+        files = {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*")
+                 if path.is_file()}
+    return {name: hashlib.sha256(files[name]).hexdigest() for name in sorted(files, key=lambda n: n.split("/"))
+            if name.rsplit("/", 1)[-1] != MANIFEST and name != "__init__.py"}
 
 
-def files_hash(package: Path) -> str:
-    """One hash of the submitted files (not the manifest): a resubmission is a change of it."""
+def files_hash(package: Path, files: Mapping[str, bytes] | None = None) -> str:
+    """One hash of the submitted files (not the manifest): a resubmission is a change of it (`files` as for
+    staged_hashes)."""
     digest = hashlib.sha256()
-    for name, sha in staged_hashes(package).items():
+    for name, sha in staged_hashes(package, files).items():
         digest.update(f"{name}\0{sha}\0".encode())
     return digest.hexdigest()
 

@@ -29,7 +29,7 @@ from grader.core.policy import Override, Policy, parse_time
 from grader.core.transaction import Door, grade_submission
 from grader.course import outputs, submit
 from grader.course.history import kept_report
-from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage
+from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage_files
 from grader.quiz import learner_id
 from grader.submission import Submission
 
@@ -126,13 +126,17 @@ class Outcome:
 
 # ------------------------------------------------------------------------------------ staging
 
-def content_hash(root: Path, learner: str, grading: Grading) -> str:
-    """What a learner's report as judged depends on: the staged files and Grading.judging."""
+def content_hash(root: Path, learner: str, grading: Grading, files: Mapping[str, bytes] | None = None) -> str:
+    """What a learner's report as judged depends on: the staged files and Grading.judging; from `files` (posix path
+    in exercises/ -> bytes: what staging wrote) where given, else read from disk. In the order of their paths'
+    parts, as sorted Paths are."""
     digest = hashlib.sha256(grading.judging(learner).encode("utf-8", "surrogatepass"))
-    for path in sorted((root / "exercises").rglob("*")):
-        if path.is_file():
-            digest.update(str(path.relative_to(root)).encode("utf-8", "surrogatepass") + b"\0" + path.read_bytes()
-                          + b"\0")
+    if files is None:
+        package = root / "exercises"
+        files = {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*")
+                 if path.is_file()}
+    for name in sorted(files, key=lambda n: n.split("/")):
+        digest.update(f"exercises/{name}".encode("utf-8", "surrogatepass") + b"\0" + files[name] + b"\0")
     return digest.hexdigest()
 
 
@@ -145,17 +149,17 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
     started = time.monotonic()
     learner = entry.learner
     try:
-        root = stage(entry, out / STAGING)
+        root, files = stage_files(entry, out / STAGING)  # each file read once: the hashes are made from these
     except StagingError as exc:
         return Outcome(learner, "unreadable", f"{entry.source.name}: {exc}")
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     submitted, timing = submission_time(entry, manifest, course, root / "exercises")
-    staged = Staged(learner, str(root), content_hash(root, learner, grading),
+    staged = Staged(learner, str(root), content_hash(root, learner, grading, files),
                     learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing, submitted,
                     _time_source(entry, submitted), _manifest_summary(manifest),
-                    (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
+                    (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),
                     tuple(overrides), time.monotonic() - started, entry.origin)
     if staged.digest == previous and not force:
         return Outcome(learner, "unchanged", "already graded, files unchanged", staged)

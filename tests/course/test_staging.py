@@ -50,3 +50,25 @@ def test_grade_batch_lists_them_and_says_it_is_incomplete(tmp_path):
         ("row", "bug-H-transposd", "bug-H-transposed"), ("row", "zed", None),
         ("submission", "bug-H-transposed", "bug-H-transposd"), ("submission", "cy", None)]
     assert "names no submission" in (out / "summary.html").read_text(encoding="utf-8")
+
+
+def test_the_hashes_made_from_the_staged_bytes_are_those_read_back_from_disk(tmp_path):
+    """Staging reads each file once: the content hash and the files' hash are made from the bytes it staged, and are
+    what reading the staged folder back gives, in the order of sorted paths (a folder before a name it prefixes)."""
+    import hashlib
+
+    from grader.course import submit
+    from grader.course.staging import Entry, stage_files
+    from grader.course.workers import Grading, content_hash
+
+    folder = chapter_submission(tmp_path / "ann", "ann", "ch06_measurement")
+    for name in ("answers/ch06.yaml", "answers/ch05.yaml", "ch05_finite_differences.py"):
+        (folder / "exercises" / name).write_text(f"# {name}\n", encoding="utf-8")
+    root, files = stage_files(Entry("ann", folder), tmp_path / "staging")
+    grading = Grading(("ch05", "ch06"), 7)
+    assert content_hash(root, "ann", grading, files) == content_hash(root, "ann", grading)
+    assert submit.files_hash(root / "exercises", files) == submit.files_hash(root / "exercises")
+    package = root / "exercises"
+    by_path = [(p.relative_to(package).as_posix(), hashlib.sha256(p.read_bytes()).hexdigest())
+               for p in sorted(package.rglob("*")) if p.is_file() and p.name != "__init__.py"]
+    assert list(submit.staged_hashes(package, files).items()) == by_path  # Path order: answers/ before ch05...
