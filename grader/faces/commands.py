@@ -56,6 +56,9 @@ COMMANDS = {
         "grade regrade graded/                     whose grade today's grader would change, and why",
         "grade regrade graded/ --apply --reason \"bearing_variance: 3 significant digits, as its hint says\"",
         "grade regrade graded/ --course course.yaml   with an edited course file (the differences are listed)")),
+    "review": Command(COURSE, "review_command", False, (
+        "grade review graded/                      the class and each learner in the browser; overrides recorded",
+        "grade review graded/ --read-only --no-browser   for a TA: read, record nothing")),
     "selftest": Command(COURSE, "selftest_command", False, (
         "grade selftest                            25 seeds, every chapter (CI runs it)",
         "grade selftest --seeds 200 --chapters ch06",

@@ -503,3 +503,39 @@ def selftest_command(count: int | None, only: int | None, chapter_list: str, cou
                if outcome.failures else "everything holds")
     click.echo(f"{verdict} at {plural(len(seeds), 'seed')} ({counted}; {time.monotonic() - started:.1f} s).")
     sys.exit(EXIT_NOT_ALL_PASSED if outcome.failures else EXIT_ALL_PASSED)
+
+
+@click.command("review")
+@click.argument("out", type=click.Path(exists=True, file_okay=False))
+@click.option("--port", type=click.IntRange(min=0, max=65535), default=0,
+              help="The port on 127.0.0.1 (default: a free one the system gives).")
+@click.option("--read-only", is_flag=True, help="Show everything, record nothing (for a TA).")
+@click.option("--who", default="the instructor", show_default=True,
+              help="Who records the overrides made on the page (each can be changed in its form).")
+@click.option("--no-browser", is_flag=True, help="Print the address only; do not open a browser.")
+def review_command(out: str, port: int, read_only: bool, who: str, no_browser: bool) -> None:
+    """Review a batch's output folder OUT in the browser: every learner with their total, chapters, late penalty,
+    overrides, similar submissions and named mistakes (filter and sort); a learner's code beside each failing check;
+    an override or a late waiver recorded with its reason through the history, every class output rebuilt at once.
+    Served on 127.0.0.1 only, behind a secret token in the address it prints. Needs the review extra:
+    pip install "jacobians-grader[review]"."""
+    from pathlib import Path
+
+    from grader.course.review import ReviewError
+    from grader.safe_text import for_terminal
+
+    instructor_side("grade review")
+    try:
+        from grader.faces import review_server
+        import starlette  # noqa: F401
+        import uvicorn  # noqa: F401
+    except ImportError:
+        raise click.ClickException('grade review needs Starlette and uvicorn: pip install "jacobians-grader[review]"') \
+            from None
+    try:
+        review_server.serve(Path(out), port=port, read_only=read_only, who=who, open_browser=not no_browser,
+                            announce=lambda line: click.echo(for_terminal(line, one_line=True)))
+    except ReviewError as exc:
+        raise click.BadParameter(for_terminal(str(exc), one_line=True), param_hint="OUT") from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot listen on 127.0.0.1:{port}: {exc}") from None
