@@ -131,6 +131,17 @@ def _judged_data(history: histories.History, sha: str | None) -> dict | None:
     return None if row is None else json.loads(zlib.decompress(row["data"]).decode("utf-8", "surrogatepass"))
 
 
+def _pairs_of(out: Path) -> list[tuple[str, str, float]]:
+    """The similar pairs summary.json lists (grade batch --similarity), most alike first: both learners, the score."""
+    found = []
+    for pair in _summary(out).get("similar", []):
+        learners = pair.get("learners") if isinstance(pair, dict) else None
+        if isinstance(learners, list) and len(learners) == 2 and all(isinstance(x, str) for x in learners):
+            score = pair.get("score")
+            found.append((learners[0], learners[1], float(score) if isinstance(score, (int, float)) else 0.0))
+    return found
+
+
 def _row(history: histories.History, result, similar: dict[str, list[str]], seen: dict) -> ClassRow:
     """One learner's row; `seen` keeps what each kept report (by its hash) said, for learners whose report is
     another's byte for byte."""
@@ -157,9 +168,9 @@ def class_view(out: Path, seen: dict | None = None) -> ClassView:
     """Every learner of OUT's last finished run, in the class's order; `seen`: what each kept report said, by its
     hash, kept by the caller from one view to the next (a report's hash names its content: it never goes stale)."""
     similar: dict[str, list[str]] = {}
-    for pair in _summary(out).get("similar", []):
-        similar.setdefault(pair.get("first", ""), []).append(pair.get("second", ""))
-        similar.setdefault(pair.get("second", ""), []).append(pair.get("first", ""))
+    for first, second, _ in _pairs_of(out):
+        similar.setdefault(first, []).append(second)
+        similar.setdefault(second, []).append(first)
     with _history(out) as history:
         run = history.last_finished()
         if run is None:
@@ -222,7 +233,8 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
                                  "adjustments": [_adjustment_words(a) for a in adjustments]})
         for o in history.db.execute("SELECT * FROM overrides WHERE run = ? AND learner = ?", (view.run, learner)):
             in_force_rows.append(dict(o))
-    pairs = [p for p in _summary(out).get("similar", []) if learner in (p.get("first"), p.get("second"))]
+    pairs = [{"first": first, "second": second, "score": score} for first, second, score in _pairs_of(out)
+             if learner in (first, second)]
     report_html = f"{folder_name(learner)}/report.html" if (out / folder_name(learner) / "report.html").is_file() \
         else None
     return LearnerView(view.run, learner, row, files, blames, history_rows, in_force_rows, pairs, report_html)

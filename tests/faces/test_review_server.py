@@ -40,7 +40,7 @@ def graded(tmp_path_factory) -> Path:
     for learner, text in (("ann", None), ("bo", transposed), ("cy", transposed), ("di", None), (HOSTILE, hostile)):
         chapter_submission(submissions / learner, learner, "ch06_measurement", text)
     out = folder / "out"
-    done = run_grade("batch", submissions, "--out", out, "--chapters", "ch06", "--lms", "canvas")
+    done = run_grade("batch", submissions, "--out", out, "--chapters", "ch06", "--lms", "canvas", "--similarity")
     assert (out / "gradebook.db").is_file(), done.stdout + done.stderr
     return out
 
@@ -146,6 +146,20 @@ def test_a_wrong_or_missing_csrf_token_and_a_read_only_review_record_nothing(ser
         assert status == 403 and not (other / "overrides.csv").exists()
     finally:
         reader.stop()
+
+
+def test_a_similar_pair_is_shown_side_by_side_with_the_shared_lines_marked(server):
+    running, out = server
+    pairs = json.loads((out / "summary.json").read_text(encoding="utf-8"))["similar"]
+    first, second = pairs[0]["learners"]  # the most alike: two learners who handed in the same file
+    _, _, page = running.request("GET", _learner_path(first))
+    assert f"{first} and {second}" in page
+    side = page[page.index("Similar submissions"):]
+    assert side.count('class="shared"') > 10
+    assert f'<pre aria-label="{first}">' in side and f'<pre aria-label="{second}">' in side
+    _, _, page = running.request("GET", "/")
+    row = next(r for r in page.split("<tr ") if f'data-learner="{first}"' in r)
+    assert "similar" in row.split('data-flags="', 1)[1].split('"', 1)[0] and second in row
 
 
 def test_nothing_outside_out_is_served(server):
