@@ -318,7 +318,7 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
                        key=lambda change: (position.get(change[0], len(position)), change[0]))
         first_run = history.previous(run) is None
         found = _keep_hand_edits(out, history, run)
-        deadline = _has_deadline(settings)
+        deadline = has_deadline(settings)
         if deadline and collected.untimed:
             found.append(_untimed_line(collected.untimed, len(graded), settings.roster.path))
         digest = hashlib.sha256()
@@ -375,7 +375,8 @@ def lms_layouts(out: Path, settings: RunSettings) -> list[str]:
     return [layout for layout, name in LMS_FILES.items() if layout in settings.lms or (out / name).is_file()]
 
 
-def _has_deadline(settings: RunSettings) -> bool:
+def has_deadline(settings: RunSettings) -> bool:
+    """Whether the run's course file sets a deadline with a late penalty (so a time is needed)."""
     try:
         course = settings.course_file()
     except CourseError:

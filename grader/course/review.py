@@ -142,9 +142,10 @@ def _pairs_of(out: Path) -> list[tuple[str, str, float]]:
     return found
 
 
-def _row(history: histories.History, result, similar: dict[str, list[str]], seen: dict) -> ClassRow:
+def _row(history: histories.History, result, similar: dict[str, list[str]], seen: dict, deadline: bool) -> ClassRow:
     """One learner's row; `seen` keeps what each kept report (by its hash) said, for learners whose report is
-    another's byte for byte."""
+    another's byte for byte; `deadline`: the run's course has one, so a learner without a trusted time (the
+    roster's, as the class summary counts them) is untimed."""
     sha = result.report if result.status == "graded" else None
     if sha not in seen:
         mistakes, failing = [], []
@@ -159,7 +160,7 @@ def _row(history: histories.History, result, similar: dict[str, list[str]], seen
     late = "; ".join(_adjustment_words(a) for a in result.adjustments if (a.get("kind") or "") == "late")
     return ClassRow(result.learner, result.status, result.message, result.score, result.max_score,
                     {c: v.get("score") for c, v in (result.chapters or {}).items()}, late,
-                    result.status == "graded" and not result.submitted and "untimed" in " ".join(result.flags or []),
+                    deadline and result.status == "graded" and result.time_from != "roster",
                     [_adjustment_words(a) for a in result.adjustments if (a.get("kind") or "") != "late"],
                     similar.get(result.learner, []), list(mistakes), list(failing), list(result.flags or []))
 
@@ -178,7 +179,8 @@ def class_view(out: Path, seen: dict | None = None) -> ClassView:
         info, results, settings = history.run_info(run), history.results(run), history.settings(run)
         order = outputs.class_order(list(results), settings)
         seen = {} if seen is None else seen
-        rows = [_row(history, results[learner], similar, seen) for learner in order]
+        deadline = settings is not None and outputs.has_deadline(settings)
+        rows = [_row(history, results[learner], similar, seen, deadline) for learner in order]
     chapters = list(settings.chapters) if settings else sorted({c for r in rows for c in r.chapters})
     return ClassView(run, info, chapters, rows, sorted({m for r in rows for m in r.mistakes}),
                      sorted({c for r in rows for c in r.failing}))
@@ -280,6 +282,9 @@ def record_override(out: Path, learner: str, target: str, points: float | None, 
             raise ReviewError(f"{learner!r} has no graded report in run {run}: nothing to override")
         path = Path(settings.overrides.path) if settings.overrides.path else out / "overrides.csv"
         candidate = (settings.overrides.text if settings.overrides.text is not None else "")
+        if (Source.read(path).text or "") != candidate:  # edited by hand since: this run would record other rows
+            raise StaleError(f"{path.name} changed since run {run} read it: grade the batch again (it reads the "
+                             "file as it is now), then record here")
         row = [learner, target, "" if points is None else f"{points:g}", "" if factor is None else f"{factor:g}",
                reason, who]
         buffer = io.StringIO()

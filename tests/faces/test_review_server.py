@@ -270,3 +270,14 @@ def _axe(page, script: str) -> list[str]:
     found = page.evaluate("() => axe.run(document, {runOnly: {type: 'tag', values: ['wcag2a', 'wcag2aa', "
                           "'wcag21a', 'wcag21aa']}, resultTypes: ['violations']})")
     return [f"{v['id']}: {v['nodes'][0]['html'][:160]}" for v in found["violations"]]
+
+
+def test_an_overrides_file_edited_by_hand_since_the_last_run_is_not_written_over(server):
+    running, out = server
+    (out / "overrides.csv").write_text("learner,target,points,factor,reason,who\nann,total,1,,by hand,bo\n",
+                                       encoding="utf-8")
+    _, _, page = running.request("GET", _learner_path("bo"))
+    status, _, body = running.request("POST", _learner_path("bo") + "/override",
+                                      {**_form(page), "target": "total", "points": "1", "reason": "r", "who": "bo"})
+    assert status == 409 and "overrides.csv changed since run 1 read it" in body
+    assert "bo,total" not in (out / "overrides.csv").read_text(encoding="utf-8")
