@@ -200,7 +200,7 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
     """One learner of OUT's last finished run (`view`: its class_view, where the caller keeps it): ReviewError where
     it has none of that name."""
     view = view or class_view(out)
-    row = next((r for r in view.rows if r.learner == learner), None)
+    row = next((each for each in view.rows if each.learner == learner), None)
     if row is None:
         raise ReviewError(f"run {view.run} has no learner {learner!r}")
     package = out / STAGING / folder_name(learner) / "exercises"

@@ -77,13 +77,13 @@ _CLASS_SCRIPT = """
         const order = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : x.localeCompare(y);
         return ascending ? order : -order;
       });
-      rows.forEach(r => body.appendChild(r));
+      rows.forEach(row => body.appendChild(row));
     });
   });
   document.addEventListener('keydown', event => {
     if (event.target.matches('input, select, textarea')) return;
     if (event.key !== 'j' && event.key !== 'k') return;
-    const visible = rows.filter(r => !r.hidden);
+    const visible = rows.filter(row => !row.hidden);
     const at = visible.indexOf(document.activeElement.closest && document.activeElement.closest('tr'));
     const next = visible[Math.max(0, Math.min(visible.length - 1, at + (event.key === 'j' ? 1 : -1)))];
     if (next) { next.querySelector('a').focus(); event.preventDefault(); }
@@ -116,16 +116,16 @@ _CLASS = """<h1>{{ out_name }}: {{ view.rows|length }} learners</h1>
 <th scope="col" class="num"><button type="button">{{ c }}</button></th>{% endfor %}
 <th scope="col"><button type="button">late</button></th><th scope="col"><button type="button">overrides</button></th>
 <th scope="col"><button type="button">similar</button></th><th scope="col"><button type="button">named mistakes</button></th>
-</tr></thead><tbody>{% for r in view.rows %}
-<tr data-learner="{{ r.learner }}" data-flags="{{ flags(r) }}" data-checks="{{ r.failing|join('|') }}"
-data-mistakes="{{ r.mistakes|join('|') }}"><td data-sort="{{ r.learner }}"><a href="/learner/{{ url(r.learner) }}">{{ r.learner }}</a></td>
-<td data-sort="{{ r.status }}">{% if r.status != "graded" %}<span class="tag bad">{{ r.status }}</span> {{ r.message }}{% else %}graded{% endif %}</td>
-<td class="num" data-sort="{{ r.score if r.score is not none else -1 }}">{{ points(r.score) }}</td>{% for c in view.chapters %}
-<td class="num" data-sort="{{ r.chapters.get(c) if r.chapters.get(c) is not none else -1 }}">{{ points(r.chapters.get(c)) }}</td>{% endfor %}
-<td data-sort="{{ r.late }}">{{ r.late }}{% if r.untimed %}<span class="tag warn">untimed</span>{% endif %}</td>
-<td data-sort="{{ r.overrides|length }}">{% for o in r.overrides %}<span class="tag">{{ o }}</span>{% endfor %}</td>
-<td data-sort="{{ r.similar|length }}">{{ r.similar|join(", ") }}</td>
-<td data-sort="{{ r.mistakes|length }}">{% for m in r.mistakes %}<span class="tag warn">{{ m }}</span>{% endfor %}</td>
+</tr></thead><tbody>{% for row in view.rows %}
+<tr data-learner="{{ row.learner }}" data-flags="{{ flags(row) }}" data-checks="{{ row.failing|join('|') }}"
+data-mistakes="{{ row.mistakes|join('|') }}"><td data-sort="{{ row.learner }}"><a href="/learner/{{ url(row.learner) }}">{{ row.learner }}</a></td>
+<td data-sort="{{ row.status }}">{% if row.status != "graded" %}<span class="tag bad">{{ row.status }}</span> {{ row.message }}{% else %}graded{% endif %}</td>
+<td class="num" data-sort="{{ row.score if row.score is not none else -1 }}">{{ points(row.score) }}</td>{% for c in view.chapters %}
+<td class="num" data-sort="{{ row.chapters.get(c) if row.chapters.get(c) is not none else -1 }}">{{ points(row.chapters.get(c)) }}</td>{% endfor %}
+<td data-sort="{{ row.late }}">{{ row.late }}{% if row.untimed %}<span class="tag warn">untimed</span>{% endif %}</td>
+<td data-sort="{{ row.overrides|length }}">{% for o in row.overrides %}<span class="tag">{{ o }}</span>{% endfor %}</td>
+<td data-sort="{{ row.similar|length }}">{{ row.similar|join(", ") }}</td>
+<td data-sort="{{ row.mistakes|length }}">{% for m in row.mistakes %}<span class="tag warn">{{ m }}</span>{% endfor %}</td>
 </tr>{% endfor %}</tbody></table></div>"""
 
 _LEARNER = """<h1>{{ v.learner }}</h1>
