@@ -49,14 +49,15 @@ _CLASS_SCRIPT = """
 (function(){
   const rows = Array.from(document.querySelectorAll('#learners tbody tr'));
   const body = document.querySelector('#learners tbody');
-  const inputs = ['q','flag','check','mistake'].map(id => document.getElementById(id));
+  const inputs = ['q','flag','chapter','check','mistake'].map(id => document.getElementById(id));
   const count = document.getElementById('shown');
   function apply(){
-    const [q, flag, check, mistake] = inputs.map(i => i.value);
+    const [q, flag, chapter, check, mistake] = inputs.map(i => i.value);
     let shown = 0;
     for (const row of rows) {
       const ok = (!q || row.dataset.learner.toLowerCase().includes(q.toLowerCase()))
         && (!flag || row.dataset.flags.split(' ').includes(flag))
+        && (!chapter || row.dataset.checks.split('|').some(c => c.startsWith(chapter + '/')))
         && (!check || row.dataset.checks.split('|').includes(check))
         && (!mistake || row.dataset.mistakes.split('|').includes(mistake));
       row.hidden = !ok; if (ok) shown++;
@@ -106,6 +107,8 @@ _CLASS = """<h1>{{ out_name }}: {{ view.rows|length }} learners</h1>
 <label for="flag">Flag<select id="flag"><option value="">any</option><option value="notgraded">not graded</option>
 <option value="late">late</option><option value="untimed">untimed</option><option value="overridden">overridden</option>
 <option value="similar">similar to another</option><option value="flagged">flagged</option></select></label>
+<label for="chapter">Failing in chapter<select id="chapter"><option value="">any</option>{% for c in view.chapters %}
+<option value="{{ c }}">{{ c }}</option>{% endfor %}</select></label>
 <label for="check">Failing check<select id="check"><option value="">any</option>{% for c in view.checks %}
 <option value="{{ c }}">{{ c }}</option>{% endfor %}</select></label>
 <label for="mistake">Named mistake<select id="mistake"><option value="">any</option>{% for m in view.mistakes %}
