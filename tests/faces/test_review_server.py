@@ -5,6 +5,7 @@ gradebook.db, the Canvas file and the learner's report; axe-core's WCAG 2.1 AA r
 
 from __future__ import annotations
 
+import html
 import http.client
 import json
 import os
@@ -247,9 +248,15 @@ def test_in_a_browser_filter_open_and_record_an_override_and_the_pages_pass_axe(
             visible = page.locator("#learners tbody tr:visible td:first-child").all_inner_texts()
             assert sorted(visible) == sorted(["bo", "cy", HOSTILE])
             page.select_option("#mistake", "")
-            page.select_option("#chapter", "ch06")  # failing any check of ch06: the same three
-            assert len(page.locator("#learners tbody tr:visible").all()) == 3
+            page.select_option("#chapter", "ch06")  # failing any check of ch06, as each row's checks say
+            failing = re.findall(r'data-learner="([^"]*)" data-flags="[^"]*" data-checks="([^"]*)"', page.content())
+            expected = sorted(html.unescape(name) for name, checks in failing if "ch06/" in checks)
+            assert sorted(page.locator("#learners tbody tr:visible td:first-child").all_inner_texts()) == expected
             page.select_option("#chapter", "")
+            page.select_option("#flag", "similar")  # the pair summary.json lists, and no one else
+            pair = json.loads((out / "summary.json").read_text(encoding="utf-8"))["similar"][0]["learners"]
+            assert sorted(page.locator("#learners tbody tr:visible td:first-child").all_inner_texts()) == sorted(pair)
+            page.select_option("#flag", "")
             page.select_option("#mistake", "ch06/H_jacobian: transpose")
             assert page.evaluate("typeof window.pwned") == "undefined"
             violations = _axe(page, script)
