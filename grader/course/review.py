@@ -16,7 +16,6 @@ came from was made (`seen_run`): two saves of one page never overwrite each othe
 
 from __future__ import annotations
 
-import ast
 import csv
 import io
 import json
@@ -29,9 +28,10 @@ from grader.course import history as histories
 from grader.course import outputs
 from grader.course.overrides import OverridesError, by_learner, in_force
 from grader.course.settings import Source
+from grader.course.similarity import function_lines
 from grader.course.staging import STAGING, folder_name
 from grader.course.workers import Grading, Outcome, staged_again
-from grader.model import Status
+from grader.model import Adjustment, Status
 
 TARGETS_HELP = "a check (chNN/check_id), a chapter (chNN), total, or late (its factor: 0 waives it)"
 _SAVING = threading.Lock()  # one save at a time in this process; the history's run ids order them across processes
@@ -108,12 +108,12 @@ def _history(out: Path) -> histories.History:
 
 
 def _adjustment_words(adjustment: dict) -> str:
-    target = adjustment.get("target") or "total"
-    points = adjustment.get("points")
-    said = f"{points:+g}" if isinstance(points, (int, float)) else "0"
-    reason = adjustment.get("reason") or ""
-    kind = adjustment.get("kind") or ""
-    return f"{kind} {target}: {said} ({reason})".strip()
+    """An adjustment as the history keeps it (Adjustment.to_dict), in words: "override +2 on ch06 (why; by bo)"."""
+    try:
+        made = Adjustment(**adjustment)
+    except TypeError:  # a history edited by hand: its words as they are
+        return " ".join(str(v) for v in adjustment.values())
+    return f"{made.kind} {made.describe()}"
 
 
 def _summary(out: Path) -> dict:
@@ -186,16 +186,6 @@ def class_view(out: Path, seen: dict | None = None) -> ClassView:
                      sorted({c for r in rows for c in r.failing}))
 
 
-def _functions(text: str) -> dict[str, tuple[int, int]]:
-    """Each top-level function of a chapter file: its first and last line (parsed, never run)."""
-    try:
-        tree = ast.parse(text)
-    except (SyntaxError, ValueError, RecursionError, MemoryError):
-        return {}
-    return {node.name: (node.lineno, node.end_lineno or node.lineno) for node in tree.body
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))}
-
-
 def learner_view(out: Path, learner: str, view: ClassView | None = None) -> LearnerView:
     """One learner of OUT's last finished run (`view`: its class_view, where the caller keeps it): ReviewError where
     it has none of that name."""
@@ -213,7 +203,7 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
     where = {}
     for name, text in files.items():
         if name.endswith(".py"):
-            for function, lines in _functions(text).items():
+            for function, lines in function_lines(text).items():
                 where.setdefault((name[:4], function), (name, lines))
     blames, history_rows, in_force_rows = [], [], []
     with _history(out) as history:

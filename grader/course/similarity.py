@@ -61,15 +61,21 @@ def _engine():
     return CodeFingerprint, compare_files
 
 
-def _functions(source: str) -> dict[str, str]:
-    """Each top-level function's source, by name (a file that does not parse: nothing)."""
+def function_lines(source: str) -> dict[str, tuple[int, int]]:
+    """Each top-level function of a file: its first and last line, by name (parsed, never run; a file that does not
+    parse: nothing)."""
     try:
         tree = ast.parse(source)
     except (SyntaxError, ValueError, RecursionError, MemoryError):  # a file nested too deep is just not split
         return {}
-    lines = source.splitlines()
-    return {node.name: "\n".join(lines[node.lineno - 1:node.end_lineno]) for node in tree.body
+    return {node.name: (node.lineno, node.end_lineno or node.lineno) for node in tree.body
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))}
+
+
+def _functions(source: str) -> dict[str, str]:
+    """Each top-level function's source, by name (a file that does not parse: nothing)."""
+    lines = source.splitlines()
+    return {name: "\n".join(lines[first - 1:last]) for name, (first, last) in function_lines(source).items()}
 
 
 def _fingerprinter(boilerplate):

@@ -22,6 +22,7 @@ from urllib.parse import parse_qs, quote
 from jinja2 import Environment
 
 from grader.course import review
+from grader.model import points_text
 
 COOKIE = "grade_review"
 _STYLE = """
@@ -177,10 +178,6 @@ by {{ o.who }}: {{ o.reason }} <small>({{ o.applied }})</small>{% if not read_on
 {% endfor %}</pre></div>{% endfor %}{% endfor %}{% endif %}"""
 
 
-def _points(value) -> str:
-    return "" if value is None else f"{value:g}"
-
-
 def _flags(row: review.ClassRow) -> str:
     said = []
     if row.status != "graded":
@@ -306,7 +303,7 @@ def make_app(state: Review):
             return Markup("<pre>{}</pre>").format(text)
         return Markup(code(name, text, lines))  # Pygments escapes the text it formats
 
-    helpers = {"points": _points, "flags": _flags, "url": lambda s: quote(str(s), safe=""), "anchor": _anchor,
+    helpers = {"points": points_text, "flags": _flags, "url": lambda s: quote(str(s), safe=""), "anchor": _anchor,
                "highlighted": highlighted}
 
     def page(title: str, body: str, script: str = "", status: int = 200) -> HTMLResponse:
