@@ -126,6 +126,17 @@ class Adjustment:
         return {"target": self.target, "points": rounded_points(self.points), "reason": self.reason, "kind": self.kind,
                 "who": self.who, "source": self.source}
 
+    @classmethod
+    def said(cls, kept: dict) -> str:
+        """An adjustment as report.json and the history keep it (to_dict), in words with its kind: "override +2 on
+        ch06 (regrade request; by bo, overrides.csv, line 3)"; a record that is none (a history edited by hand) as
+        its values."""
+        try:
+            made = cls(**kept)
+        except TypeError:
+            return " ".join(str(v) for v in kept.values())
+        return f"{made.kind} {made.describe()}"
+
     def describe(self) -> str:
         """One line: '+2 on ch06/H_worked_example (regrade request; by bo, overrides.csv, line 3)'."""
         by = ", ".join(p for p in (f"by {self.who}" if self.who else "", self.source) if p)

@@ -107,15 +107,6 @@ def _history(out: Path) -> histories.History:
     return histories.History(path)
 
 
-def _adjustment_words(adjustment: dict) -> str:
-    """An adjustment as the history keeps it (Adjustment.to_dict), in words: "override +2 on ch06 (why; by bo)"."""
-    try:
-        made = Adjustment(**adjustment)
-    except TypeError:  # a history edited by hand: its words as they are
-        return " ".join(str(v) for v in adjustment.values())
-    return f"{made.kind} {made.describe()}"
-
-
 def _summary(out: Path) -> dict:
     try:
         return json.loads((out / "summary.json").read_text(encoding="utf-8"))
@@ -157,11 +148,11 @@ def _row(history: histories.History, result, similar: dict[str, list[str]], seen
                         mistakes.append(f"{chapter['chapter']}/{check['function']}: {check['mistake']}")
         seen[sha] = (list(dict.fromkeys(mistakes)), failing)
     mistakes, failing = seen[sha]
-    late = "; ".join(_adjustment_words(a) for a in result.adjustments if (a.get("kind") or "") == "late")
+    late = "; ".join(Adjustment.said(a) for a in result.adjustments if (a.get("kind") or "") == "late")
     return ClassRow(result.learner, result.status, result.message, result.score, result.max_score,
                     {c: v.get("score") for c, v in (result.chapters or {}).items()}, late,
                     deadline and result.status == "graded" and result.time_from != "roster",
-                    [_adjustment_words(a) for a in result.adjustments if (a.get("kind") or "") != "late"],
+                    [Adjustment.said(a) for a in result.adjustments if (a.get("kind") or "") != "late"],
                     similar.get(result.learner, []), list(mistakes), list(failing), list(result.flags or []))
 
 
@@ -222,7 +213,7 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
             adjustments = json.loads(run_row["adjustments"] or "[]")
             history_rows.append({"run": run_row["id"], "started": run_row["started"], "reason": run_row["reason"] or
                                  "grade batch", "status": run_row["status"], "score": run_row["score"],
-                                 "adjustments": [_adjustment_words(a) for a in adjustments]})
+                                 "adjustments": [Adjustment.said(a) for a in adjustments]})
         for o in history.db.execute("SELECT * FROM overrides WHERE run = ? AND learner = ?", (view.run, learner)):
             in_force_rows.append(dict(o))
     pairs = [{"first": first, "second": second, "score": score} for first, second, score in _pairs_of(out)
