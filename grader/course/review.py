@@ -7,7 +7,7 @@ submission (OUT/.staging: exactly the files graded), each failing check with its
 lines of the function it blames, and their grade's history, run by run. Nothing here runs learner code or reads
 anything outside OUT.
 
-Recording: `record_override` appends one row to the overrides file the last run read (or OUT/overrides.csv) and
+Recording: `record_override` adds one row to the overrides file the last run read (or OUT/overrides.csv) and
 records a run of the history in one transaction: the learner's kept report adjusted by the overrides now in force
 (no grading), every other learner as the last run had them, and every class output rebuilt
 (grader.course.outputs.rebuild). It is refused, saying what changed, when the history moved on since the page it
@@ -31,6 +31,7 @@ from grader.course.settings import Source
 from grader.course.similarity import function_lines
 from grader.course.staging import STAGING, folder_name
 from grader.course.workers import Grading, Outcome, staged_again
+from grader.files import write_atomically
 from grader.model import Adjustment, Status
 
 TARGETS_HELP = "a check (chNN/check_id), a chapter (chNN), total, or late (its factor: 0 waives it)"
@@ -156,6 +157,12 @@ def _row(history: histories.History, result, similar: dict[str, list[str]], seen
                     similar.get(result.learner, []), list(mistakes), list(failing), list(result.flags or []))
 
 
+def last_run(out: Path) -> int | None:
+    """The id of OUT's last finished run (None: none yet): what a kept class_view was made from."""
+    with _history(out) as history:
+        return history.last_finished()
+
+
 def class_view(out: Path, seen: dict | None = None) -> ClassView:
     """Every learner of OUT's last finished run, in the class's order; `seen`: what each kept report said, by its
     hash, kept by the caller from one view to the next (a report's hash names its content: it never goes stale)."""
@@ -223,25 +230,12 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
     return LearnerView(view.run, learner, row, files, blames, history_rows, in_force_rows, pairs, report_html)
 
 
-def _append_row(path: Path, row: list[str]) -> None:
-    """One row at the end of an overrides file (its header first where it is new), as UTF-8."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    text = path.read_text(encoding="utf-8-sig") if path.is_file() else ""
-    if not text.strip():
-        writer.writerow(["learner", "target", "points", "factor", "reason", "who"])
-    elif not text.endswith("\n"):
-        buffer.write("\n")
-    writer.writerow(row)
-    with open(path, "a", encoding="utf-8", newline="") as handle:
-        handle.write(buffer.getvalue())
-
-
 def record_override(out: Path, learner: str, target: str, points: float | None, factor: float | None, reason: str,
                     who: str, seen_run: int) -> int:
     """Record an override of `learner` (points, or a factor for `late`) with its reason and who made it, through the
     history: a new run (its id is returned) with the learner's kept report adjusted, and every class output rebuilt.
-    StaleError where a run was recorded after `seen_run`; ReviewError for a row that cannot apply."""
+    StaleError where a run was recorded after `seen_run` or the file was edited since; ReviewError for a row that
+    cannot apply."""
     reason, who, target = reason.strip(), who.strip(), (target.strip() or "total")
     if not reason:
         raise ReviewError("every override needs its reason (the learner reads it)")
@@ -290,7 +284,7 @@ def record_override(out: Path, learner: str, target: str, points: float | None, 
         if staged is None or learner not in kept:
             raise ReviewError(f"{learner!r}'s stored submission (OUT/.staging) or kept report is gone: grade the batch "
                               "again first")
-        _append_row(path, row)
+        write_atomically(path, text)  # the file as it was read (checked above), and the row: what the run records
         run_now = history.start(settings, course.id if course else None,
                                 reason=f"override by {who} in grade review: {learner} {target}: {reason}")
         from grader.course.batch import Recorder

@@ -227,6 +227,11 @@ def stage(entry: Entry, staging: Path) -> Path:
     return stage_files(entry, staging)[0]
 
 
+def staged_files(package: Path) -> dict[str, bytes]:
+    """Every file of a staged package, by its posix path in it, with its bytes: what stage_files returns, read back."""
+    return {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*") if path.is_file()}
+
+
 def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
     """stage(), and every file staged by its path in exercises/ (posix) with its bytes, exactly what is on disk
     there now: what the hashes of the staged files are made from without reading them again."""

@@ -27,11 +27,11 @@ import subprocess
 import sys
 import tempfile
 import zipfile
-from datetime import datetime, timezone
 from collections.abc import Mapping
+from datetime import datetime, timezone
 from pathlib import Path
 
-from grader.course.staging import MANIFEST
+from grader.course.staging import MANIFEST, staged_files
 
 FORMAT = 1
 
@@ -45,8 +45,7 @@ def staged_hashes(package: Path, files: Mapping[str, bytes] | None = None) -> di
     __init__.py grade batch adds; from `files` (posix path in the package -> bytes: what staging wrote) where
     given, else read from disk. In the order of their paths' parts, as sorted Paths are."""
     if files is None:
-        files = {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*")
-                 if path.is_file()}
+        files = staged_files(package)
     return {name: hashlib.sha256(files[name]).hexdigest() for name in sorted(files, key=lambda n: n.split("/"))
             if name.rsplit("/", 1)[-1] != MANIFEST and name != "__init__.py"}
 

@@ -29,7 +29,7 @@ from grader.core.policy import Override, Policy, parse_time
 from grader.core.transaction import Door, grade_submission
 from grader.course import outputs, submit
 from grader.course.history import kept_report
-from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage_files
+from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage_files, staged_files
 from grader.quiz import learner_id
 from grader.submission import Submission
 
@@ -132,9 +132,7 @@ def content_hash(root: Path, learner: str, grading: Grading, files: Mapping[str,
     parts, as sorted Paths are."""
     digest = hashlib.sha256(grading.judging(learner).encode("utf-8", "surrogatepass"))
     if files is None:
-        package = root / "exercises"
-        files = {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*")
-                 if path.is_file()}
+        files = staged_files(root / "exercises")
     for name in sorted(files, key=lambda n: n.split("/")):
         digest.update(f"exercises/{name}".encode("utf-8", "surrogatepass") + b"\0" + files[name] + b"\0")
     return digest.hexdigest()

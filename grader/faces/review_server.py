@@ -208,19 +208,16 @@ class Review:
     csrf: str = field(default_factory=lambda: secrets.token_urlsafe(32))
     read_only: bool = False
     who: str = "the instructor"
-    _kept: tuple | None = None
+    _kept: review.ClassView | None = None
     _said: dict = field(default_factory=dict)  # what each kept report says, by its hash: read once
     _lock: threading.Lock = field(default_factory=threading.Lock)
 
     def class_view(self) -> review.ClassView:
         """The class of the last finished run, made once per run (a save makes a new run)."""
         with self._lock:
-            from grader.course.history import FILE_NAME
-
-            stamp = (self.out / FILE_NAME).stat().st_mtime_ns
-            if self._kept is None or self._kept[0] != stamp:
-                self._kept = (stamp, review.class_view(self.out, self._said))
-            return self._kept[1]
+            if self._kept is None or self._kept.run != review.last_run(self.out):
+                self._kept = review.class_view(self.out, self._said)
+            return self._kept
 
 
 def _highlighter():

@@ -6,6 +6,8 @@ numbers). It reads only the numbers grader.course.statistics computed."""
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 from grader.render.figures import GUIDE, LEARNER, REFERENCE, Figure, preload, svg_uri
 
 
@@ -45,15 +47,23 @@ def _short(item: dict) -> str:
     return item["id"].split("/", 1)[1]
 
 
-def canvas(chapter: str, items: list[dict], rules: dict, learners: int):
+class Canvas(NamedTuple):
+    """A chapter's figure drawn: the matplotlib Figure, the labels that fit nowhere, the rules' bounds in view."""
+
+    figure: object
+    unlabelled: list[str]
+    guides: list[str]
+
+
+def canvas(chapter: str, items: list[dict], rules: dict, learners: int) -> Canvas:
     """The chapter's figure as a matplotlib Figure, drawn: axes fitted to the items' range, the rules' guide lines
     that fall inside it, and each label placed where it overlaps no other text, marker or the legend and stays inside
     the figure (items at one spot share a label; one that fits nowhere is left to the table, and `unlabelled` says
     which)."""
     preload()
-    from matplotlib.figure import Figure as Canvas
+    from matplotlib.figure import Figure as MatplotlibFigure
 
-    fig = Canvas(figsize=(7.5, 4.6))
+    fig = MatplotlibFigure(figsize=(7.5, 4.6))
     ax = fig.add_subplot()
     placed = [i for i in items if i["facility"] is not None and i["discrimination"] is not None]
     for flagged, colour, marker, label in ((False, REFERENCE, "o", "item"), (True, LEARNER, "^", "flagged item")):
@@ -78,9 +88,7 @@ def canvas(chapter: str, items: list[dict], rules: dict, learners: int):
         ax.legend(fontsize=8, loc="lower right", bbox_to_anchor=(1.0, 1.0), ncols=2, frameon=False,
                   borderaxespad=0.2)
     fig.subplots_adjust(left=0.1, right=0.97, bottom=0.12, top=0.9)
-    fig.unlabelled = _place_labels(fig, ax, items, placed)
-    fig.guides = shown
-    return fig
+    return Canvas(fig, _place_labels(fig, ax, items, placed), shown)
 
 
 def _fitted(values: list[float], lowest: float, highest: float) -> tuple[float, float]:
@@ -148,15 +156,15 @@ def _place_labels(fig, ax, items: list[dict], placed: list[dict]) -> list[str]:
 
 
 def _figure(chapter: str, items: list[dict], rules: dict, learners: int) -> Figure:
-    fig = canvas(chapter, items, rules, learners)
+    drawn = canvas(chapter, items, rules, learners)
     placed = [i for i in items if i["facility"] is not None and i["discrimination"] is not None]
-    guides = f"dotted lines at the flagging rules' bounds in view ({', '.join(fig.guides)})" if fig.guides else \
+    guides = f"dotted lines at the flagging rules' bounds in view ({', '.join(drawn.guides)})" if drawn.guides else \
         "no flagging rule's bound falls in view"
     caption = (f"{chapter}: each item's facility against its discrimination, the axes fitted to the items; {guides}; "
                "flagged items as triangles, with their names; the numbers are those of the chapter's table of items")
-    if fig.unlabelled:
-        caption += f"; not labelled where they would overlap: {'; '.join(fig.unlabelled)}"
-    return Figure(svg_uri(fig), f"{caption}. {_in_numbers(items, placed)}", caption, 750, 460,
+    if drawn.unlabelled:
+        caption += f"; not labelled where they would overlap: {'; '.join(drawn.unlabelled)}"
+    return Figure(svg_uri(drawn.figure), f"{caption}. {_in_numbers(items, placed)}", caption, 750, 460,
                   _in_numbers(items, placed))
 
 

@@ -459,8 +459,8 @@ def test_the_figure_fits_its_data_and_no_label_overlaps_another_or_is_clipped(ca
                 "crowded at facility 0.95-1": [_crowded_chapter()],
                 "one item": [_crowded_chapter(1)]}[case]
     for items in chapters:
-        fig = item_plots.canvas(items[0]["chapter"], items, rules, 200)
-        ax = fig.axes[0]
+        drawn = item_plots.canvas(items[0]["chapter"], items, rules, 200)
+        fig, ax = drawn.figure, drawn.figure.axes[0]
         facility = [i["facility"] for i in items if i["discrimination"] is not None]
         low, high = ax.get_xlim()
         assert low <= min(facility) and max(facility) <= high  # every point in view ...
@@ -474,8 +474,8 @@ def test_the_figure_fits_its_data_and_no_label_overlaps_another_or_is_clipped(ca
             for other, other_box in boxes[k + 1:]:
                 assert not box.overlaps(other_box), f"{text!r} overlaps {other!r}"
         labelled = sum(len(t.get_text().split(", ")) for t in ax.texts)
-        assert labelled + sum(len(u.split(", ")) for u in fig.unlabelled) == len(facility)
-        assert len(fig.unlabelled) <= len(items) // 4  # most items labelled; the rest named in the caption
+        assert labelled + sum(len(u.split(", ")) for u in drawn.unlabelled) == len(facility)
+        assert len(drawn.unlabelled) <= len(items) // 4  # most items labelled; the rest named in the caption
 
 
 def test_the_overlap_test_catches_labels_drawn_on_top_of_each_other():

@@ -259,6 +259,19 @@ def test_in_a_browser_filter_open_and_record_an_override_and_the_pages_pass_axe(
             page.select_option("#flag", "")
             page.select_option("#mistake", "ch06/H_jacobian: transpose")
             assert page.evaluate("typeof window.pwned") == "undefined"
+            page.select_option("#mistake", "")
+            page.get_by_role("button", name="total", exact=True).click()  # sorted by total, lowest first
+            totals = [float(t) for t in page.locator("#learners tbody tr td:nth-child(3)").all_inner_texts()]
+            assert totals == sorted(totals) and len(totals) == 5
+            assert page.locator("th[aria-sort=ascending]").inner_text() == "total"
+            page.evaluate("document.activeElement.blur()")
+            page.keyboard.press("j")  # the first learner's link, then the next
+            first = page.evaluate("document.activeElement.textContent")
+            page.keyboard.press("j")
+            assert page.evaluate("document.activeElement.textContent") != first
+            page.keyboard.press("k")
+            assert page.evaluate("document.activeElement.textContent") == first
+            page.select_option("#mistake", "ch06/H_jacobian: transpose")
             violations = _axe(page, script)
             assert violations == [], violations
             page.get_by_role("link", name="bo", exact=True).click()
