@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -178,9 +179,23 @@ def _from_yaml(path: Path) -> Course:
     return from_text(text, str(path))
 
 
-def from_text(text: str, path: str) -> Course:
-    """The course file whose text is `text`, read from `path` (which messages name). CourseError for what cannot
-    be a course file."""
+def _parsed(text: str, path: str) -> tuple[object, dict[str, int]]:
+    """The YAML `text`'s data and the line of each top-level setting. A parse that JSON holds exactly is kept in
+    the user's cache folder by the text's hash, so a command that only reads the course does not import yaml."""
+    import hashlib
+
+    from grader.system import cache_folder
+
+    folder = cache_folder("course")
+    kept = None if folder is None else os.path.join(folder, hashlib.sha256(text.encode("utf-8")).hexdigest() + ".json")
+    if kept is not None:
+        try:
+            with open(kept, encoding="utf-8") as handle:
+                data, lines = json.load(handle)
+            if isinstance(lines, dict):
+                return data, lines
+        except (OSError, ValueError, TypeError):
+            pass
     import yaml
 
     try:
@@ -190,9 +205,27 @@ def from_text(text: str, path: str) -> Course:
         raise CourseError(f"{path}, line {line}: not valid YAML ({exc.problem})") from None
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
         raise CourseError(f"{path}: not valid YAML ({exc})") from None
+    lines = _key_lines(text) if isinstance(data, dict) else {}
+    if kept is not None and isinstance(data, dict):
+        try:
+            held = json.dumps([data, lines], allow_nan=False)
+            if json.loads(held) == [data, lines]:  # no date, tuple or number JSON would change
+                os.makedirs(folder, exist_ok=True)
+                temporary = f"{kept}.{os.getpid()}.tmp"
+                with open(temporary, "w", encoding="utf-8") as handle:
+                    handle.write(held)
+                os.replace(temporary, kept)
+        except (OSError, TypeError, ValueError):
+            pass
+    return data, lines
+
+
+def from_text(text: str, path: str) -> Course:
+    """The course file whose text is `text`, read from `path` (which messages name). CourseError for what cannot
+    be a course file."""
+    data, lines = _parsed(text, path)
     if not isinstance(data, dict):
         raise CourseError(f"{path}: expected settings `name: value`, one per line")
-    lines = _key_lines(text)
 
     def where(key: str) -> str:
         return f"{path}, line {lines[key]}" if key in lines else str(path)

@@ -64,23 +64,40 @@ def kill_orphans() -> None:
     """Kill and reap the adopted processes that are not one of the grader's own (grader.system.keep)."""
     if not _SUBREAPER:
         return
-    me = os.getpid()
     spared = kept()
+    for pid in _children():
+        if pid in spared:
+            continue
+        try:
+            os.kill(pid, 9)
+            os.waitpid(pid, os.WNOHANG)
+        except (ProcessLookupError, ChildProcessError, PermissionError):
+            pass
+
+
+def _children() -> list[int]:
+    """This process's children (adopted orphans among them): from each thread's /proc children list where the
+    kernel keeps one, else from every process's parent in /proc."""
+    me = os.getpid()
+    try:
+        found: list[int] = []
+        for thread in os.listdir(f"/proc/{me}/task"):
+            with open(f"/proc/{me}/task/{thread}/children", "rb") as handle:
+                found += map(int, handle.read().split())
+        return found
+    except (OSError, ValueError):  # a kernel without CONFIG_PROC_CHILDREN
+        pass
+    found = []
     for entry in os.listdir("/proc"):
-        if not entry.isdigit() or int(entry) in spared:
+        if not entry.isdigit():
             continue
         try:
             with open(f"/proc/{entry}/stat", "rb") as handle:
-                fields = handle.read().rsplit(b")", 1)[1].split()
-        except OSError:
+                if int(handle.read().rsplit(b")", 1)[1].split()[1]) == me:
+                    found.append(int(entry))
+        except (OSError, ValueError, IndexError):
             continue
-        if int(fields[1]) == me:
-            pid = int(entry)
-            try:
-                os.kill(pid, 9)
-                os.waitpid(pid, os.WNOHANG)
-            except (ProcessLookupError, ChildProcessError, PermissionError):
-                pass
+    return found
 
 
 def capture_file() -> int:

@@ -47,16 +47,21 @@ class PlannedCall(Call):
 
 def _stamp_of(folders: list[Path]) -> list:
     """Each file that decides a verdict, by path, size and modification time (not read: a stamp, not a hash)."""
-    stamp = []
-    for folder in folders:
-        for root, dirs, files in os.walk(folder):
-            dirs[:] = sorted(d for d in dirs if d != "__pycache__")
-            for name in sorted(files):
-                if name.endswith((".py", ".yaml", ".json")):
-                    path = os.path.join(root, name)
+    stamp: list = []
+
+    def visit(folder: str) -> None:
+        with contextlib.suppress(OSError):
+            for entry in sorted(os.scandir(folder), key=lambda e: e.name):
+                if entry.is_dir():
+                    if entry.name != "__pycache__":
+                        visit(entry.path)
+                elif entry.name.endswith((".py", ".yaml", ".json")):
                     with contextlib.suppress(OSError):
-                        info = os.stat(path)
-                        stamp.append((path, info.st_size, info.st_mtime_ns))
+                        info = entry.stat()
+                        stamp.append((entry.path, info.st_size, info.st_mtime_ns))
+
+    for folder in folders:
+        visit(str(folder))
     return stamp
 
 
@@ -116,19 +121,35 @@ class Memo:
             self._files[name] = entry if valid else {"grader": self.grader}  # type: ignore[assignment]
         return self._files[name]
 
-    def _write(self, name: str) -> None:
-        """Write one file atomically; failing to write is not an error (the next run judges again)."""
+    def _write(self, name: str, data: dict | None = None) -> None:
+        """Write one file atomically (`data`, else the kept index `name`); failing to write is not an error (the
+        next run judges again)."""
         if self.folder is None:
             return
         path = self.folder / f"{name}.json"
         temporary = path.with_name(f".{name}.{os.getpid()}.tmp")
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
-            temporary.write_text(json.dumps(self._files[name]), encoding="utf-8")
+            temporary.write_text(json.dumps(self._files[name] if data is None else data), encoding="utf-8")
             os.replace(temporary, path)
         except (OSError, TypeError, ValueError):
             with contextlib.suppress(OSError):
                 temporary.unlink(missing_ok=True)
+
+    def _value(self, name: str, entry: dict) -> dict | None:
+        """A kept verdict's value: in memory, in its entry; in a folder, in a file of its own (`name`.`key`.json,
+        read only when it is wanted), made by this grader."""
+        if self.folder is None:
+            value = entry.get("value")
+        else:
+            key = entry.get("key")
+            if not isinstance(key, str) or not key.isalnum():
+                return None
+            value = None
+            with contextlib.suppress(OSError, ValueError):
+                kept = json.loads((self.folder / f"{name}.{key}.json").read_text(encoding="utf-8"))
+                value = kept.get("value") if isinstance(kept, dict) and kept.get("grader") == self.grader else None
+        return value if isinstance(value, dict) else None
 
     def calls(self, chapter: str, plan_key: str) -> EncodedCalls | None:
         """The calls a plan of `chapter` made under `plan_key`, with their JSON text, or None. The same list each
@@ -186,20 +207,31 @@ class Memo:
         if found is not None and self.folder is None:  # kept in memory: the last used is the last let go
             entries.remove(found)
             entries.append(found)
-        if found is not None and files is not None and found.get("files") != files:
+        value = self._value(name, found) if found is not None else None
+        if value is not None and files is not None and found.get("files") != files:
             found["files"] = files  # these files answer alike: the next run with them plans nothing ahead
             self._write(name)
-        return found.get("value") if found is not None and isinstance(found.get("value"), dict) else None
+        return value
 
     def keep_verdict(self, name: str, key: str | None, value: dict, files: str | None = None) -> None:
-        """Keep `value` under `key` (the last ENTRIES per file), made from the learner's files hashed as `files`."""
-        if key is None or name not in _NAMES:
+        """Keep `value` under `key` (the last ENTRIES per file), made from the learner's files hashed as `files`: in
+        a folder, the value in a file of its own beside the file of entries, so a run reads only the one it uses."""
+        if key is None or name not in _NAMES or (self.folder is not None and not key.isalnum()):
             return
         data = self._read(name)
         entries = [e for e in data.get("verdicts") or [] if isinstance(e, dict) and e.get("key") != key]
         kept = ENTRIES if self.one_learner else WORKER_ENTRIES
-        data["verdicts"] = [*entries[-(kept - 1):], {"key": key, "value": value, "files": files}]
+        dropped, entries = entries[:-(kept - 1)], entries[-(kept - 1):]
+        if self.folder is None:
+            data["verdicts"] = [*entries, {"key": key, "value": value, "files": files}]
+            return
+        self._write(f"{name}.{key}", {"grader": self.grader, "value": value})
+        data["verdicts"] = [*({k: v for k, v in e.items() if k != "value"} for e in entries), {"key": key, "files": files}]
         self._write(name)
+        for entry in dropped:
+            if isinstance(entry.get("key"), str) and entry["key"].isalnum():
+                with contextlib.suppress(OSError):
+                    (self.folder / f"{name}.{entry['key']}.json").unlink()
 
     def seen(self, name: str, files: str | None) -> bool:
         """Whether a verdict of `name` was kept from learner files hashed as `files` (then this run's answers are

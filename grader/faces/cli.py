@@ -56,7 +56,7 @@ class _Commands(click.Group):
 
 
 @click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(package_name="jacobians-grader")
+@click.version_option(package_name="jacobians-grader", message="%(prog)s, version %(version)s")  # click's own text, without its gettext lookup
 def main() -> None:
     """Grade the lesson "Jacobians & Linearization": `grade ch06`, `grade all`, `grade list`."""
     encode_what_the_console_can()

@@ -16,7 +16,7 @@ import pytest
 
 from grader.boundary import kept
 from grader.boundary.spawn import INTERPRETER
-from grader.core.memo import Memo, _stamp_of
+from grader.core.memo import ENTRIES, Memo, _stamp_of
 from tests.support import BWRAP, REPO, build_submission, replace_function, run_grade
 
 needs_bwrap = pytest.mark.skipif(BWRAP is None, reason="the memo is used only where bubblewrap walls learner code off")
@@ -102,15 +102,17 @@ def test_a_forged_or_broken_memo_is_a_miss_never_a_grade(tmp_path):
         "ch06_measurement", "range_bearing", WRONG_BEARING)})
     cache = tmp_path / "cache"
     right = _report(root, cache)
-    kept_file = cache / "results" / "ch06.json"
-    data = json.loads(kept_file.read_text(encoding="utf-8"))
-    data["grader"] = "another grader"  # made by another grader (or its files since edited): not this one's word
-    for entry in data["verdicts"]:
-        for check in entry["value"]["chapter"]["checks"]:
+    values = sorted((cache / "results").glob("ch06.*.json"))  # each verdict kept in a file of its own
+    assert values
+    for kept_file in values:
+        data = json.loads(kept_file.read_text(encoding="utf-8"))
+        data["grader"] = "another grader"  # made by another grader (or its files since edited): not this one's word
+        for check in data["value"]["chapter"]["checks"]:
             check["status"], check["points"] = "pass", check["max_points"]
-    kept_file.write_text(json.dumps(data), encoding="utf-8")
+        kept_file.write_text(json.dumps(data), encoding="utf-8")
     assert _report(root, cache) == right
-    kept_file.write_text("{not json", encoding="utf-8")
+    for kept_file in [*(cache / "results").glob("ch06.*.json"), cache / "results" / "ch06.json"]:
+        kept_file.write_text("{not json", encoding="utf-8")
     assert _report(root, cache) == right
 
 
@@ -127,6 +129,13 @@ def test_the_grader_stamp_changes_with_any_file_that_decides_a_verdict(tmp_path)
     assert Memo(tmp_path / "memo", "another stamp").verdict("ch06", "key") is None
     memo.keep_verdict("../../elsewhere", "key", {"x": 1})  # only the memo's own file names
     assert not (tmp_path / "elsewhere.json").exists()
+    memo.keep_verdict("ch06", "../x", {"x": 1})  # nor a key that is not a hash's
+    assert Memo(tmp_path / "memo", "stamp").verdict("ch06", "../x") is None
+    for n in range(ENTRIES + 3):  # each value in a file of its own, the oldest removed with its entry
+        memo.keep_verdict("ch06", f"key{n}", {"n": n})
+    assert sorted(p.name for p in (tmp_path / "memo").glob("ch06.*.json")) == \
+        sorted(f"ch06.key{n}.json" for n in range(3, ENTRIES + 3))
+    assert Memo(tmp_path / "memo", "stamp").verdict("ch06", f"key{ENTRIES + 2}") == {"n": ENTRIES + 2}
 
 
 # ------------------------------------------------------------------------------------------- the kept sandbox
@@ -320,12 +329,11 @@ def test_a_forged_verdict_is_never_read_where_learner_code_could_have_written_it
         "ch06_measurement", "range_bearing", WRONG_BEARING)})
     cache = tmp_path / "cache"
     honest = _report(root, cache, "--no-quiz")
-    kept_file = cache / "results" / "ch06.json"
-    data = json.loads(kept_file.read_text(encoding="utf-8"))  # this grader's stamp: a forgery learner code could write
-    for entry in data["verdicts"]:
-        for check in entry["value"]["chapter"]["checks"]:
+    for kept_file in (cache / "results").glob("ch06.*.json"):
+        data = json.loads(kept_file.read_text(encoding="utf-8"))  # this grader's stamp: a forgery learner code could write
+        for check in data["value"]["chapter"]["checks"]:
             check["status"], check["points"], check["message"] = "pass", check["max_points"], ""
-    kept_file.write_text(json.dumps(data), encoding="utf-8")
+        kept_file.write_text(json.dumps(data), encoding="utf-8")
     unwalled = _report(root, cache, "--no-quiz", "--no-sandbox")
     assert unwalled["chapters"][0]["score"] == honest["chapters"][0]["score"] < unwalled["chapters"][0]["max_score"]
 
