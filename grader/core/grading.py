@@ -12,8 +12,10 @@ from grader.chapters import BY_ID
 from grader.course_config import PUBLIC_SEED
 from grader.model import ChapterResult, Report, Status
 from grader.notebook import KERNEL, relocate
+from grader.system import trace
 
 if TYPE_CHECKING:
+    from grader.boundary.wire import Returned
     from grader.core.memo import Memo
     from grader.core.planning import ChapterPlan
 
@@ -62,11 +64,97 @@ def _plan(chapter_id: str, seed: int, with_plots: bool, exclude: frozenset[str])
     return ChapterPlan(check_registry.load(chapter_id), seed, plots_of(chapter_id) if with_plots else None, exclude)
 
 
-def _answered(run: ChapterRun) -> list:
-    """Everything the child answered for one chapter, as plain data (a memo key's part): with the helpers each call
+def _answer(returned: Returned | None) -> list | None:
+    """Everything the child answered for one call, as plain data (a memo key's part): with the helpers the call
     entered, which decide where a failure is blamed (point_upstream)."""
-    return [run.import_error, [None if r is None else [r.kind, r.function, r.encoded, r.error, r.note, r.reached]
-                               for r in run.results]]
+    r = returned
+    return None if r is None else [r.kind, r.function, r.encoded, r.error, r.note, r.reached]
+
+
+def _answered(run: ChapterRun) -> list:
+    """Everything the child answered for one chapter, as plain data (a memo key's part)."""
+    return [run.import_error, [_answer(r) for r in run.results]]
+
+
+def _check_keys(plan_key: str | None, slots: dict[str, list[int]] | None, module_file: str, limits: object,
+                run: ChapterRun) -> dict[str, str | None]:
+    """The memo key of each check's verdict: what decides it (the plan, the chapter's file, the limits) and what the
+    child answered for the check's own calls (`slots`); none where the chapter did not import."""
+    from grader.core.memo import key_of
+
+    if not slots or run.import_error is not None or \
+            any(not 0 <= i < len(run.results) for numbers in slots.values() for i in numbers):
+        return {}
+    return {check: key_of(plan_key, check, module_file, repr(limits), [_answer(run.results[i]) for i in numbers])
+            for check, numbers in slots.items()}
+
+
+def _load_checks(chapter_id: str) -> None:
+    """Import what planning `chapter_id` needs (numpy, its checks, the planning), ahead of knowing which checks to plan."""
+    from grader import checks as check_registry
+    from grader.core import planning  # noqa: F401
+
+    check_registry.load(chapter_id)
+
+
+def _judged_in_part(memo: Memo, chapter_id: str, slots: dict[str, list[int]], keys: dict[str, str | None],
+                    calls: list, run: ChapterRun, module_file: str, seed: int,
+                    exclude: frozenset[str]) -> tuple[ChapterResult, dict] | None:
+    """The chapter judged check by check (only the changed functions judged afresh): a check whose own calls answered
+    exactly as when its last verdict was kept (`keys`) gets that verdict, and only the others are planned and judged,
+    with the answers to their calls. (the ChapterResult, the helpers each check's calls entered); None where the
+    memo does not hold what that needs, or the plan's calls are not the kept ones (then the chapter is judged whole)."""
+    from grader import checks as check_registry
+    from grader.core.planning import ChapterPlan
+
+    if not keys or any(i >= len(calls) for numbers in slots.values() for i in numbers):
+        return None
+    kept = memo.check_verdicts(chapter_id)
+    reused = {c for c in slots if c in kept and keys.get(c) is not None and kept[c][0] == keys[c]}
+    plan = ChapterPlan(check_registry.load(chapter_id), seed, None, exclude | {f"{chapter_id}/{c}" for c in reused})
+    if [check.id for check, _ in plan.pending] != [c for c in slots if c not in reused]:
+        return None
+    results: list = [None] * len(plan.calls)
+    for check, pending in plan.pending:
+        own = slots[check.id]
+        if len(own) != len(pending.slots):
+            return None
+        for mine, kept_number in zip(pending.slots, own):
+            if plan.calls[mine].to_json(kept_number) != calls[kept_number].to_json(kept_number):
+                return None  # never, unless the memo is wrong
+            results[mine] = run.results[kept_number]
+    part = ChapterRun(chapter_id, None, results)
+    judged = plan.judge(part, module_file)
+    fresh, fresh_entered = {c.id: c for c in judged.checks}, plan.reached(part)
+    chapter, entered = ChapterResult(chapter_id, BY_ID[chapter_id].title), {}
+    for c in slots:
+        if c not in reused:
+            chapter.checks.append(fresh[c])
+            if c in fresh_entered:
+                entered[c] = fresh_entered[c]
+            continue
+        value = kept[c][1]
+        try:
+            chapter.checks.append(ChapterResult.from_dict({"chapter": chapter_id, "checks": [value["check"]]}).checks[0])
+            helpers = [str(h) for h in value.get("reached") or []]
+        except (KeyError, TypeError, ValueError, IndexError):
+            return None
+        if helpers:
+            entered[c] = helpers
+    trace(f"{chapter_id}: {len(slots) - len(reused)} of {len(slots)} checks judged afresh")
+    return chapter, entered
+
+
+def _keep_check_verdicts(memo: Memo, chapter: ChapterResult, kept: dict, keys: dict[str, str | None],
+                         entered: dict) -> None:
+    """Keep each check's verdict (`kept`: the chapter's to_kept()) under its key (`keys`), for a later run that
+    changes other functions only; never a grader's own failure (it is judged again)."""
+    if len(kept.get("checks", [])) != len(chapter.checks):
+        return
+    memo.keep_check_verdicts(chapter.chapter, {
+        check.id: [keys[check.id], {"check": value, "reached": entered.get(check.id)}]
+        for check, value in zip(chapter.checks, kept["checks"]) if keys.get(check.id) is not None and not (
+            check.status == Status.ERROR and check.message.startswith(("grader error", "not graded here")))})
 
 
 def _settled(chapter: ChapterResult, run: ChapterRun) -> bool:
@@ -99,16 +187,20 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
             plans[cid] = _plan(cid, seed, with_plots, exclude)
             calls, helpers = plans[cid].calls, plans[cid].chapter.builds_on
             if memo is not None and plan_keys[cid]:
-                memo.keep_calls(cid, plan_keys[cid], calls, helpers)
+                memo.keep_calls(cid, plan_keys[cid], calls, helpers, plans[cid].slots())
         requests.append(ChapterRequest(cid, BY_ID[cid].module, calls, helpers))
     # one learner's runs: which files a kept verdict was made from says which chapters will most likely be judged
     files = key_of(session.prepared.files) if memo is not None and memo.one_learner else None
     unseen = [cid for cid in chapter_ids if cid not in plans and files is not None and not memo.seen(cid, files)]
+    in_part = {cid for cid in unseen if not with_plots and memo.slots(cid, plan_keys[cid]) is not None}
     if unseen:  # files no kept verdict was made from: most likely judged afresh, so planned while the child runs
-        def plan_meanwhile() -> None:
+        def plan_meanwhile() -> None:  # or, where the chapter may be judged check by check, its checks imported
             for cid in unseen:
                 try:
-                    plans[cid] = _plan(cid, seed, with_plots, exclude)
+                    if cid in in_part:
+                        _load_checks(cid)
+                    else:
+                        plans[cid] = _plan(cid, seed, with_plots, exclude)
                 except Exception:  # noqa: BLE001  planned again below, where what it raises is the report's to meet
                     return
 
@@ -138,17 +230,29 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
         except (KeyError, TypeError, ValueError):
             chapter = None
         if chapter is None:
-            plan = plans.get(cid) or _plan(cid, seed, with_plots, exclude)  # at the same seed: the same calls
-            if cid in kept_calls and [c.to_json(i) for i, c in enumerate(plan.calls)] != \
-                    [c.to_json(i) for i, c in enumerate(request.calls)]:  # never, unless the memo is wrong
-                run = session.run([plan.request()])[cid]
-                _relocate(run, prepared.sources)
-                key = None
-            chapter = plan.judge(run, module_file)
-            uses, entered = plan.chapter.builds_on, plan.reached(run)
+            by_check = memo is not None and memo.one_learner and not with_plots and key is not None
+            slots = memo.slots(cid, plan_keys[cid]) if by_check and cid not in plans and plan_keys[cid] else None
+            keys = _check_keys(plan_keys[cid], slots, module_file, session.limits, run)
+            in_part = _judged_in_part(memo, cid, slots, keys, request.calls, run, module_file, seed, exclude) \
+                if keys else None
+            if in_part is not None:
+                (chapter, entered), uses = in_part, dict(request.helpers)
+            else:
+                plan = plans.get(cid) or _plan(cid, seed, with_plots, exclude)  # at the same seed: the same calls
+                if cid in kept_calls and [c.to_json(i) for i, c in enumerate(plan.calls)] != \
+                        [c.to_json(i) for i, c in enumerate(request.calls)]:  # never, unless the memo is wrong
+                    run = session.run([plan.request()])[cid]
+                    _relocate(run, prepared.sources)
+                    key = None
+                chapter = plan.judge(run, module_file)
+                uses, entered = plan.chapter.builds_on, plan.reached(run)
+                keys = _check_keys(plan_keys[cid], plan.slots(), module_file, session.limits, run) \
+                    if by_check and key is not None else {}
             if memo is not None and _settled(chapter, run):
-                memo.keep_verdict(cid, key, {"chapter": chapter.to_kept(), "builds_on": uses, "reached": entered},
-                                  files)
+                value = chapter.to_kept()
+                memo.keep_verdict(cid, key, {"chapter": value, "builds_on": uses, "reached": entered}, files)
+                if keys:
+                    _keep_check_verdicts(memo, chapter, value, keys, entered)
         builds_on[cid], reached[cid] = uses, entered
         chapter.source = Path(module_file).as_posix() if graded != KERNEL else KERNEL
         chapter.unread = module in prepared.problems  # a notebook that could not be read: nothing of it was graded

@@ -174,18 +174,51 @@ class Memo:
         return encoded
 
     def keep_calls(self, chapter: str, plan_key: str, calls: list[Call],
-                   builds_on: dict[str, tuple[str, ...]] | None = None) -> None:
+                   builds_on: dict[str, tuple[str, ...]] | None = None,
+                   slots: dict[str, list[int]] | None = None) -> None:
         """Keep a plan's calls, with the chapter's `builds_on` (its functions' helpers: what the child is asked to
-        watch for, grader.boundary.wire), which a run that reuses the calls needs without loading the checks."""
+        watch for, grader.boundary.wire), which a run that reuses the calls needs without loading the checks, and
+        with `slots`, which of the calls each check made (by their numbers), which judging one check alone needs."""
         if chapter not in _NAMES:
             return
         data = self._read(chapter)
         plans = data.get("plans") if isinstance(data.get("plans"), dict) else {}
         plans = {k: v for k, v in plans.items() if k != plan_key}
         data["plans"] = dict([*list(plans.items())[-(PLANS - 1):], (plan_key, [c.to_json(i) for i, c in enumerate(calls)])])
+        kept_slots = data.get("slots") if isinstance(data.get("slots"), dict) else {}
+        data["slots"] = {k: v for k, v in kept_slots.items() if k in data["plans"] and k != plan_key}
+        if slots is not None:
+            data["slots"][plan_key] = slots
         if builds_on is not None:
             data["builds_on"] = {function: list(helpers) for function, helpers in builds_on.items()}
         self._write(chapter)
+
+    def slots(self, chapter: str, plan_key: str) -> dict[str, list[int]] | None:
+        """Which of the kept calls (`calls`) each check of the plan made, by check id in the plan's order; or None."""
+        kept = self._read(chapter).get("slots") if chapter in _NAMES else None
+        slots = kept.get(plan_key) if isinstance(kept, dict) else None
+        if not isinstance(slots, dict) or not all(isinstance(c, str) and isinstance(n, list) and
+                                                  all(type(i) is int for i in n) for c, n in slots.items()):
+            return None
+        return slots
+
+    def check_verdicts(self, chapter: str) -> dict[str, list]:
+        """Each check's last verdict kept for `chapter` (keep_check_verdicts), by check id: [its key, its value]."""
+        if chapter not in _NAMES or self.folder is None:
+            return {}
+        kept = self._read(f"{chapter}-checks").get("checks")
+        return {c: v for c, v in kept.items() if isinstance(v, list) and len(v) == 2 and isinstance(v[1], dict)} \
+            if isinstance(kept, dict) else {}
+
+    def keep_check_verdicts(self, chapter: str, verdicts: dict[str, list]) -> None:
+        """Keep each check's last verdict (check id -> [its key, its value]): a run whose chapter answers differ from
+        every kept run's judges afresh only the checks whose own calls answered otherwise. One learner's memo only."""
+        if chapter not in _NAMES or self.folder is None or not verdicts:
+            return
+        data = self._read(f"{chapter}-checks")
+        kept = data.get("checks") if isinstance(data.get("checks"), dict) else {}
+        data["checks"] = {**kept, **verdicts}
+        self._write(f"{chapter}-checks")
 
     def builds_on(self, chapter: str) -> dict[str, tuple[str, ...]] | None:
         """The chapter's builds_on kept with its calls (keep_calls), or None (then its calls are planned again)."""

@@ -137,6 +137,10 @@ class ChapterPlan:
     def request(self) -> ChapterRequest:
         return ChapterRequest(self.chapter.info.id, self.chapter.info.module, self.calls, self.chapter.builds_on)
 
+    def slots(self) -> dict[str, list[int]]:
+        """Which of the plan's calls each check made (by their numbers in `calls`), by check id in report order."""
+        return {check.id: list(pending.slots) for check, pending in self.pending}
+
     def reached(self, run: ChapterRun) -> dict[str, list[str]]:
         """Per check of a function with helpers (ChapterChecks.builds_on), the helpers that the calls of its own
         function made by the check entered (Returned.reached; a call the child said nothing of counts for none):

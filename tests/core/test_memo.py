@@ -9,6 +9,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -17,7 +18,8 @@ import pytest
 from grader.boundary import kept
 from grader.boundary.spawn import INTERPRETER
 from grader.core.memo import ENTRIES, Memo, _stamp_of
-from tests.support import BWRAP, REPO, build_submission, replace_function, run_grade
+from tests.support import (BWRAP, REPO, WRONG_H, build_submission, replace_function, replace_functions,
+                           run_grade)
 
 needs_bwrap = pytest.mark.skipif(BWRAP is None, reason="the memo is used only where bubblewrap walls learner code off")
 
@@ -76,6 +78,33 @@ def test_a_changed_function_is_judged_again(tmp_path):
     assert changed == _report(root, "")
     failing = [c["id"] for ch in changed["chapters"] for c in ch["checks"] if c["status"] == "fail"]
     assert any("range_bearing" in name for name in failing)
+
+
+@needs_bwrap
+def test_only_the_checks_whose_calls_answered_otherwise_are_judged_afresh(tmp_path):
+    root = build_submission(tmp_path / "sub")
+    cache = tmp_path / "cache"
+    module = root / "exercises" / "ch06_measurement.py"
+
+    def judged() -> tuple[dict, list[str]]:
+        done = run_grade("ch06", "--submission", root, "--format", "json", "--no-quiz",
+                         env={**_env(cache), "GRADER_TRACE": repr(time.time())})
+        assert done.returncode in (0, 1), done.stderr[-3000:]
+        return json.loads(done.stdout), [line.split("ms  ", 1)[1] for line in done.stderr.splitlines()
+                                         if line.startswith("trace") and "judged afresh" in line]
+
+    assert judged()[1] == []  # the first run judges the chapter whole, and keeps each check's verdict
+    edits = [("range_bearing", WRONG_BEARING), ("H_jacobian", f"def H_jacobian(x, y):\n{WRONG_H}\n"),
+             ("range_bearing", "def range_bearing(x, y):\n    return np.array([np.hypot(x, y), np.arctan2(y, x)])\n")]
+    replaced: dict[str, str] = {}
+    for function, body in edits:  # one function changed at a time, as a learner edits
+        replaced[function] = body
+        module.write_text(replace_functions("ch06_measurement", replaced), encoding="utf-8")
+        report, traced = judged()
+        afresh = run_grade("ch06", "--submission", root, "--format", "json", "--no-quiz", env=_env(""))
+        assert report == json.loads(afresh.stdout)  # verdicts kept check by check, and the rest judged: as judged whole
+        fresh, total = map(int, traced[0].removeprefix("ch06: ").split(" checks")[0].split(" of "))
+        assert 0 < fresh < total, traced  # the checks of the changed function and of what calls it, or raises
 
 
 @needs_bwrap
