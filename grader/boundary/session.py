@@ -144,8 +144,8 @@ class _Child:
         return len(self.buffer)
 
     def events(self, deadline: Callable[[], float]):
-        """Yield parsed result lines; stop at EOF. Raises TimeoutError when the deadline passes. A line that
-        is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
+        """Yield each result line, parsed, with its bytes; stop at EOF. Raises TimeoutError when the deadline passes. A
+        line that is not one JSON object (malformed, too deeply nested, longer than MAX_LINE) is yielded as MALFORMED:
         the caller stops the child for it. Each byte is looked at once for a line's end, and kept once."""
         while True:
             chunk = self.handle.read(deadline() - time.monotonic())  # TimeoutError when nothing comes in time
@@ -158,9 +158,9 @@ class _Child:
                 *lines, rest = (bytes(self.buffer) + chunk[:end + 1] if self.buffer else chunk[:end + 1]).split(b"\n")
                 self.buffer = bytearray(chunk[end + 1:])
                 for line in lines:
-                    yield _parse(line)
+                    yield _parse(line), line
             if len(self.buffer) > MAX_LINE:
-                yield MALFORMED
+                yield MALFORMED, b""
                 return
 
     def stop(self) -> str:
@@ -278,13 +278,14 @@ class Progress:
         self.called = set()
         self.stage, self.index, self.deadline = Stage.BETWEEN, None, now + self.limits.call_seconds
 
-    def take(self, event: dict, now: float, runs: dict[str, ChapterRun]) -> Ending | None:
-        """Record one line of the child's; FINISHED after DONE, VIOLATED for a line out of order, else None."""
+    def take(self, event: dict, now: float, runs: dict[str, ChapterRun], line: bytes = b"") -> Ending | None:
+        """Record one line of the child's (`event`, read from `line`); FINISHED after DONE, VIOLATED for a line out of
+        order, else None."""
         kind, name = event.get("event"), event.get("chapter")
         if self.stage is Stage.CALL:  # most lines: the result of the call in flight
             if kind in _RESULTS and name == self.chapter and event.get("index") == self.index:
                 function = self.function
-                runs[name].results[self.index] = from_event(function, event, self.watched)
+                runs[name].results[self.index] = from_event(function, event, self.watched, line)
                 if now - self.call_started > self.slowest.get(function, 0.0):
                     self.slowest[function] = now - self.call_started
                 self.call_at += 1
@@ -412,10 +413,10 @@ class Session:
         ending = Ending.PIPE_CLOSED
         trace("the grader's own work done; waiting for the child's lines")
         try:
-            for event in child.events(lambda: min(progress.deadline, progress.chapter_end, self.learner_end)):
+            for event, line in child.events(lambda: min(progress.deadline, progress.chapter_end, self.learner_end)):
                 if progress.stage is Stage.STARTUP:
                     trace("the child's first line")
-                ending = progress.take(event, time.monotonic(), runs)
+                ending = progress.take(event, time.monotonic(), runs, line)
                 if ending is not None:
                     break
             else:

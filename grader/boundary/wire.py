@@ -22,7 +22,7 @@ from __future__ import annotations
 import binascii
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 # ------------------------------------------------------------------------------ events (child -> parent)
 
@@ -332,6 +332,9 @@ class Returned:
     # the function's helpers (ChapterRequest.helpers) the call entered; None: not known (no helpers asked about, no
     # line from the child that says, a timeout or a crash)
     reached: tuple[str, ...] | None = None
+    # a value's line from the child, hashed (SHA-256): what a memo key holds of the value (grader.core.grading), the
+    # same line always read as the same value; None where it is not known
+    line_hash: str | None = field(default=None, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -471,12 +474,15 @@ def _reached(event: dict, watched: tuple[str, ...]) -> tuple[str, ...] | None:
     return tuple(name for name in watched if name in said)
 
 
-def from_event(function: str, event: dict, watched: tuple[str, ...] = ()) -> Returned:
-    """Build a Returned from one child result line (already parsed JSON); `watched`: the function's helpers the
-    request asked about (ChapterRequest.helpers)."""
+def from_event(function: str, event: dict, watched: tuple[str, ...] = (), line: bytes = b"") -> Returned:
+    """Build a Returned from one child result line (already parsed JSON: `event`; `line`, its bytes as read, where
+    they are at hand); `watched`: the function's helpers the request asked about (ChapterRequest.helpers)."""
     kind = event.get("event")
     if kind == RETURNED and valid_value(event.get("value")):
-        return Returned(VALUE, function, encoded=event["value"], reached=_reached(event, watched))
+        import hashlib
+
+        return Returned(VALUE, function, encoded=event["value"], reached=_reached(event, watched),
+                        line_hash=hashlib.sha256(line).hexdigest() if line else None)
     if kind == RAISED_EVENT and isinstance(event.get("error"), dict):
         error = clean_error(event["error"])
         return Returned(NOT_IMPLEMENTED if error["not_implemented"] else RAISED, function, error=error,

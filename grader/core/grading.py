@@ -65,10 +65,11 @@ def _plan(chapter_id: str, seed: int, with_plots: bool, exclude: frozenset[str])
 
 
 def _answer(returned: Returned | None) -> list | None:
-    """Everything the child answered for one call, as plain data (a memo key's part): with the helpers the call
-    entered, which decide where a failure is blamed (point_upstream)."""
+    """Everything the child answered for one call, as plain data (a memo key's part): its value by the hash of the
+    line it came in (the value itself where that is not known), with the helpers the call entered, which decide
+    where a failure is blamed (point_upstream)."""
     r = returned
-    return None if r is None else [r.kind, r.function, r.encoded, r.error, r.note, r.reached]
+    return None if r is None else [r.kind, r.function, r.line_hash or r.encoded, r.error, r.note, r.reached]
 
 
 def _answered(run: ChapterRun) -> list:

@@ -94,4 +94,4 @@ def test_lines_are_read_back_whole_whatever_the_chunks(chunk):
             self.position += len(part)
             return part
 
-    assert list(_Child(Pipe()).events(lambda: float("inf"))) == lines
+    assert list(_Child(Pipe()).events(lambda: float("inf"))) == [(line, json.dumps(line).encode()) for line in lines]
