@@ -35,6 +35,15 @@ def fork_is_safe() -> bool:
             and hasattr(socket, "SOCK_SEQPACKET") and multiprocessing.get_start_method(allow_none=False) != "spawn")
 
 
+def forkable_now() -> bool:
+    """Whether this process may fork now (a drawing process, the warm judge): forking is safe on this system
+    (fork_is_safe) and no other thread runs (a fork copies only the calling thread: one holding a lock, an
+    import's among them, would leave it held in the copy)."""
+    import threading
+
+    return fork_is_safe() and threading.active_count() == 1
+
+
 def child_path() -> list[str]:
     """A grader interpreter's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
     paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]

@@ -17,6 +17,9 @@ if str(REPO) not in sys.path:
 # The HTML report's figure cache (grader.render.figure_cache) is off in tests: a figure kept by one test
 # would be reused by the next, and tests never touch the tester's own cache. Its tests turn it on.
 os.environ["GRADER_CACHE_DIR"] = ""
+# Nor is a judge kept warm after a run (grader.core.warm_judge): it would outlive the test by minutes. Its tests
+# turn it on, and end the judges they keep.
+os.environ["GRADER_WARM_JUDGE"] = "off"
 
 from tests.support import Quiz, build_submission  # noqa: E402
 

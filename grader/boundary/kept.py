@@ -23,7 +23,7 @@ import sys
 
 from grader.system import cache_folder, child_path
 
-_NOT_READ_BY_THE_DOOR = ("GRADER_TRACE", "GRADER_CACHE_DIR")
+_NOT_READ_BY_THE_DOOR = ("GRADER_TRACE", "GRADER_CACHE_DIR", "GRADER_WARM_JUDGE")
 
 
 def _file() -> str | None:

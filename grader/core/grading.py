@@ -91,7 +91,7 @@ def _check_keys(plan_key: str | None, slots: dict[str, list[int]] | None, module
 
 
 def _load_checks(chapter_id: str) -> None:
-    """Import what planning `chapter_id` needs (numpy, its checks, the planning), ahead of knowing which checks to plan."""
+    """Import what planning `chapter_id` needs (numpy, its checks, the planning), before its checks to plan are known."""
     from grader import checks as check_registry
     from grader.core import planning  # noqa: F401
 
@@ -102,31 +102,30 @@ def _judged_in_part(memo: Memo, chapter_id: str, slots: dict[str, list[int]], ke
                     calls: list, run: ChapterRun, module_file: str, seed: int,
                     exclude: frozenset[str]) -> tuple[ChapterResult, dict] | None:
     """The chapter judged check by check (only the changed functions judged afresh): a check whose own calls answered
-    exactly as when its last verdict was kept (`keys`) gets that verdict, and only the others are planned and judged,
-    with the answers to their calls. (the ChapterResult, the helpers each check's calls entered); None where the
-    memo does not hold what that needs, or the plan's calls are not the kept ones (then the chapter is judged whole)."""
-    from grader import checks as check_registry
-    from grader.core.planning import ChapterPlan
+    exactly as when its last verdict was kept (`keys`) gets that verdict, and only the others are planned and judged
+    (by the warm judge where one answers, grader.core.warm_judge), with the answers to their calls. (the
+    ChapterResult, the helpers each check's calls entered); None where the memo does not hold what that needs, or
+    the plan's calls are not the kept ones (then the chapter is judged whole)."""
+    from grader.core import warm_judge
 
     if not keys or any(i >= len(calls) for numbers in slots.values() for i in numbers):
         return None
     kept = memo.check_verdicts(chapter_id)
     reused = {c for c in slots if c in kept and keys.get(c) is not None and kept[c][0] == keys[c]}
-    plan = ChapterPlan(check_registry.load(chapter_id), seed, None, exclude | {f"{chapter_id}/{c}" for c in reused})
-    if [check.id for check, _ in plan.pending] != [c for c in slots if c not in reused]:
+    fresh_slots = {c: numbers for c, numbers in slots.items() if c not in reused}
+    numbers = sorted({i for own in fresh_slots.values() for i in own})
+    asked = (chapter_id, seed, exclude | {f"{chapter_id}/{c}" for c in reused}, fresh_slots,
+             {i: calls[i].to_json(i) for i in numbers}, {i: run.results[i] for i in numbers}, module_file)
+    judged = warm_judge.judge(memo.grader, *asked) if fresh_slots else ([], {})
+    if judged is None:
+        from grader.core.planning import judge_checks
+
+        judged = judge_checks(*asked)
+    else:
+        trace(f"{chapter_id} judged by the warm judge")
+    if judged is None:
         return None
-    results: list = [None] * len(plan.calls)
-    for check, pending in plan.pending:
-        own = slots[check.id]
-        if len(own) != len(pending.slots):
-            return None
-        for mine, kept_number in zip(pending.slots, own):
-            if plan.calls[mine].to_json(kept_number) != calls[kept_number].to_json(kept_number):
-                return None  # never, unless the memo is wrong
-            results[mine] = run.results[kept_number]
-    part = ChapterRun(chapter_id, None, results)
-    judged = plan.judge(part, module_file)
-    fresh, fresh_entered = {c.id: c for c in judged.checks}, plan.reached(part)
+    fresh, fresh_entered = {c.id: c for c in judged[0]}, judged[1]
     chapter, entered = ChapterResult(chapter_id, BY_ID[chapter_id].title), {}
     for c in slots:
         if c not in reused:
@@ -136,13 +135,14 @@ def _judged_in_part(memo: Memo, chapter_id: str, slots: dict[str, list[int]], ke
             continue
         value = kept[c][1]
         try:
-            chapter.checks.append(ChapterResult.from_dict({"chapter": chapter_id, "checks": [value["check"]]}).checks[0])
+            kept_check = ChapterResult.from_dict({"chapter": chapter_id, "checks": [value["check"]]}).checks[0]
             helpers = [str(h) for h in value.get("reached") or []]
         except (KeyError, TypeError, ValueError, IndexError):
             return None
+        chapter.checks.append(kept_check)
         if helpers:
             entered[c] = helpers
-    trace(f"{chapter_id}: {len(slots) - len(reused)} of {len(slots)} checks judged afresh")
+    trace(f"{chapter_id}: {len(fresh_slots)} of {len(slots)} checks judged afresh")
     return chapter, entered
 
 
@@ -194,12 +194,19 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
     files = key_of(session.prepared.files) if memo is not None and memo.one_learner else None
     unseen = [cid for cid in chapter_ids if cid not in plans and files is not None and not memo.seen(cid, files)]
     in_part = {cid for cid in unseen if not with_plots and memo.slots(cid, plan_keys[cid]) is not None}
+    if memo is not None and memo.one_learner:
+        from grader.core import warm_judge
+
+        warm_judge.wanted(memo.grader)
     if unseen:  # files no kept verdict was made from: most likely judged afresh, so planned while the child runs
         def plan_meanwhile() -> None:  # or, where the chapter may be judged check by check, its checks imported
+            from grader.core import warm_judge
+
             for cid in unseen:
                 try:
                     if cid in in_part:
-                        _load_checks(cid)
+                        if not warm_judge.available(memo.grader):  # the warm judge has them imported
+                            _load_checks(cid)
                     else:
                         plans[cid] = _plan(cid, seed, with_plots, exclude)
                 except Exception:  # noqa: BLE001  planned again below, where what it raises is the report's to meet

@@ -180,6 +180,31 @@ class ChapterPlan:
         return result
 
 
+def judge_checks(chapter_id: str, seed: int, exclude: frozenset[str], slots: dict[str, list[int]],
+                 calls: dict[int, dict], results: dict[int, Returned | None],
+                 module_file: str) -> tuple[list[CheckResult], dict] | None:
+    """Plan and judge only the checks of `slots` (check id -> the numbers of its calls in the chapter's kept plan, in
+    report order; `exclude`: every other check), with the kept calls (`calls`: number -> Call.to_json) and what the
+    child answered to them (`results`, by the same numbers): (their CheckResults, the helpers each check's calls
+    entered); None where the plan made now is not the kept one (the chapter is then judged whole)."""
+    from grader import checks as check_registry
+
+    plan = ChapterPlan(check_registry.load(chapter_id), seed, None, exclude)
+    if [check.id for check, _ in plan.pending] != list(slots):
+        return None
+    answered: list[Returned | None] = [None] * len(plan.calls)
+    for check, pending in plan.pending:
+        own = slots[check.id]
+        if len(own) != len(pending.slots):
+            return None
+        for mine, kept_number in zip(pending.slots, own):
+            if kept_number not in calls or plan.calls[mine].to_json(kept_number) != calls[kept_number]:
+                return None  # never, unless the memo is wrong
+            answered[mine] = results.get(kept_number)
+    part = ChapterRun(chapter_id, None, answered)
+    return plan.judge(part, module_file).checks, plan.reached(part)
+
+
 def _result(check: Check, status: Status, points: float, message: str, verdict: Verdict | None = None) -> CheckResult:
     return CheckResult(
         id=check.id, function=check.function, description=check.description, status=status,

@@ -104,4 +104,6 @@ def main() -> None:
         print(f"trace {at:8.1f} ms  {what}", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
+    if "grader.core.warm_judge" in sys.modules:  # everything written: a judge kept warm for the next command
+        sys.modules["grader.core.warm_judge"].linger()
     os._exit(code or 0)

@@ -16,6 +16,8 @@ from __future__ import annotations
 import os
 import signal
 
+from grader.system import forkable_now
+
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
 _ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by `end`)
 
@@ -25,10 +27,10 @@ def start() -> bool:
     here (to plan and judge the calls whose results the figures show), so it is imported once for both, not in
     each (about 0.1 s of CPU on two busy cores). Call it before any thread starts (a fork copies only the
     calling thread), and after the learner's child is started (numpy's import would delay it). False where
-    forking is not safe here now (`forkable`) or fails."""
+    forking is not safe here now (grader.system.forkable_now) or fails."""
     from grader.system import keep, trace
 
-    if _STARTED or not forkable():
+    if _STARTED or not forkable_now():
         return bool(_STARTED)
     import multiprocessing
 
@@ -175,19 +177,8 @@ def _received(sent: tuple) -> list | None:
     return drawn
 
 
-def forkable() -> bool:
-    """Whether drawing processes may be forked from this process now: forking is safe on this system and no other
-    thread runs (a fork copies only the calling thread: one holding a lock, an import's among them, would leave
-    it held in the copy)."""
-    import threading
-
-    from grader.system import fork_is_safe
-
-    return fork_is_safe() and threading.active_count() == 1
-
-
 def two_processes():
-    """Two forked drawing processes (one where there is one core); fork them only where `forkable` says so."""
+    """Two forked drawing processes (one where there is one core); fork them only where forkable_now says so."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -206,7 +197,7 @@ def _draw_in_two(chapters: list) -> list[list]:
 def figures_due(chapters: list, here: bool = False):
     """Start drawing the figures of `chapters` (grader.model.ChapterResult); returns the function that
     waits for them, one list of figures per chapter: drawn by the started drawing process, else by two
-    processes forked then, where `forkable`, else by this process. With no chapters, the started
+    processes forked then, where forkable_now says so, else by this process. With no chapters, the started
     drawing process is stopped. `here`: drawn by this process in any case (a batch worker, one of as many
     as there are cores: forking more for each learner only costs forks)."""
     from grader.render.figures import figures, preload
@@ -226,8 +217,8 @@ def figures_due(chapters: list, here: bool = False):
             return drawn
         if len(chapters) > 1:
             try:
-                preload()  # here, before any fork (a thread still importing it keeps the figures here: forkable)
-                if forkable():
+                preload()  # here, before any fork (a thread still importing it keeps the figures here: forkable_now)
+                if forkable_now():
                     return _draw_in_two(chapters)
             except (OSError, ValueError, ImportError, RuntimeError):
                 pass

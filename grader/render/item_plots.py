@@ -21,13 +21,14 @@ def figures(statistics: dict) -> dict[str, Figure]:
 
 
 def _drawn(jobs: list[tuple]) -> list[Figure]:
-    from grader.render.drawer import drawn_by_started, forkable, two_processes
+    from grader.render.drawer import drawn_by_started, two_processes
+    from grader.system import forkable_now
 
     drawn = drawn_by_started((__name__, _one.__name__), jobs) if jobs else None  # the one a batch started
     if drawn is not None:
         return drawn
     preload()  # imported once, here, before any fork
-    if len(jobs) > 1 and forkable():
+    if len(jobs) > 1 and forkable_now():
         try:
             with two_processes() as pool:
                 return list(pool.map(_one, jobs))

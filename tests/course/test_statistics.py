@@ -525,6 +525,7 @@ def test_no_drawing_process_is_forked_while_another_thread_runs(monkeypatch):
     import threading
 
     from grader.render import drawer, item_plots
+    from grader.system import forkable_now
 
     rules = {"facility_low": 0.2, "facility_high": 0.95, "discrimination_low": 0.1}
     items = [{"id": f"ch0{n}/item{k}", "chapter": f"ch0{n}", "facility": 0.1 * k, "discrimination": 0.05 * k,
@@ -539,7 +540,7 @@ def test_no_drawing_process_is_forked_while_another_thread_runs(monkeypatch):
     other = threading.Thread(target=release.wait, daemon=True)
     other.start()
     try:
-        assert not drawer.forkable()
+        assert not forkable_now()
         beside = item_plots.figures(statistics)
     finally:
         release.set()

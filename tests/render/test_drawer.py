@@ -70,7 +70,7 @@ def test_an_unused_drawing_process_ends_with_the_grader():
 
 
 def test_no_drawing_process_is_started_while_another_thread_runs():
-    """The same rule as every fork of drawing processes (drawer.forkable): a fork copies only the calling thread."""
+    """The same rule as every fork of drawing processes (grader.system.forkable_now): a fork copies only the calling thread."""
     script = textwrap.dedent("""
         import threading
         from grader.render import drawer

@@ -1,0 +1,252 @@
+"""A judge kept warm between one learner's runs of `grade`: the checks a changed function needs judged without
+numpy's import in the command's own process.
+
+A learner edits a function and runs `grade ch06` again. The chapter's other checks keep their verdicts
+(grader.core.memo), but the changed function's checks are judged afresh, and judging needs numpy and the checks:
+imported, they cost the command more than the learner's child it waits on. So a one-off `grade` that judged in
+its own process (numpy and the checks imported) forks, as it ends, a copy of itself that waits on a Unix socket in
+the user's cache folder for the next command's checks (`linger`); the next command sends it the checks to plan,
+the kept calls and what the child answered, and gets their verdicts back (`judge`), as plain data (JSON lines).
+
+The judge runs the grader's code only: a copy of the grader made after grading, given plain data. It answers only
+a command of the same grader (the memo's stamp: its files, the interpreter, numpy) and of the same user (the
+socket is the user's own, and the peer's uid is checked), and it ends after IDLE_SECONDS without a question, when
+its socket is removed or taken by another judge, or when a command of another grader asks. Like the memo, it is
+used only where learner code cannot reach this user's files (the sandbox or a dropped uid), and it is as safe as
+the user's cache folder. Where none answers, or it fails, the command judges in its own process: the judge decides
+speed, never a verdict. It is kept where forking a process that has numpy loaded is safe (grader.system.forkable_now)
+and the socket's peer can be known; GRADER_WARM_JUDGE=off turns it off.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+
+TYPE_CHECKING = False  # typing's own import is not needed here (mypy reads this one too)
+if TYPE_CHECKING:
+    import socket
+
+IDLE_SECONDS = 600.0  # a judge nobody asked for this long ends
+CHECK_SECONDS = 2.0  # how often a waiting judge looks whether its socket is still its own
+ANSWER_SECONDS = 30.0  # the most a command waits for one answer before it judges itself
+SETTING = "GRADER_WARM_JUDGE"
+
+HELLO_SECONDS = 0.2  # the most a command waits for a judge to greet it (one busy with another command does not)
+
+_client: list = []  # this command's connection to a judge: [socket, reader] or [None] once none answered
+_served = False  # a judge answered this command (then it is still warm: nothing to fork)
+_wanted: list[str] = []  # the grader stamp of this command's memo: a judge of it may be kept warm (`linger`)
+
+
+def wanted(stamp: str) -> None:
+    """Say that this command grades one learner with the memo of grader `stamp` (walled off from learner code): a
+    judge of that grader may answer it, and be kept warm as it ends."""
+    if not _wanted:
+        _wanted.append(stamp)
+
+
+def _socket_path() -> str | None:
+    from grader.system import cache_folder
+
+    folder = cache_folder("launch")
+    return None if folder is None else os.path.join(folder, "judge")
+
+
+def enabled() -> bool:
+    """Whether a warm judge may be used and kept here: not turned off, and Unix sockets whose peer is known."""
+    if os.environ.get(SETTING, "on") == "off":
+        return False
+    import socket
+
+    return hasattr(socket, "AF_UNIX") and hasattr(socket, "SO_PEERCRED")
+
+
+def _peer_uid(connection: socket.socket) -> int:
+    import socket
+    import struct
+
+    credentials = connection.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    return struct.unpack("3i", credentials)[1]
+
+
+def _send(connection: socket.socket, message: dict) -> None:
+    connection.sendall((json.dumps(message) + "\n").encode("utf-8"))
+
+
+def _connection(stamp: str):
+    """This command's connection to the warm judge of grader `stamp` ([socket, reader]), or None."""
+    if _client:
+        return _client[0] if _client[0] is not None else None
+    _client.append(None)
+    path = _socket_path()
+    if not enabled() or path is None or not os.path.exists(path):
+        return None
+    import socket
+
+    connection = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    try:
+        connection.settimeout(HELLO_SECONDS)
+        connection.connect(path)
+        if _peer_uid(connection) != os.getuid():
+            raise OSError("the judge's socket is another user's")
+        reader = connection.makefile("rb")
+        _send(connection, {"stamp": stamp})
+        hello = json.loads(reader.readline() or b"null")
+        if not isinstance(hello, dict) or hello.get("stamp") != stamp:
+            raise OSError("a judge of another grader")
+        connection.settimeout(ANSWER_SECONDS)
+    except (OSError, ValueError):
+        connection.close()
+        return None
+    _client[0] = [connection, reader]
+    return _client[0]
+
+
+def available(stamp: str) -> bool:
+    """Whether a warm judge of grader `stamp` answers this command (connected now, for the questions to come)."""
+    return _connection(stamp) is not None
+
+
+def judge(stamp: str, chapter_id: str, seed: int, exclude: frozenset[str], slots: dict[str, list[int]],
+          calls: dict[int, dict], results: dict, module_file: str) -> tuple[list, dict] | None:
+    """grader.core.planning.judge_checks, answered by the warm judge of grader `stamp`: (the CheckResults, the helpers
+    each check's calls entered), or None where no judge answers (or it cannot say): then the command judges."""
+    global _served
+    held = _connection(stamp)
+    if held is None:
+        return None
+    connection, reader = held
+    answered = {str(i): None if r is None else [r.kind, r.function, r.encoded, r.error, r.note,
+                                                None if r.reached is None else list(r.reached), r.line_hash]
+                for i, r in results.items()}
+    try:
+        _send(connection, {"judge": [chapter_id, seed, sorted(exclude), slots, {str(i): c for i, c in calls.items()},
+                                     answered, module_file]})
+        reply = json.loads(reader.readline() or b"null")
+    except (OSError, ValueError):
+        _client[0] = None
+        connection.close()
+        return None
+    if not isinstance(reply, dict) or not isinstance(reply.get("checks"), list):
+        return None
+    from grader.model import ChapterResult
+
+    try:
+        checks = ChapterResult.from_dict({"chapter": chapter_id, "checks": reply["checks"]}).checks
+        entered = {str(c): [str(h) for h in helpers] for c, helpers in dict(reply["entered"]).items()}
+    except (KeyError, TypeError, ValueError):
+        return None
+    _served = True
+    return checks, entered
+
+
+def linger() -> None:
+    """As a one-off command that judged in its own process ends: fork the warm judge of its grader (`wanted`), unless
+    one answered this command, or judging was not imported here, or forking is not safe here now. Call it with
+    everything written and flushed."""
+    if not _wanted or _served or not enabled() or "grader.core.planning" not in sys.modules:
+        return
+    stamp = _wanted[0]
+    from grader.system import forkable_now
+
+    path = _socket_path()
+    if path is None or not forkable_now():
+        return
+    import socket
+
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    temporary = f"{path}.{os.getpid()}"
+    mask = os.umask(0o077)
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        listener.bind(temporary)
+        pid = os.fork()
+    except OSError:
+        listener.close()
+        try:
+            os.unlink(temporary)
+        except OSError:
+            pass
+        return
+    finally:
+        os.umask(mask)
+    if pid == 0:
+        try:
+            listener.listen(4)  # here, so that a command's peer credentials are the judge's
+            os.replace(temporary, path)  # a judge before this one finds its socket gone and ends
+            _serve(listener, stamp, path)
+        finally:
+            os._exit(0)
+    listener.close()
+
+
+def _serve(listener: socket.socket, stamp: str, path: str) -> None:
+    """The judge: a session of its own (no terminal's signals, no pipe of the command's kept open), answering one
+    command at a time until it is idle too long or its socket is no longer its own."""
+    os.setsid()
+    keep = listener.fileno()
+    null = os.open(os.devnull, os.O_RDWR)
+    for standard in (0, 1, 2):
+        os.dup2(null, standard)
+    os.closerange(3, keep)
+    os.closerange(keep + 1, 1 << 16)
+    import gc
+
+    gc.freeze()  # what the command made stays out of the collector's passes
+    mine = os.stat(path).st_ino
+    listener.settimeout(CHECK_SECONDS)
+    idle_until = time.monotonic() + IDLE_SECONDS
+    while time.monotonic() < idle_until:
+        try:
+            connection, _ = listener.accept()
+        except TimeoutError:
+            try:
+                if os.stat(path).st_ino != mine:
+                    return
+            except OSError:
+                return
+            continue
+        with connection:
+            if not _answer(connection, stamp):
+                return
+        idle_until = time.monotonic() + IDLE_SECONDS
+
+
+def _answer(connection: socket.socket, stamp: str) -> bool:
+    """Answer one command's questions until it closes; False where it is of another grader (this judge then ends)."""
+    from grader.boundary.wire import Returned
+    from grader.core.planning import judge_checks
+    from grader.model import ChapterResult
+
+    connection.settimeout(ANSWER_SECONDS)
+    try:
+        if _peer_uid(connection) != os.getuid():
+            return True
+        reader = connection.makefile("rb")
+        hello = json.loads(reader.readline() or b"null")
+        if not isinstance(hello, dict):
+            return True  # no command's greeting: nothing asked
+        _send(connection, {"stamp": stamp})
+        if hello.get("stamp") != stamp:
+            return False  # a command of another grader: this one is stale
+        for line in reader:
+            chapter_id, seed, exclude, slots, calls, answered, module_file = json.loads(line)["judge"]
+            results = {int(i): None if r is None else Returned(r[0], r[1], r[2], r[3], r[4],
+                                                                None if r[5] is None else tuple(r[5]), r[6])
+                       for i, r in answered.items()}
+            reply: dict = {}
+            try:
+                judged = judge_checks(chapter_id, seed, frozenset(exclude), slots,
+                                      {int(i): c for i, c in calls.items()}, results, module_file)
+                if judged is not None:
+                    reply = {"checks": ChapterResult(chapter_id, "", list(judged[0])).to_kept()["checks"],
+                             "entered": judged[1]}
+            except Exception:  # noqa: BLE001  judged by the command, which meets what it raises
+                reply = {}
+            _send(connection, reply)
+    except (OSError, ValueError, TypeError, KeyError):
+        pass
+    return True
