@@ -243,8 +243,16 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
             keys = _check_keys(plan_keys[cid], slots, module_file, session.limits, run)
             in_part = _judged_in_part(memo, cid, slots, keys, request.calls, run, module_file, seed, exclude) \
                 if keys else None
+            unimported = None
+            if in_part is None and by_check and run.import_error is not None and cid not in plans:
+                from grader.core import warm_judge
+
+                unimported = warm_judge.judge_not_imported(memo.grader, cid, exclude, run.import_error, module_file)
             if in_part is not None:
                 (chapter, entered), uses = in_part, dict(request.helpers)
+            elif unimported is not None:  # the warm judge said it: a file that could not be imported
+                chapter, uses, entered = unimported, dict(request.helpers), {}
+                trace(f"{cid} judged by the warm judge")
             else:
                 plan = plans.get(cid) or _plan(cid, seed, with_plots, exclude)  # at the same seed: the same calls
                 if cid in kept_calls and [c.to_json(i) for i, c in enumerate(plan.calls)] != \

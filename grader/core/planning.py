@@ -160,12 +160,7 @@ class ChapterPlan:
         info = self.chapter.info
         result = ChapterResult(info.id, info.title)
         if run.import_error is not None:
-            message = import_problem(run.import_error, module_file)
-            result.problems.append(message)
-            failed = "read" if run.import_error.get("exception") == "NotebookError" else "imported"  # a notebook or not
-            short = f"not graded: {module_file} could not be {failed} (see the chapter's message)"
-            result.checks = [_result(check, Status.ERROR, 0.0, short) for check in self.checks]
-            return result
+            return _not_imported(result, self.checks, run.import_error, module_file)
         for check, pending in self.pending:
             result.checks.append(_judge_one(check, pending, run))
         for name, pending in self.plot_pending:
@@ -178,6 +173,25 @@ class ChapterPlan:
             if isinstance(data, dict):
                 result.plots[name] = data
         return result
+
+
+def _not_imported(result: ChapterResult, checks: list[Check], import_error: dict, module_file: str) -> ChapterResult:
+    """`result` for a chapter file that could not be imported (or read): its message, every check not graded."""
+    result.problems.append(import_problem(import_error, module_file))
+    failed = "read" if import_error.get("exception") == "NotebookError" else "imported"  # a notebook or not
+    short = f"not graded: {module_file} could not be {failed} (see the chapter's message)"
+    result.checks = [_result(check, Status.ERROR, 0.0, short) for check in checks]
+    return result
+
+
+def judge_not_imported(chapter_id: str, exclude: frozenset[str], import_error: dict, module_file: str) -> ChapterResult:
+    """The chapter whose file could not be imported, as its plan judges it (ChapterPlan.judge), without planning."""
+    from grader import checks as check_registry
+
+    chapter = check_registry.load(chapter_id)
+    info = chapter.info
+    checks = [c for c in chapter.checks if f"{info.id}/{c.id}" not in exclude]
+    return _not_imported(ChapterResult(info.id, info.title), checks, import_error, module_file)
 
 
 def judge_checks(chapter_id: str, seed: int, exclude: frozenset[str], slots: dict[str, list[int]],

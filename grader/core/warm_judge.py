@@ -114,23 +114,12 @@ def judge(stamp: str, chapter_id: str, seed: int, exclude: frozenset[str], slots
           calls: dict[int, dict], results: dict, module_file: str) -> tuple[list, dict] | None:
     """grader.core.planning.judge_checks, answered by the warm judge of grader `stamp`: (the CheckResults, the helpers
     each check's calls entered), or None where no judge answers (or it cannot say): then the command judges."""
-    global _served
-    held = _connection(stamp)
-    if held is None:
-        return None
-    connection, reader = held
     answered = {str(i): None if r is None else [r.kind, r.function, r.encoded, r.error, r.note,
                                                 None if r.reached is None else list(r.reached), r.line_hash]
                 for i, r in results.items()}
-    try:
-        _send(connection, {"judge": [chapter_id, seed, sorted(exclude), slots, {str(i): c for i, c in calls.items()},
-                                     answered, module_file]})
-        reply = json.loads(reader.readline() or b"null")
-    except (OSError, ValueError):
-        _client[0] = None
-        connection.close()
-        return None
-    if not isinstance(reply, dict) or not isinstance(reply.get("checks"), list):
+    reply = _ask(stamp, {"judge": [chapter_id, seed, sorted(exclude), slots, {str(i): c for i, c in calls.items()},
+                                   answered, module_file]})
+    if reply is None or not isinstance(reply.get("checks"), list):
         return None
     from grader.model import ChapterResult
 
@@ -139,8 +128,42 @@ def judge(stamp: str, chapter_id: str, seed: int, exclude: frozenset[str], slots
         entered = {str(c): [str(h) for h in helpers] for c, helpers in dict(reply["entered"]).items()}
     except (KeyError, TypeError, ValueError):
         return None
-    _served = True
     return checks, entered
+
+
+def _ask(stamp: str, question: dict) -> dict | None:
+    """The warm judge's answer to `question` (None where none answers: the connection is then let go)."""
+    global _served
+    held = _connection(stamp)
+    if held is None:
+        return None
+    connection, reader = held
+    try:
+        _send(connection, question)
+        reply = json.loads(reader.readline() or b"null")
+    except (OSError, ValueError):
+        _client[0] = None
+        connection.close()
+        return None
+    if not isinstance(reply, dict):
+        return None
+    _served = True
+    return reply
+
+
+def judge_not_imported(stamp: str, chapter_id: str, exclude: frozenset[str], import_error: dict,
+                       module_file: str):
+    """grader.core.planning.judge_not_imported, answered by the warm judge of grader `stamp`: the ChapterResult of a
+    chapter file that could not be imported, or None where no judge answers (then the command judges)."""
+    reply = _ask(stamp, {"not_imported": [chapter_id, sorted(exclude), import_error, module_file]})
+    if reply is None or not isinstance(reply.get("chapter"), dict):
+        return None
+    from grader.model import ChapterResult
+
+    try:
+        return ChapterResult.from_dict(reply["chapter"])
+    except (KeyError, TypeError, ValueError):
+        return None
 
 
 def linger() -> None:
@@ -218,7 +241,7 @@ def _serve(listener: socket.socket, stamp: str, path: str) -> None:
 def _answer(connection: socket.socket, stamp: str) -> bool:
     """Answer one command's questions until it closes; False where it is of another grader (this judge then ends)."""
     from grader.boundary.wire import Returned
-    from grader.core.planning import judge_checks
+    from grader.core.planning import judge_checks, judge_not_imported
     from grader.model import ChapterResult
 
     connection.settimeout(ANSWER_SECONDS)
@@ -233,17 +256,22 @@ def _answer(connection: socket.socket, stamp: str) -> bool:
         if hello.get("stamp") != stamp:
             return False  # a command of another grader: this one is stale
         for line in reader:
-            chapter_id, seed, exclude, slots, calls, answered, module_file = json.loads(line)["judge"]
-            results = {int(i): None if r is None else Returned(r[0], r[1], r[2], r[3], r[4],
-                                                                None if r[5] is None else tuple(r[5]), r[6])
-                       for i, r in answered.items()}
-            reply: dict = {}
+            question, reply = json.loads(line), {}
             try:
-                judged = judge_checks(chapter_id, seed, frozenset(exclude), slots,
-                                      {int(i): c for i, c in calls.items()}, results, module_file)
-                if judged is not None:
-                    reply = {"checks": ChapterResult(chapter_id, "", list(judged[0])).to_kept()["checks"],
-                             "entered": judged[1]}
+                if "not_imported" in question:
+                    chapter_id, exclude, import_error, module_file = question["not_imported"]
+                    reply = {"chapter": judge_not_imported(chapter_id, frozenset(exclude), import_error,
+                                                           module_file).to_kept()}
+                else:
+                    chapter_id, seed, exclude, slots, calls, answered, module_file = question["judge"]
+                    results = {int(i): None if r is None else Returned(r[0], r[1], r[2], r[3], r[4],
+                                                                        None if r[5] is None else tuple(r[5]), r[6])
+                               for i, r in answered.items()}
+                    judged = judge_checks(chapter_id, seed, frozenset(exclude), slots,
+                                          {int(i): c for i, c in calls.items()}, results, module_file)
+                    if judged is not None:
+                        reply = {"checks": ChapterResult(chapter_id, "", list(judged[0])).to_kept()["checks"],
+                                 "entered": judged[1]}
             except Exception:  # noqa: BLE001  judged by the command, which meets what it raises
                 reply = {}
             _send(connection, reply)

@@ -91,12 +91,14 @@ def _edit(root: Path, replaced: dict[str, str]) -> None:
 
 
 def test_the_judge_kept_warm_judges_the_next_edits_as_the_command_would_without_numpy(learner):
+    """Two functions changed in turn, then a syntax error (the file cannot be imported)."""
     root, cache = learner
     _run(root, cache)  # judged here, then a judge kept warm
     first = _judge_pid(cache)
     assert first is not None
     for replaced in ({"range_bearing": WRONG_BEARING}, {"range_bearing": WRONG_BEARING,
-                                                         "H_jacobian": f"def H_jacobian(x, y):\n{WRONG_H}\n"}):
+                                                         "H_jacobian": f"def H_jacobian(x, y):\n{WRONG_H}\n"},
+                     {"range_bearing": "def range_bearing(x, y):\n    return np.array([np.hypot(x, y) 0])\n"}):
         _edit(root, replaced)
         report, judged, imported = _run(root, cache)
         assert any("judged by the warm judge" in line for line in judged), judged
