@@ -8,8 +8,9 @@ What is timed (the grader's caches in a private folder, warmed by one run first,
 after their first `grade`):
 - `grade ch06 --solutions` and `grade ch06` on the stubs, run again with the answers unchanged: the kept
   sandbox starts the child first, and the kept verdicts are reused (grader.core.memo);
-- the same with a function changed before every run (a new constant each time): that chapter is planned while
-  the child runs and judged afresh, numpy and the checks imported;
+- the same with a function changed before every run (a new constant each time): the checks whose calls now answer
+  otherwise are judged afresh, by the judge the previous run kept warm (grader.core.warm_judge), so the command
+  imports neither numpy nor the checks; and with a syntax error made anew before every run;
 - the first run of all, with nothing kept (a fresh cache folder each time): the door decides, the sandbox's
   folders are prepared, every chapter is planned and judged;
 - without the sandbox (so nothing is reused either: learner code could write the memo);
@@ -61,6 +62,9 @@ os._exit(0 if b'"done"' in buffer else 1)
 
 _CHANGED = """def range_bearing(x, y):
     return np.array([np.hypot(x, y) * {scale!r}, np.arctan2(y, x)])
+"""
+_SYNTAX_ERROR = """def range_bearing(x, y):
+    return np.array([np.hypot(x, y) * {scale!r} np.arctan2(y, x)])
 """
 
 
@@ -119,13 +123,14 @@ def run(scratch: Path, args) -> None:
     env = dict(os.environ, GRADER_CACHE_DIR=str(cache))
     right = build_submission(scratch / "right")
     changing = build_submission(scratch / "changing")
+    broken = build_submission(scratch / "broken")
     fresh = [0]
 
-    def change_a_function() -> None:  # a new constant each time: the chapter's answers differ from every kept run
-        fresh[0] += 1
-        source = replace_function("ch06_measurement", "range_bearing", _CHANGED.format(scale=1 + fresh[0] * 1e-9))
-        (changing / "exercises" / "ch06_measurement.py").write_text(source.replace("solutions.", "exercises."),
-                                                                  encoding="utf-8")
+    def change_a_function(template: str = _CHANGED, folder: Path = changing) -> None:
+        fresh[0] += 1  # a new constant each time: the chapter's answers differ from every kept run
+        source = replace_function("ch06_measurement", "range_bearing", template.format(scale=1 + fresh[0] * 1e-9))
+        (folder / "exercises" / "ch06_measurement.py").write_text(source.replace("solutions.", "exercises."),
+                                                                encoding="utf-8")
 
     def empty_cache() -> None:
         shutil.rmtree(scratch / "first", ignore_errors=True)
@@ -141,6 +146,8 @@ def run(scratch: Path, args) -> None:
         "grade ch06 (stubs)": ([*grade, "ch06"], env, None),
         "  a right submission": ([*grade, "ch06", "--submission", str(right)], env, None),
         "  a function changed": ([*grade, "ch06", "--submission", str(changing)], env, change_a_function),
+        "  a syntax error made": ([*grade, "ch06", "--submission", str(broken)], env,
+                                  lambda: change_a_function(_SYNTAX_ERROR, broken)),
         "  first run, nothing kept": ([*grade, "ch06", "--solutions"], dict(env, GRADER_CACHE_DIR=str(scratch / "first")),
                                       empty_cache),
         "  without the sandbox": ([*grade, "ch06", "--solutions", "--no-sandbox"], env, None),
@@ -175,8 +182,8 @@ def run(scratch: Path, args) -> None:
 
     print(f"\ngrade ch06 / import numpy = {ratio('grade ch06 --solutions'):.2f}x (--solutions), "
           f"{ratio('grade ch06 (stubs)'):.2f}x (stubs), {ratio('  a right submission'):.2f}x (a right submission) "
-          f"(target <= 1.5x); with a function changed {ratio('  a function changed'):.2f}x, the first run "
-          f"{ratio('  first run, nothing kept'):.2f}x")
+          f"(target <= 1.5x); with a function changed {ratio('  a function changed'):.2f}x (target <= 1.5x), a "
+          f"syntax error {ratio('  a syntax error made'):.2f}x, the first run {ratio('  first run, nothing kept'):.2f}x")
     print(f"floors: bubblewrap alone {ratio('floor: bubblewrap alone'):.2f}x, the child's path "
           f"{ratio('floor: the child' + chr(39) + 's path'):.2f}x; otter-grader's quoted 3.4 s for one notebook "
           f"would be {3.4 / baseline:.0f}x")

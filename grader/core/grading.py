@@ -146,6 +146,26 @@ def _judged_in_part(memo: Memo, chapter_id: str, slots: dict[str, list[int]], ke
     return chapter, entered
 
 
+def _judged_by_check(memo: Memo, plan_key: str | None, request: ChapterRequest, run: ChapterRun, module_file: str,
+                     limits: object, seed: int, exclude: frozenset[str]) -> tuple[ChapterResult, dict, dict] | None:
+    """The chapter judged without its whole plan: check by check (_judged_in_part), or, for a file that could not be
+    imported, by the warm judge. (the ChapterResult, the helpers each check's calls entered, each check's verdict
+    key); None where neither can (then the chapter is judged whole)."""
+    chapter_id = request.chapter
+    if run.import_error is not None:
+        from grader.core import warm_judge
+
+        chapter = warm_judge.judge_not_imported(memo.grader, chapter_id, exclude, run.import_error, module_file)
+        if chapter is not None:
+            trace(f"{chapter_id} judged by the warm judge")
+        return None if chapter is None else (chapter, {}, {})
+    slots = memo.slots(chapter_id, plan_key) if plan_key else None
+    keys = _check_keys(plan_key, slots, module_file, limits, run)
+    judged = _judged_in_part(memo, chapter_id, slots, keys, request.calls, run, module_file, seed, exclude) \
+        if slots and keys else None
+    return None if judged is None else (*judged, keys)
+
+
 def _keep_check_verdicts(memo: Memo, chapter: ChapterResult, kept: dict, keys: dict[str, str | None],
                          entered: dict) -> None:
     """Keep each check's verdict (`kept`: the chapter's to_kept()) under its key (`keys`), for a later run that
@@ -193,7 +213,7 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
     # one learner's runs: which files a kept verdict was made from says which chapters will most likely be judged
     files = key_of(session.prepared.files) if memo is not None and memo.one_learner else None
     unseen = [cid for cid in chapter_ids if cid not in plans and files is not None and not memo.seen(cid, files)]
-    in_part = {cid for cid in unseen if not with_plots and memo.slots(cid, plan_keys[cid]) is not None}
+    by_check_ahead = {cid for cid in unseen if not with_plots and memo.slots(cid, plan_keys[cid]) is not None}
     if memo is not None and memo.one_learner:
         from grader.core import warm_judge
 
@@ -204,7 +224,7 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
 
             for cid in unseen:
                 try:
-                    if cid in in_part:
+                    if cid in by_check_ahead:
                         if not warm_judge.available(memo.grader):  # the warm judge has them imported
                             _load_checks(cid)
                     else:
@@ -239,20 +259,10 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
             chapter = None
         if chapter is None:
             by_check = memo is not None and memo.one_learner and not with_plots and key is not None
-            slots = memo.slots(cid, plan_keys[cid]) if by_check and cid not in plans and plan_keys[cid] else None
-            keys = _check_keys(plan_keys[cid], slots, module_file, session.limits, run)
-            in_part = _judged_in_part(memo, cid, slots, keys, request.calls, run, module_file, seed, exclude) \
-                if keys else None
-            unimported = None
-            if in_part is None and by_check and run.import_error is not None and cid not in plans:
-                from grader.core import warm_judge
-
-                unimported = warm_judge.judge_not_imported(memo.grader, cid, exclude, run.import_error, module_file)
-            if in_part is not None:
-                (chapter, entered), uses = in_part, dict(request.helpers)
-            elif unimported is not None:  # the warm judge said it: a file that could not be imported
-                chapter, uses, entered = unimported, dict(request.helpers), {}
-                trace(f"{cid} judged by the warm judge")
+            judged = _judged_by_check(memo, plan_keys[cid], request, run, module_file, session.limits, seed,
+                                      exclude) if by_check and cid not in plans else None
+            if judged is not None:
+                (chapter, entered, keys), uses = judged, dict(request.helpers)
             else:
                 plan = plans.get(cid) or _plan(cid, seed, with_plots, exclude)  # at the same seed: the same calls
                 if cid in kept_calls and [c.to_json(i) for i, c in enumerate(plan.calls)] != \
