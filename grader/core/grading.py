@@ -284,6 +284,10 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
         chapter.unread = module in prepared.problems  # a notebook that could not be read: nothing of it was graded
         chapter.notes.extend(prepared.notes.get(module, []))
         report.chapters.append(chapter)
+    if memo is not None and memo.one_learner:
+        from grader.core import warm_judge
+
+        warm_judge.release()
     point_upstream(report, builds_on, reached)
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()

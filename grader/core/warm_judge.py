@@ -105,6 +105,15 @@ def _connection(stamp: str):
     return _client[0]
 
 
+def release() -> None:
+    """Let this command's connection go (the judge answers one command at a time): a process that grades again, as
+    --watch does, asks afresh."""
+    held = _client[0] if _client else None
+    _client.clear()
+    if held is not None:
+        held[0].close()
+
+
 def available(stamp: str) -> bool:
     """Whether a warm judge of grader `stamp` answers this command (connected now, for the questions to come)."""
     return _connection(stamp) is not None

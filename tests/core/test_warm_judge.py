@@ -166,3 +166,41 @@ def test_a_judge_ends_when_its_socket_is_gone_and_none_is_kept_where_turned_off(
     _edit(root, {"range_bearing": WRONG_BEARING})
     assert run_grade("ch06", "--submission", root, env=env).returncode in (0, 1)
     assert _judge_pid(cache, wait=1.0) is None
+
+
+_HOLD = """import os, sys, time
+from grader.core import memo, warm_judge
+stamp = memo.grader_stamp()
+assert warm_judge.available(stamp)
+if sys.argv[1] == "release":
+    warm_judge.release()
+print("ready", flush=True)
+time.sleep(60)
+"""
+
+
+@pytest.mark.parametrize("releases", [True, False])
+def test_a_process_that_grades_again_lets_the_judge_go_between_grades(learner, releases):
+    """The judge answers one command at a time: a process that keeps running (--watch, a notebook's kernel) lets it go
+    after each grade, so that a command in another terminal is answered; one that held it would make that command
+    judge itself."""
+    import subprocess
+    import sys
+
+    from tests.support import REPO
+
+    root, cache = learner
+    _run(root, cache)
+    env = {**os.environ, "GRADER_CACHE_DIR": str(cache), "GRADER_WARM_JUDGE": "on"}
+    holder = subprocess.Popen([sys.executable, "-c", _HOLD, "release" if releases else "hold"], cwd=REPO, env=env,
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "ready"
+        _edit(root, {"range_bearing": WRONG_BEARING})
+        report, judged, _ = _run(root, cache)
+    finally:
+        holder.kill()
+        holder.wait()
+        holder.stdout.close()
+    assert any("judged by the warm judge" in line for line in judged) == releases, judged
+    assert report == _afresh(root)
