@@ -44,6 +44,17 @@ def forkable_now() -> bool:
     return fork_is_safe() and threading.active_count() == 1
 
 
+def keep_only(descriptor: int) -> None:
+    """In a process the grader forked for itself (a drawing process, the warm judge): its standard streams to the
+    null device and every other descriptor closed but `descriptor` (no copy of a pipe to the learner's child or of
+    the command's output stays open in it)."""
+    null = os.open(os.devnull, os.O_RDWR)
+    for standard in (0, 1, 2):
+        os.dup2(null, standard)
+    os.closerange(3, descriptor)
+    os.closerange(descriptor + 1, 1 << 16)
+
+
 def child_path() -> list[str]:
     """A grader interpreter's sys.path: this interpreter's library folders (not the cwd), then grader's parent."""
     paths = [p for p in sys.path if p and os.path.isabs(p) and p != GRADER_PARENT]

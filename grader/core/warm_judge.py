@@ -218,13 +218,10 @@ def linger() -> None:
 def _serve(listener: socket.socket, stamp: str, path: str) -> None:
     """The judge: a session of its own (no terminal's signals, no pipe of the command's kept open), answering one
     command at a time until it is idle too long or its socket is no longer its own."""
+    from grader.system import keep_only
+
     os.setsid()
-    keep = listener.fileno()
-    null = os.open(os.devnull, os.O_RDWR)
-    for standard in (0, 1, 2):
-        os.dup2(null, standard)
-    os.closerange(3, keep)
-    os.closerange(keep + 1, 1 << 16)
+    keep_only(listener.fileno())
     import gc
 
     gc.freeze()  # what the command made stays out of the collector's passes

@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 import signal
 
-from grader.system import forkable_now
+from grader.system import forkable_now, keep_only
 
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
 _ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by `end`)
@@ -88,12 +88,7 @@ def _draw_what_comes(connection) -> None:
     # Background work: matplotlib's import runs while the grader and the learner's child grade, on the same cores,
     # and the grading is what the figures wait for (first run -3% wall, paired). Its drawing processes inherit it.
     os.nice(10)
-    keep = connection.fileno()
-    null = os.open(os.devnull, os.O_RDWR)
-    for standard in (0, 1, 2):
-        os.dup2(null, standard)
-    os.closerange(3, keep)
-    os.closerange(keep + 1, 1 << 16)
+    keep_only(connection.fileno())
     try:
         # matplotlib's import makes some 40,000 objects the collector tracks, and no garbage: its passes over them
         # were 7% of this process's work. Frozen, they stay out of the drawing processes' collections too (and out of
