@@ -107,15 +107,16 @@ def in_handout() -> bool:
 
 
 @functools.lru_cache(maxsize=None)
-def current(config: str | None = None) -> Course:
+def current(config: str | None = None, kept_parse: bool = False) -> Course:
     """The handout's course in a handout; else the instructor's `config` file, else
-    solutions/course.yaml where the references are installed, else the defaults."""
+    solutions/course.yaml where the references are installed, else the defaults. `kept_parse`: a YAML file's parse
+    may be the one kept in the user's cache folder (_parsed; for the commands that grade one submission only)."""
     if config is None and in_handout():
         return _from_handout(HANDOUT_FILE)
     path = Path(config) if config is not None else _project_config()
     if path is None:
         return Course(source="defaults")
-    return _from_yaml(path)
+    return _from_yaml(path, kept_parse)
 
 
 def here() -> Course:
@@ -123,7 +124,7 @@ def here() -> Course:
     `grade submit`): a handout's own; on the instructor's side the course file beside the references (its id,
     its quiz feedback and exact derivatives), or the defaults where there is none or it cannot be read."""
     try:
-        return current()
+        return current(kept_parse=True)
     except CourseError:
         return Course(source="defaults")
 
@@ -169,25 +170,34 @@ def _key_lines(text: str) -> dict[str, int]:
     return {str(key.value): key.start_mark.line + 1 for key, _ in node.value}
 
 
-def _from_yaml(path: Path) -> Course:
+def _from_yaml(path: Path, kept_parse: bool = False) -> Course:
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise CourseError(f"{path}: cannot be read ({exc.strerror})") from None
     except UnicodeDecodeError as exc:
         raise CourseError(f"{path}: not UTF-8 text ({exc})") from None
-    return from_text(text, str(path))
+    return from_text(text, str(path), kept_parse)
 
 
-def _parsed(text: str, path: str) -> tuple[object, dict[str, int]]:
-    """The YAML `text`'s data and the line of each top-level setting. A parse that JSON holds exactly is kept in
-    the user's cache folder by the text's hash, so a command that only reads the course does not import yaml."""
+def _parsed(text: str, path: str, kept_parse: bool = False) -> tuple[object, dict[str, int]]:
+    """The YAML `text`'s data and the line of each top-level setting. With `kept_parse` (a command that grades one
+    submission), a parse that JSON holds exactly is kept in the user's cache folder by the hash of the text and of
+    this module's file, so that such a command reads an unchanged course without importing yaml; the instructor's
+    commands (batch, regrade, Gradescope's) always parse the file, trusting no cache."""
     import hashlib
 
     from grader.system import cache_folder
 
-    folder = cache_folder("course")
-    kept = None if folder is None else os.path.join(folder, hashlib.sha256(text.encode("utf-8")).hexdigest() + ".json")
+    folder = cache_folder("course") if kept_parse else None
+    kept = None
+    if folder is not None:
+        try:
+            parser = os.stat(__file__)
+            key = json.dumps([text, parser.st_size, parser.st_mtime_ns])
+            kept = os.path.join(folder, hashlib.sha256(key.encode("utf-8", "surrogatepass")).hexdigest() + ".json")
+        except OSError:
+            kept = None
     if kept is not None:
         try:
             with open(kept, encoding="utf-8") as handle:
@@ -220,10 +230,10 @@ def _parsed(text: str, path: str) -> tuple[object, dict[str, int]]:
     return data, lines
 
 
-def from_text(text: str, path: str) -> Course:
-    """The course file whose text is `text`, read from `path` (which messages name). CourseError for what cannot
-    be a course file."""
-    data, lines = _parsed(text, path)
+def from_text(text: str, path: str, kept_parse: bool = False) -> Course:
+    """The course file whose text is `text`, read from `path` (which messages name); `kept_parse`: see _parsed.
+    CourseError for what cannot be a course file."""
+    data, lines = _parsed(text, path, kept_parse)
     if not isinstance(data, dict):
         raise CourseError(f"{path}: expected settings `name: value`, one per line")
 

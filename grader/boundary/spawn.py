@@ -65,28 +65,34 @@ def kill_orphans() -> None:
     if not _SUBREAPER:
         return
     spared = kept()
-    for pid in _children():
-        if pid in spared:
-            continue
+    if _kill([pid for pid in _children() if pid not in spared]):  # orphans there were: a list of the kernel's can
+        _kill([pid for pid in _children(scan=True) if pid not in spared])  # miss a living child while others exit
+
+
+def _kill(pids: list[int]) -> bool:
+    """Kill and reap (where they ended at once) the processes `pids`; whether there were any."""
+    for pid in pids:
         try:
             os.kill(pid, 9)
             os.waitpid(pid, os.WNOHANG)
         except (ProcessLookupError, ChildProcessError, PermissionError):
             pass
+    return bool(pids)
 
 
-def _children() -> list[int]:
+def _children(scan: bool = False) -> list[int]:
     """This process's children (adopted orphans among them): from each thread's /proc children list where the
-    kernel keeps one, else from every process's parent in /proc."""
+    kernel keeps one, else (or with `scan`) from every process's parent in /proc."""
     me = os.getpid()
-    try:
-        found: list[int] = []
-        for thread in os.listdir(f"/proc/{me}/task"):
-            with open(f"/proc/{me}/task/{thread}/children", "rb") as handle:
-                found += map(int, handle.read().split())
-        return found
-    except (OSError, ValueError):  # a kernel without CONFIG_PROC_CHILDREN
-        pass
+    if not scan:
+        try:
+            found: list[int] = []
+            for thread in os.listdir(f"/proc/{me}/task"):
+                with open(f"/proc/{me}/task/{thread}/children", "rb") as handle:
+                    found += map(int, handle.read().split())
+            return found
+        except (OSError, ValueError):  # a kernel without CONFIG_PROC_CHILDREN
+            pass
     found = []
     for entry in os.listdir("/proc"):
         if not entry.isdigit():

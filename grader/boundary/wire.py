@@ -340,6 +340,21 @@ class Returned:
     def ok(self) -> bool:
         return self.kind == VALUE
 
+    def to_plain(self) -> list:
+        """This outcome as plain data (a JSON line's), which from_plain makes again."""
+        return [self.kind, self.function, self.encoded, self.error, self.note,
+                None if self.reached is None else list(self.reached), self.line_hash]
+
+    @classmethod
+    def from_plain(cls, data: list) -> Returned:
+        """The Returned whose to_plain() `data` is (ValueError where it is not one)."""
+        if not isinstance(data, list) or len(data) != 7:
+            raise ValueError("not a Returned's plain data")
+        kind, function, encoded, error, note, reached, line_hash = data
+        return cls(str(kind), str(function), encoded if isinstance(encoded, dict) else None,
+                   error if isinstance(error, dict) else None, str(note),
+                   None if reached is None else tuple(map(str, reached)), None if line_hash is None else str(line_hash))
+
     @property
     def type_name(self) -> str:
         if self.encoded is None:

@@ -4,6 +4,7 @@ judged again, and neither the checks nor numpy are imported for it."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -117,15 +118,15 @@ def _judged_in_part(memo: Memo, chapter_id: str, slots: dict[str, list[int]], ke
     asked = (chapter_id, seed, exclude | {f"{chapter_id}/{c}" for c in reused}, fresh_slots,
              {i: calls[i].to_json(i) for i in numbers}, {i: run.results[i] for i in numbers}, module_file)
     judged = warm_judge.judge(memo.grader, *asked) if fresh_slots else ([], {})
-    if judged is None:
+    if fresh_slots and judged is not None:
+        trace(f"{chapter_id} judged by the warm judge")
+    elif judged is None:
         from grader.core.planning import judge_checks
 
         judged = judge_checks(*asked)
-    else:
-        trace(f"{chapter_id} judged by the warm judge")
-    if judged is None:
+    fresh, fresh_entered = ({c.id: c for c in judged[0]}, judged[1]) if judged is not None else ({}, {})
+    if set(fresh) != set(fresh_slots):
         return None
-    fresh, fresh_entered = {c.id: c for c in judged[0]}, judged[1]
     chapter, entered = ChapterResult(chapter_id, BY_ID[chapter_id].title), {}
     for c in slots:
         if c not in reused:
@@ -191,7 +192,17 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
           exclude: frozenset[str] = frozenset(), memo: Memo | None = None) -> Report:
     """Grade `chapter_ids` of the session's submission, but the checks in `exclude` ("chNN/check_id");
     learner code runs only in the session's child. With `memo`, kept plans and verdicts (with their plot data)
-    are reused where they were made from exactly this."""
+    are reused where they were made from exactly this, and a judge kept warm may judge what changed (its connection
+    let go at the end, whatever happened: a process that grades again asks afresh)."""
+    try:
+        return _judge_chapters(session, chapter_ids, seed, with_plots, submission_label, exclude, memo)
+    finally:
+        if "grader.core.warm_judge" in sys.modules:
+            sys.modules["grader.core.warm_judge"].release()
+
+
+def _judge_chapters(session: Session, chapter_ids: list[str], seed: int, with_plots: bool,
+                    submission_label: str | None, exclude: frozenset[str], memo: Memo | None) -> Report:
     from grader.core.memo import key_of
 
     plans: dict[str, ChapterPlan] = {}
@@ -284,10 +295,6 @@ def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT
         chapter.unread = module in prepared.problems  # a notebook that could not be read: nothing of it was graded
         chapter.notes.extend(prepared.notes.get(module, []))
         report.chapters.append(chapter)
-    if memo is not None and memo.one_learner:
-        from grader.core import warm_judge
-
-        warm_judge.release()
     point_upstream(report, builds_on, reached)
     report.learner_output = session.output
     broken = [run.import_error.get("message", "") for run in runs.values()

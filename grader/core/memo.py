@@ -6,7 +6,8 @@ before. What a check decides is a function of the grader, the seed, the calls it
 (values, errors, their tracebacks, timeouts: every byte of the child's answer, as the parent recorded it), so a
 chapter whose child answered exactly as before is judged as before without planning or judging again: the
 parent then imports neither numpy nor the checks. The child still runs every call every time; only the judging
-is kept.
+is kept. Each check's last verdict is kept too, by what the check's own calls answered: a chapter whose answers
+differ from every kept run's judges only the checks whose calls answered otherwise (grader.core.grading).
 
 Only `grade` on one submission uses it, and only where learner code cannot write this user's files (the sandbox
 or a dropped uid: grader.boundary's `walled`): an entry is the grader's own word, kept where only the grader writes.

@@ -139,6 +139,15 @@ def test_a_forged_or_broken_memo_is_a_miss_never_a_grade(tmp_path):
         for check in data["value"]["chapter"]["checks"]:
             check["status"], check["points"] = "pass", check["max_points"]
         kept_file.write_text(json.dumps(data), encoding="utf-8")
+    by_check = cache / "results" / "ch06-checks.json"  # and each check's last verdict
+    data = json.loads(by_check.read_text(encoding="utf-8"))
+    data["grader"] = "another grader"
+    for _, value in data["checks"].values():
+        value["check"]["status"], value["check"]["points"] = "pass", value["check"]["max_points"]
+    by_check.write_text(json.dumps(data), encoding="utf-8")
+    (root / "exercises" / "ch06_measurement.py").write_text(replace_functions("ch06_measurement", {
+        "range_bearing": WRONG_BEARING, "H_jacobian": f"def H_jacobian(x, y):\n{WRONG_H}\n"}), encoding="utf-8")
+    right = _report(root, "")  # another function changed too: judged check by check, had the forgery been taken
     assert _report(root, cache) == right
     for kept_file in [*(cache / "results").glob("ch06.*.json"), cache / "results" / "ch06.json"]:
         kept_file.write_text("{not json", encoding="utf-8")

@@ -156,6 +156,50 @@ def test_a_judge_of_another_grader_is_never_asked(learner):
     assert report == _afresh(root)
 
 
+def test_a_judge_that_answers_other_checks_or_nonsense_is_not_believed(learner):
+    """A judge of this grader (any process of the user can say the stamp) whose answers leave out a check, or are not
+    answers: the command judges itself."""
+    from grader.core.memo import grader_stamp
+
+    root, cache = learner
+    _run(root, cache)
+    os.kill(_judge_pid(cache), signal.SIGKILL)
+    path = cache / "launch" / "judge"
+    path.unlink()
+    stamp = grader_stamp()
+    replies = iter([b'{"checks": [], "entered": {}}\n', b'"not an answer"\n'])  # a check left out; no answer
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    listener.bind(str(path))
+    listener.listen(1)
+    asked: list[str] = []
+
+    def wrong_judge() -> None:
+        while True:
+            try:
+                connection, _ = listener.accept()
+            except OSError:
+                return
+            with connection:
+                reader = connection.makefile("rb")
+                reader.readline()
+                connection.sendall(json.dumps({"stamp": stamp}).encode() + b"\n")
+                for line in reader:
+                    asked.append(line.decode())
+                    connection.sendall(next(replies, b"{}\n"))
+
+    threading.Thread(target=wrong_judge, daemon=True).start()
+    try:
+        for replaced in ({"range_bearing": WRONG_BEARING},
+                         {"range_bearing": "def range_bearing(x, y):\n    return np.array([np.hypot(x, y) 0])\n"}):
+            _edit(root, replaced)
+            report, judged, imported = _run(root, cache)
+            assert not any("warm judge" in line for line in judged) and "numpy" in imported
+            assert report == _afresh(root)
+    finally:
+        listener.close()
+    assert asked  # it was asked, and not believed
+
+
 def test_a_judge_ends_when_its_socket_is_gone_and_none_is_kept_where_turned_off(learner):
     root, cache = learner
     _run(root, cache)
