@@ -4,6 +4,7 @@ of another grader is never used; and a judge ends when its socket is no longer i
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -120,18 +121,20 @@ def test_a_judge_that_died_is_replaced_and_the_command_judges_itself_meanwhile(l
     assert _judge_pid(cache) not in (None, pid)  # a new one kept warm
 
 
-def test_a_judge_of_another_grader_is_never_asked(learner):
-    root, cache = learner
-    _run(root, cache)
+@contextlib.contextmanager
+def _false_judge(cache: Path, stamp: str, replies: list[bytes]):
+    """In place of the judge the first run kept: a process of the user's on the judge's socket that greets every
+    command with `stamp` and answers each question with the next of `replies`; yields what it was sent."""
     os.kill(_judge_pid(cache), signal.SIGKILL)
     path = cache / "launch" / "judge"
     path.unlink()
-    asked: list[str] = []
+    sent: list[str] = []
+    answers = iter(replies)
     listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     listener.bind(str(path))
     listener.listen(1)
 
-    def another_grader() -> None:  # greets every command as a judge of another grader, and would pass everything
+    def answer() -> None:
         while True:
             try:
                 connection, _ = listener.accept()
@@ -139,19 +142,26 @@ def test_a_judge_of_another_grader_is_never_asked(learner):
                 return
             with connection:
                 reader = connection.makefile("rb")
-                asked.append(reader.readline().decode())
-                connection.sendall(b'{"stamp": "another grader"}\n')
+                sent.append(reader.readline().decode())
+                connection.sendall(json.dumps({"stamp": stamp}).encode() + b"\n")
                 for line in reader:
-                    asked.append(line.decode())
-                    connection.sendall(b'{"checks": [], "entered": {}}\n')
+                    sent.append(line.decode())
+                    connection.sendall(next(answers, b"{}\n"))
 
-    threading.Thread(target=another_grader, daemon=True).start()
+    threading.Thread(target=answer, daemon=True).start()
     try:
-        _edit(root, {"range_bearing": WRONG_BEARING})
-        report, judged, imported = _run(root, cache)
+        yield sent
     finally:
         listener.close()
-    assert len(asked) == 1 and "stamp" in asked[0]  # greeted, never asked to judge
+
+
+def test_a_judge_of_another_grader_is_never_asked(learner):
+    root, cache = learner
+    _run(root, cache)
+    with _false_judge(cache, "another grader", [b'{"checks": [], "entered": {}}\n']) as sent:  # would pass all
+        _edit(root, {"range_bearing": WRONG_BEARING})
+        report, judged, imported = _run(root, cache)
+    assert len(sent) == 1 and "stamp" in sent[0]  # greeted, never asked to judge
     assert not any("warm judge" in line for line in judged) and "numpy" in imported
     assert report == _afresh(root)
 
@@ -163,41 +173,14 @@ def test_a_judge_that_answers_other_checks_or_nonsense_is_not_believed(learner):
 
     root, cache = learner
     _run(root, cache)
-    os.kill(_judge_pid(cache), signal.SIGKILL)
-    path = cache / "launch" / "judge"
-    path.unlink()
-    stamp = grader_stamp()
-    replies = iter([b'{"checks": [], "entered": {}}\n', b'"not an answer"\n'])  # a check left out; no answer
-    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    listener.bind(str(path))
-    listener.listen(1)
-    asked: list[str] = []
-
-    def wrong_judge() -> None:
-        while True:
-            try:
-                connection, _ = listener.accept()
-            except OSError:
-                return
-            with connection:
-                reader = connection.makefile("rb")
-                reader.readline()
-                connection.sendall(json.dumps({"stamp": stamp}).encode() + b"\n")
-                for line in reader:
-                    asked.append(line.decode())
-                    connection.sendall(next(replies, b"{}\n"))
-
-    threading.Thread(target=wrong_judge, daemon=True).start()
-    try:
+    with _false_judge(cache, grader_stamp(), [b'{"checks": [], "entered": {}}\n', b'"not an answer"\n']) as sent:
         for replaced in ({"range_bearing": WRONG_BEARING},
                          {"range_bearing": "def range_bearing(x, y):\n    return np.array([np.hypot(x, y) 0])\n"}):
             _edit(root, replaced)
             report, judged, imported = _run(root, cache)
             assert not any("warm judge" in line for line in judged) and "numpy" in imported
             assert report == _afresh(root)
-    finally:
-        listener.close()
-    assert asked  # it was asked, and not believed
+    assert len(sent) == 4  # two greetings, two questions: asked, and not believed
 
 
 def test_a_judge_ends_when_its_socket_is_gone_and_none_is_kept_where_turned_off(learner):
