@@ -64,9 +64,13 @@ def kill_orphans() -> None:
     """Kill and reap the adopted processes that are not one of the grader's own (grader.system.keep)."""
     if not _SUBREAPER:
         return
-    spared = kept()
-    if _kill([pid for pid in _children() if pid not in spared]):  # orphans there were: a list of the kernel's can
-        _kill([pid for pid in _children(scan=True) if pid not in spared])  # miss a living child while others exit
+    spared = set(kept())
+    for _ in range(3):  # the kernel's lists can miss a living child while others exit: read again after killing
+        found = [pid for pid in _children() if pid not in spared]
+        if not _kill(found):
+            return
+        spared.update(found)  # killed (and reaped where they ended at once): not sought again
+    _kill([pid for pid in _children(scan=True) if pid not in spared])  # still more: every process's parent
 
 
 def _kill(pids: list[int]) -> bool:
