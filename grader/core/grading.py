@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 from grader.boundary import ChapterRequest, ChapterRun, Session
 from grader.chapters import BY_ID
 from grader.course_config import PUBLIC_SEED
-from grader.model import ChapterResult, Report, Status
+from grader.model import ChapterResult, CheckResult, Report, Status
 from grader.notebook import KERNEL, relocate
 from grader.system import trace
 
@@ -171,20 +171,22 @@ def _keep_check_verdicts(memo: Memo, chapter: ChapterResult, kept: dict, keys: d
                          entered: dict) -> None:
     """Keep each check's verdict (`kept`: the chapter's to_kept()) under its key (`keys`), for a later run that
     changes other functions only; never a grader's own failure (it is judged again)."""
-    if len(kept.get("checks", [])) != len(chapter.checks):
-        return
     memo.keep_check_verdicts(chapter.chapter, {
         check.id: [keys[check.id], {"check": value, "reached": entered.get(check.id)}]
-        for check, value in zip(chapter.checks, kept["checks"]) if keys.get(check.id) is not None and not (
-            check.status == Status.ERROR and check.message.startswith(("grader error", "not graded here")))})
+        for check, value in zip(chapter.checks, kept["checks"])
+        if keys.get(check.id) is not None and not _grader_failed(check)})
+
+
+def _grader_failed(check: CheckResult) -> bool:
+    """Whether `check` failed for a reason of the grader's own (its verdict is never kept: judged again next time)."""
+    return check.status == Status.ERROR and check.message.startswith(("grader error", "not graded here"))
 
 
 def _settled(chapter: ChapterResult, run: ChapterRun) -> bool:
     """Whether a verdict may be kept: no failure of the grader's own (it is judged again next time)."""
     if run.import_error is not None and (run.import_error.get("grader") or run.import_error.get("infrastructure")):
         return False
-    return not any(c.status == Status.ERROR and c.message.startswith(("grader error", "not graded here"))
-                   for c in chapter.checks)
+    return not any(_grader_failed(c) for c in chapter.checks)
 
 
 def judge_chapters(session: Session, chapter_ids: list[str], seed: int = DEFAULT_SEED,
