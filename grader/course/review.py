@@ -29,7 +29,7 @@ from grader.course import outputs
 from grader.course.overrides import OverridesError, by_learner, in_force
 from grader.course.settings import Source
 from grader.course.similarity import function_lines
-from grader.course.staging import STAGING, folder_name
+from grader.course.staging import STAGING, folder_name, kept_files
 from grader.course.workers import Grading, Outcome, staged_again
 from grader.files import write_atomically
 from grader.model import Adjustment, Status
@@ -191,13 +191,10 @@ def learner_view(out: Path, learner: str, view: ClassView | None = None) -> Lear
     row = next((each for each in view.rows if each.learner == learner), None)
     if row is None:
         raise ReviewError(f"run {view.run} has no learner {learner!r}")
-    package = out / STAGING / folder_name(learner) / "exercises"
-    files = {}
-    if package.is_dir():
-        for path in sorted(package.rglob("*"), key=lambda p: (p.parent != package, p.name)):  # chapters first
-            if path.is_file() and not path.is_symlink() and path.name != "__init__.py" and \
-                    path.suffix in (".py", ".ipynb", ".yaml", ".yml"):
-                files[path.relative_to(package).as_posix()] = path.read_bytes().decode("utf-8", "replace")
+    files = {name: data.decode("utf-8", "replace")
+             for name, data in sorted((kept_files(out / STAGING, learner) or {}).items(),
+                                      key=lambda item: ("/" in item[0], item[0].rsplit("/", 1)[-1]))  # chapters first
+             if name.rsplit("/", 1)[-1] != "__init__.py" and name.endswith((".py", ".ipynb", ".yaml", ".yml"))}
     where = {}
     for name, text in files.items():
         if name.endswith(".py"):

@@ -131,26 +131,28 @@ def _shared_lines(fingerprint, slices, limit: int = 3) -> list[str]:
     return blocks
 
 
-def _sources(package: Path) -> dict[str, str]:
-    """A learner's chapters as code, by module: each chNN_*.py, and each notebook without a .py of its name by
-    its code cells in order (what is graded of it). A notebook that cannot be read gives nothing."""
+def _sources(files: dict[str, bytes]) -> dict[str, str]:
+    """A learner's chapters as code, by module, from their staged files (grader.course.staging.kept_files): each
+    chNN_*.py, and each notebook without a .py of its name by its code cells in order (what is graded of it). A
+    notebook that cannot be read gives nothing."""
     from grader.notebook import NotebookError, code_cells
 
-    found = {path.stem: path.read_text(encoding="utf-8", errors="replace") for path in sorted(package.glob("ch0*.py"))}
-    for path in sorted(package.glob("ch0*.ipynb")):
-        if path.stem not in found:
+    top = sorted(name for name in files if "/" not in name and name.startswith("ch0"))
+    found = {name[:-len(".py")]: files[name].decode("utf-8", "replace") for name in top if name.endswith(".py")}
+    for name in top:
+        if name.endswith(".ipynb") and name[:-len(".ipynb")] not in found:
             try:
-                found[path.stem] = "\n\n".join(source for _, source in code_cells(path.read_bytes()))
-            except (NotebookError, OSError):
+                found[name[:-len(".ipynb")]] = "\n\n".join(source for _, source in code_cells(files[name]))
+            except NotebookError:
                 continue
     return found
 
 
 def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int = TOP) -> tuple[list[Pair], list[str]]:
-    """The `top` pairs of `learners` whose staged code (staging/<folder>/exercises/chNN_*.py, or the code cells
-    of a chapter kept as a notebook) is most alike, and a sentence for each file that could not be compared (a
-    hostile one: too deeply nested, too large to tokenize), which is left out, the others compared."""
-    from grader.course.staging import folder_name
+    """The `top` pairs of `learners` whose staged code (their chNN_*.py as the batch kept them in `staging`, or the
+    code cells of a chapter kept as a notebook) is most alike, and a sentence for each file that could not be
+    compared (a hostile one: too deeply nested, too large to tokenize), which is left out, the others compared."""
+    from grader.course.staging import kept_files
 
     _, compare_files = _engine()
     if stubs is None:
@@ -164,9 +166,8 @@ def rank(staging: Path, learners: list[str], stubs: Path | None = None, top: int
     prints: dict[str, dict[str, object]] = {}  # learner -> "chNN_module.function" (and "chNN_module" whole) -> fp
     left_out: list[str] = []
     for learner in learners:
-        package = staging / folder_name(learner) / "exercises"
         mine: dict[str, object] = {}
-        for module, source in _sources(package).items():
+        for module, source in _sources(kept_files(staging, learner) or {}).items():
             try:
                 parts = {module: fingerprint(source), **{f"{module}.{name}": fingerprint(text)
                                                           for name, text in _functions(source).items()}}

@@ -28,6 +28,7 @@ MAX_NOTEBOOK_BYTES = 16 << 20  # a notebook with its outputs (plots); staged wit
 MAX_TOTAL_BYTES = 16 << 20
 MAX_FILES = 200
 STAGING = ".staging"
+RECORDS = ".records"  # in STAGING: each learner's files as graded, one zip each (record_path)
 MAX_SUGGESTIONS = 250_000  # pairs of unmatched rows and submissions compared for a did-you-mean
 CLASS_OUTPUTS = ("gradebook.csv", "junit.xml", "summary.html", "gradebook-canvas.csv", "gradebook-moodle.csv",
                  "changes.csv", "summary.json", "gradebook.db", "gradebook.db-wal", "gradebook.db-shm", "overrides.csv")
@@ -232,11 +233,9 @@ def staged_files(package: Path) -> dict[str, bytes]:
     return {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*") if path.is_file()}
 
 
-def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
-    """stage(), and every file staged by its path in exercises/ (posix) with its bytes, exactly what is on disk
-    there now: what the hashes of the staged files are made from without reading them again."""
-    root = staging / folder_name(entry.learner)
-    package = root / "exercises"
+def submitted_files(entry: Entry) -> dict[str, bytes]:
+    """The files of a submission that are staged, each read once, by their path in exercises/ (posix), with their
+    bytes (StagingError where it cannot be staged)."""
     files: dict[str, bytes] = {"__init__.py": b""}
     total = 0
     if entry.source.is_symlink():
@@ -285,6 +284,21 @@ def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
         raise StagingError("the submission is too large")
     if not any(CHAPTER_FILE.match(name) for name in files):
         raise StagingError("no chapter files (chNN_*.py or chNN_*.ipynb) found, neither in exercises/ nor at the top")
+    return files
+
+
+def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
+    """stage(), and every file staged by its path in exercises/ (posix) with its bytes, exactly what is on disk
+    there now: what the hashes of the staged files are made from without reading them again."""
+    root = staging / folder_name(entry.learner)
+    files = submitted_files(entry)
+    put(files, root / "exercises")
+    return root, files
+
+
+def put(files: dict[str, bytes], package: Path) -> None:
+    """Make `package` hold exactly `files` (posix path in it -> bytes): a file already there with the same bytes is
+    left as it is (no new file where a folder is reused), one not in `files` is removed."""
     (package / "answers").mkdir(parents=True, exist_ok=True)
     for path in package.rglob("*"):
         if path.is_file() and path.relative_to(package).as_posix() not in files:
@@ -297,4 +311,72 @@ def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
         except OSError:
             pass
         path.write_bytes(data)
-    return root, files
+
+
+# ------------------------------------------------------------------------------------ the record a batch keeps
+
+_RECORD_TIME = (1980, 1, 1, 0, 0, 0)  # every entry's: the same files make the same record, byte for byte
+
+
+def record_path(staging: Path, learner: str) -> Path:
+    """Where a batch keeps the files it graded of `learner`: one uncompressed zip, staging/.records/<folder>.zip (one
+    file per learner, however many it submitted; no learner's folder is named .records: folder_name)."""
+    return staging / RECORDS / f"{folder_name(learner)}.zip"
+
+
+def keep(staging: Path, learner: str, files: dict[str, bytes]) -> Path:
+    """Keep `files` (posix path in exercises/ -> bytes) as `learner`'s record (record_path), written through a
+    temporary file and replaced at once; the folder an older grader staged the learner into is removed: the record
+    alone says what was graded."""
+    import io
+    import shutil
+
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_STORED) as archive:
+        for name in sorted(files):
+            archive.writestr(zipfile.ZipInfo(f"exercises/{name}", _RECORD_TIME), files[name])
+    data = buffer.getvalue()
+    path = record_path(staging, learner)
+    try:
+        same = path.read_bytes() == data  # graded again with the same files: nothing to write
+    except OSError:
+        same = False
+    if not same:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        temporary.write_bytes(data)
+        os.replace(temporary, path)
+    older = staging / folder_name(learner)
+    if older.is_dir() and not older.is_symlink():
+        shutil.rmtree(older, ignore_errors=True)
+    return path
+
+
+def kept_place(staging: Path, learner: str) -> Path | None:
+    """Where the files a batch graded of `learner` are kept: its record (record_path), or the package folder an
+    older grader staged it into (staging/<folder>/exercises); None where neither is there."""
+    path = record_path(staging, learner)
+    if path.is_file():
+        return path
+    package = staging / folder_name(learner) / "exercises"
+    return package if package.is_dir() and not package.is_symlink() else None
+
+
+def read_kept(place: Path) -> dict[str, bytes] | None:
+    """The files kept at `place` (kept_place: a record, or an older grader's staged package), by their posix path in
+    exercises/, with their bytes; None where they cannot be read."""
+    if place.is_dir():
+        return staged_files(place)
+    try:
+        with zipfile.ZipFile(place) as archive:
+            return {info.filename[len("exercises/"):]: archive.read(info) for info in archive.infolist()
+                    if info.filename.startswith("exercises/") and not info.is_dir()
+                    and ".." not in info.filename.split("/")}
+    except (OSError, zipfile.BadZipFile):
+        return None
+
+
+def kept_files(staging: Path, learner: str) -> dict[str, bytes] | None:
+    """The files a batch graded of `learner` (kept_place, read_kept), or None."""
+    place = kept_place(staging, learner)
+    return None if place is None else read_kept(place)

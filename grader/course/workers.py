@@ -29,7 +29,17 @@ from grader.core.policy import Override, Policy, parse_time
 from grader.core.transaction import Door, grade_submission
 from grader.course import outputs, submit
 from grader.course.history import kept_report
-from grader.course.staging import STAGING, Entry, StagingError, folder_name, stage_files, staged_files
+from grader.course.staging import (
+    STAGING,
+    Entry,
+    StagingError,
+    keep,
+    kept_place,
+    put,
+    read_kept,
+    staged_files,
+    submitted_files,
+)
 from grader.quiz import learner_id
 from grader.submission import Submission
 
@@ -73,9 +83,10 @@ class Grading:
 
 @dataclass
 class Staged:
-    """A learner staged and due for grading (plain data): where its files are staged, its content hash, what was
-    found while staging (warnings, the submission time and where it came from, its manifest), its overrides, and
-    the seconds staging took."""
+    """A learner staged and due for grading (plain data): the folder its files were put in to be read here (`root`:
+    a process's own, reused for the next learner), its content hash, what was found while staging (warnings, the
+    submission time and where it came from, its manifest), its overrides, the seconds staging took, and where the
+    batch keeps its files (`kept`: grader.course.staging.kept_place)."""
 
     learner: str
     root: str
@@ -89,12 +100,15 @@ class Staged:
     overrides: tuple[Override, ...] = ()
     seconds: float = 0.0
     learner_from: str = ""  # where its id came from (the roster and line, the submission's name), for the report
+    kept: str = ""
 
     def files(self) -> dict[str, bytes]:
-        """The staged files (relative path -> bytes): what travels to a worker that does not share this disk."""
-        package = Path(self.root) / "exercises"
-        return {path.relative_to(package).as_posix(): path.read_bytes()
-                for path in sorted(package.rglob("*")) if path.is_file()}
+        """The staged files (relative path -> bytes), as the batch keeps them: what a worker grades (put into a
+        folder of its own), wherever it is."""
+        files = read_kept(Path(self.kept)) if self.kept else staged_files(Path(self.root) / "exercises")
+        if files is None:
+            raise StagingError(f"the files kept of {self.learner} ({self.kept}) cannot be read")
+        return dict(sorted(files.items()))
 
     def policy(self, course: Course | None) -> Policy:
         """What this learner's grade is adjusted by: their overrides, and the late penalty at their trusted time."""
@@ -138,18 +152,37 @@ def content_hash(root: Path, learner: str, grading: Grading, files: Mapping[str,
     return digest.hexdigest()
 
 
+def scratch() -> Path:
+    """This process's folder for the files of the learner it stages or grades (the same for each, one at a time:
+    a file put there again with the same name is rewritten, not made anew), removed as the process ends."""
+    pid, folder = _worker_state.get("scratch", (None, None))
+    if pid != os.getpid():  # a worker forked from a process that had one makes its own
+        import shutil
+        import tempfile
+        from multiprocessing.util import Finalize
+
+        folder = Path(tempfile.mkdtemp(prefix="grade-staged-"))
+        Finalize(None, shutil.rmtree, args=(folder, True), exitpriority=10)  # a pool's worker runs no atexit
+        _worker_state["scratch"] = (os.getpid(), folder)
+    return folder
+
+
 def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), previous: str | None = None,
               force: bool = False) -> Staged | Outcome:
-    """Stage one submission into OUT/.staging: the Staged learner, due for grading, or its Outcome without grading
+    """Stage one submission: its files kept in OUT/.staging (grader.course.staging.keep: one record each) and put
+    into this process's scratch folder to be read; the Staged learner, due for grading, or its Outcome without grading
     (unreadable; unchanged: its content hash is `previous`, that of the report the history keeps, unless `force`).
     The manifest of an archive made by `grade submit` is checked (grader.course.submit.check) and what it says is
     flagged."""
     started = time.monotonic()
     learner = entry.learner
     try:
-        root, files = stage_files(entry, out / STAGING)  # each file read once: the hashes are made from these
+        files = submitted_files(entry)  # each file read once: the hashes are made from these
     except StagingError as exc:
         return Outcome(learner, "unreadable", f"{entry.source.name}: {exc}")
+    kept = keep(out / STAGING, learner, files)
+    root = scratch()
+    put(files, root / "exercises")
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
@@ -158,7 +191,7 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
                     learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing, submitted,
                     _time_source(entry, submitted), _manifest_summary(manifest),
                     (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),
-                    tuple(overrides), time.monotonic() - started, entry.origin)
+                    tuple(overrides), time.monotonic() - started, entry.origin, str(kept))
     if staged.digest == previous and not force:
         return Outcome(learner, "unchanged", "already graded, files unchanged", staged)
     return staged
@@ -329,7 +362,10 @@ def _grade_one(entry: Entry | Staged, out: str, grading: Grading, overrides: tup
                force: bool) -> Outcome:
     """Stage (an Entry; a Staged learner is staged already) and grade one submission in a worker process of the
     local pool."""
-    staged = entry if isinstance(entry, Staged) else stage_one(entry, Path(out), grading, overrides, previous, force)
+    if isinstance(entry, Staged):  # staged by the coordinator (grade regrade): its kept files put here
+        put(entry.files(), scratch() / "exercises")
+        return grade_staged(entry, grading, root=scratch())
+    staged = stage_one(entry, Path(out), grading, overrides, previous, force)
     return staged if isinstance(staged, Outcome) else grade_staged(staged, grading)
 
 
@@ -367,18 +403,25 @@ class LocalPool:
 def staged_again(out: Path, learner: str, result, grading: Grading, overrides: tuple) -> Staged | None:
     """A learner of an earlier run as it was staged (OUT/.staging keeps exactly the files it graded), to be graded
     again (grade regrade) with `grading`, with its submission time as the history keeps it and what its staging finds
-    to flag; None where the stored files are gone."""
-    root = out / STAGING / folder_name(learner)
-    if not (root / "exercises").is_dir():
+    to flag; None where the stored files are gone. Its `root` is where they are kept: a worker puts them into its
+    own folder to grade them (_grade_one)."""
+    import tempfile
+
+    place = kept_place(out / STAGING, learner)
+    files = read_kept(place) if place is not None else None
+    if files is None:
         return None
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
-    manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
-    roster_time = result.submitted if result.time_from == "roster" else ""
-    submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course,
-                                        root / "exercises")
-    return Staged(learner, str(root), content_hash(root, learner, grading),
-                  learner_yaml_warnings(root, learner) + manifest_flags + timing, submitted,
+    with tempfile.TemporaryDirectory(prefix="grade-staged-") as folder:
+        root = Path(folder)
+        put(files, root / "exercises")
+        manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
+        roster_time = result.submitted if result.time_from == "roster" else ""
+        submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course,
+                                            root / "exercises")
+        warnings = learner_yaml_warnings(root, learner) + manifest_flags + timing
+    return Staged(learner, str(place), content_hash(root, learner, grading, files), warnings, submitted,
                   result.time_from if submitted else None, _manifest_summary(manifest),
-                  (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises"),
-                  tuple(overrides), result.seconds or 0.0, "the history in gradebook.db")
+                  (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),
+                  tuple(overrides), result.seconds or 0.0, "the history in gradebook.db", str(place))

@@ -256,19 +256,18 @@ def _code_css() -> str:
 
 def _pairs(out: Path, learner: str, view: review.LearnerView) -> list[dict]:
     """Each similar pair with this learner: per chapter file both have, the lines side by side, shared ones marked."""
-    from grader.course.staging import STAGING, folder_name
+    from grader.course.staging import STAGING, kept_files
 
     shown = []
     for pair in view.pairs[:3]:
         other = pair["second"] if pair.get("first") == learner else pair["first"]
         mine = view.files
-        theirs_root = out / STAGING / folder_name(other) / "exercises"
+        kept = kept_files(out / STAGING, other) or {}
         files = []
         for name, text in mine.items():
-            path = theirs_root / name
-            if not name.endswith(".py") or not path.is_file():
+            if not name.endswith(".py") or name not in kept:
                 continue
-            theirs = path.read_bytes().decode("utf-8", "replace")
+            theirs = kept[name].decode("utf-8", "replace")
             ours_lines, their_lines = text.splitlines(), theirs.splitlines()
             common = {line.strip() for line in ours_lines if line.strip()} & \
                      {line.strip() for line in their_lines if line.strip()}

@@ -72,3 +72,25 @@ def test_the_hashes_made_from_the_staged_bytes_are_those_read_back_from_disk(tmp
     by_path = [(p.relative_to(package).as_posix(), hashlib.sha256(p.read_bytes()).hexdigest())
                for p in sorted(package.rglob("*")) if p.is_file() and p.name != "__init__.py"]
     assert list(submit.staged_hashes(package, files).items()) == by_path  # Path order: answers/ before ch05...
+
+
+def test_a_batch_keeps_each_learners_files_as_one_record_that_gives_them_back_exactly(tmp_path):
+    """The record a batch keeps (one zip per learner) gives back exactly the bytes staged, as does the folder an
+    older grader staged into; the same files are not written again, and a record replaces that older folder."""
+    from grader.course.staging import Entry, keep, kept_files, record_path, stage_files, submitted_files
+
+    folder = chapter_submission(tmp_path / "ann", "ann", "ch06_measurement")
+    (folder / "exercises" / "answers" / "ch06.yaml").write_bytes("range_bearing: zoë\r\n".encode("utf-8"))
+    files = submitted_files(Entry("ann", folder))
+    staging = tmp_path / "staging"
+    stage_files(Entry("ann", folder), staging)  # an older grader's layout: a folder per learner
+    assert kept_files(staging, "ann") == files
+    record = keep(staging, "ann", files)
+    assert record == record_path(staging, "ann") and record.parent.name == ".records"
+    assert not (staging / "ann").exists() and kept_files(staging, "ann") == files
+    written = record.stat().st_mtime_ns, record.stat().st_ino
+    keep(staging, "ann", files)
+    assert (record.stat().st_mtime_ns, record.stat().st_ino) == written  # the same files: the record is left
+    keep(staging, "ann", {**files, "answers/ch05.yaml": b"x: 1\n"})
+    assert kept_files(staging, "ann")["answers/ch05.yaml"] == b"x: 1\n"
+    assert kept_files(staging, "bo") is None
