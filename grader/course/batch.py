@@ -1,7 +1,8 @@
 """Batch grading of a folder of submissions: survey, stage, grade in parallel, record, rebuild every output.
 
-Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is copied or safely
-extracted into OUT/.staging/<folder>/exercises/ (grader.course.staging) and graded by a worker process (of this
+Each submission (a folder or a .zip, holding exercises/ or the chapter files directly) is read or safely
+extracted, its files kept as one record in OUT/.staging/.records/<folder>.zip (grader.course.staging), and graded
+by a worker process (of this
 machine's pool, grader.course.workers.LocalPool, or of a Dask cluster, grader.course.cluster) through the one
 transaction (grader.core.transaction.grade_submission); the worker returns plain data and this process alone
 records it in the history (OUT/gradebook.db, grader.course.history) and writes the learner's files, atomically,

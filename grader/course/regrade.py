@@ -1,8 +1,9 @@
 """`grade regrade OUT`: grade a batch's stored submissions again with today's grader, and say whose grade would change,
 check by check, before anything changes.
 
-The stored submissions are the staged copies grade batch keeps (OUT/.staging/<folder>/exercises: exactly the files
-it graded). Each learner graded in the batch's last finished run (grader.course.history) is graded again through
+The stored submissions are the staged copies grade batch keeps (one record per learner in OUT/.staging/.records,
+grader.course.staging.keep: exactly the files it graded; an older grader's OUT/.staging/<folder>/exercises is read
+as well). Each learner graded in the batch's last finished run (grader.course.history) is graded again through
 the one transaction, behind the sandbox as a batch grades, with what that run graded with (its settings: the course
 file's and the overrides' text as read then, its seed and chapters) unless another course file or overrides file is
 named (--course, --overrides: each difference is listed), and compared with what that run recorded: the score, the

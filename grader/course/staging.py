@@ -1,7 +1,8 @@
 """Finding and staging submissions: each learner's folder or .zip in a submissions folder, with its learner
 id (its name, or a roster's), copied or safely extracted into a staging folder of chapter and answer files
-only; and where a learner's outputs go (folder_name). Used by grade batch, grade submit's check of its own
-archive, the Gradescope autograder and --similarity.
+only; the record of those files a batch keeps per learner (keep, kept_files); and where a learner's outputs go
+(folder_name). Used by grade batch, grade submit's check of its own archive, the Gradescope autograder and
+--similarity.
 
 Only chNN_*.py, chNN_*.ipynb (without outputs), answers/*.yaml and a grade submit manifest are staged; zip
 entries with absolute paths, '..' or symlinks are never extracted, links inside a folder are never followed,

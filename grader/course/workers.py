@@ -167,6 +167,15 @@ def scratch() -> Path:
     return folder
 
 
+def drop_scratch() -> None:
+    """Remove this process's scratch folder now (a command that leaves by os._exit runs no exit handler)."""
+    pid, folder = _worker_state.pop("scratch", (None, None))
+    if pid == os.getpid():
+        import shutil
+
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), previous: str | None = None,
               force: bool = False) -> Staged | Outcome:
     """Stage one submission: its files kept in OUT/.staging (grader.course.staging.keep: one record each) and put

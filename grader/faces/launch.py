@@ -94,6 +94,8 @@ def main() -> None:
         prestart.take("", None)  # stops a prestarted child nobody took
         if "grader.render.drawer" in sys.modules:  # its drawing process: stopped if unused, else waited for
             sys.modules["grader.render.drawer"].end()  # (no atexit handler runs after os._exit)
+        if "grader.course.workers" in sys.modules:  # the folder a batch's coordinator staged learners in
+            sys.modules["grader.course.workers"].drop_scratch()
     # Leave without the interpreter's teardown of every imported module (numpy's is slow):
     # everything is written and every child is stopped by now.
     if isinstance(code, str):
