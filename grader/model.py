@@ -22,6 +22,9 @@ class Status(str, Enum):
         return self is not Status.RECORDED
 
 
+_RECORDED = Status.RECORDED  # the one status not counted (Status.counted), compared without a call in the sums
+
+
 class _RoundedPoints:
     """A dataclass field of points, rounded once, as it is set (rounded_points): every sum and every output is of
     these. A descriptor, so that setting the other fields costs no call of Python's."""
@@ -160,21 +163,21 @@ class ChapterResult:
 
     def score_of(self, kind: str | None = None) -> float:
         """Points of the checks judged here (of one kind), with the overrides of those checks."""
-        checks = sum(c.points for c in self.checks if kind in (None, c.kind) and c.status.counted)
+        checks = sum(c.points for c in self.checks if kind in (None, c.kind) and c.status is not _RECORDED)
         overridden = sum(a.points for a in self.adjustments if a.on_check and kind in (None, a.check_kind))
         return rounded_points(checks + overridden)
 
     @property
     def raw_score(self) -> float:
         """Points of the checks as graded, before any override."""
-        return rounded_points(sum(c.points for c in self.checks if c.status.counted))
+        return rounded_points(sum(c.points for c in self.checks if c.status is not _RECORDED))
 
     def max_score_of(self, kind: str | None = None) -> float:
-        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status.counted))
+        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status is not _RECORDED))
 
     def recorded_score_of(self, kind: str | None = None) -> float:
         """The points of answers recorded here and graded on submission."""
-        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and not c.status.counted))
+        return rounded_points(sum(c.max_points for c in self.checks if kind in (None, c.kind) and c.status is _RECORDED))
 
     @property
     def pending_score(self) -> float:
@@ -225,15 +228,16 @@ class ChapterResult:
                    hidden_points=float(ch.get("hidden_points", 0.0)), source=ch.get("source") or "",
                    unread=ch.get("unread") is True, notes=list(ch.get("notes") or []))
 
-    def to_kept(self) -> dict:
-        """to_dict() with each check's details, the plot data and whether `source` could not be read: what
-        from_dict() makes this chapter again from (grader.core.memo, the history)."""
-        data = self.to_dict()
+    def to_kept(self, made: dict | None = None) -> dict:
+        """to_dict() (`made`: that dict, made already, which is left as it is) with each check's details, the plot
+        data and whether `source` could not be read: what from_dict() makes this chapter again from
+        (grader.core.memo, the history)."""
+        data = self.to_dict() if made is None else dict(made)
         if self.unread:
             data["unread"] = True
-        for check, kept in zip(self.checks, data["checks"]):
-            if check.details:
-                kept["details"] = jsonable(check.details)
+        if any(check.details for check in self.checks):
+            data["checks"] = [dict(kept, details=jsonable(check.details)) if check.details else kept
+                              for check, kept in zip(self.checks, data["checks"])]
         if self.plots:
             data["plots"] = plain(self.plots)
         return data
@@ -315,10 +319,12 @@ class Report:
                 adjustment.check_kind = next((c.kind for c in chapter.checks if c.id == check_id), "code")
             chapter.adjustments.append(adjustment)
 
-    def to_kept(self) -> dict:
+    def to_kept(self, chapters: list[dict] | None = None) -> dict:
         """The report as judged, to be made again by from_kept (grader.core.memo, the history): to_dict() without
-        the adjustments, with each check's details, the plot data, what learner code printed and the flags."""
-        return dict(self.to_dict(chapters=[c.to_kept() for c in self.chapters]), adjustments=[],
+        the adjustments, with each check's details, the plot data, what learner code printed and the flags;
+        `chapters`: its chapters' to_dict(), made already (left as they are)."""
+        made = chapters or [None] * len(self.chapters)
+        return dict(self.to_dict(chapters=[c.to_kept(m) for c, m in zip(self.chapters, made)]), adjustments=[],
                     learner_output=self.learner_output, flags=list(self.flags), learner_unset=self.learner_unset)
 
     @classmethod

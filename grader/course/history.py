@@ -60,9 +60,10 @@ def now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
-def kept_report(report: Report) -> tuple[str, bytes]:
-    """(the hash, the compressed data) the history keeps `report` as judged by: Report.to_kept, without adjustments."""
-    text = json.dumps(report.to_kept(), ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
+def kept_report(report: Report, chapters: list[dict] | None = None) -> tuple[str, bytes]:
+    """(the hash, the compressed data) the history keeps `report` as judged by: Report.to_kept, without adjustments
+    (`chapters`: its chapters' to_dict(), made already)."""
+    text = json.dumps(report.to_kept(chapters), ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
     return hashlib.sha256(text).hexdigest(), zlib.compress(text, 1)
 
 

@@ -86,10 +86,11 @@ class LearnerFacts:
                                 time_from=self.time_from, seconds=self.seconds, manifest=self.manifest)
 
 
-def report_json(report: Report, facts: LearnerFacts) -> str:
+def report_json(report: Report, facts: LearnerFacts, chapters: list[dict] | None = None) -> str:
     """A learner's report.json: the report (grader/schemas/batch-report.schema.json) and what the batch keeps; a
-    seed other than the public one is not in it (null: the learner reads this file)."""
-    data = report.to_dict()
+    seed other than the public one is not in it (null: the learner reads this file). `chapters`: its chapters'
+    to_dict(), made already."""
+    data = report.to_dict(chapters)
     if report.seed != PUBLIC_SEED:
         data["seed"] = None
         data["provenance"]["seed"] = None
@@ -102,9 +103,11 @@ def report_json(report: Report, facts: LearnerFacts) -> str:
     return json_text(data) + "\n"
 
 
-def learner_files(report: Report, facts: LearnerFacts, grading: Grading) -> dict[str, str | None]:
+def learner_files(report: Report, facts: LearnerFacts, grading: Grading,
+                  chapters: list[dict] | None = None) -> dict[str, str | None]:
     """The texts of a graded learner's files, in the order they are written: results.json (Gradescope's format),
-    report.html (where the run writes it) and report.json, last: it marks the learner done."""
+    report.html (where the run writes it) and report.json, last: it marks the learner done (`chapters`: the
+    report's chapters' to_dict(), made already)."""
     files: dict[str, str | None] = {
         "results.json": lms.gradescope(report, hidden=grading.hidden, execution_time=facts.seconds,
                                        heading=[f"Graded as {facts.learner}."], notes=list(facts.warnings))}
@@ -113,7 +116,7 @@ def learner_files(report: Report, facts: LearnerFacts, grading: Grading) -> dict
 
         # a worker draws its learner's figures itself: the other workers keep the other cores busy
         files["report.html"] = html.render(report, draw_here=True, learner_sees=True)
-    files["report.json"] = report_json(report, facts)
+    files["report.json"] = report_json(report, facts, chapters)
     return files
 
 

@@ -357,12 +357,13 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
         return Outcome(learner, "error", message, staged, files=outputs.not_graded_files(report, staged, extra),
                        infrastructure=report.infrastructure, extra=dict(extra))
     report.learner_output = report.learner_output[:outputs.LEARNER_OUTPUT]
-    kept = kept_report(report)
+    chapters = [chapter.to_dict() for chapter in report.chapters]  # made once: the kept report's and report.json's
+    kept = kept_report(report, chapters)
     outcome = Outcome(learner, "graded", outputs.graded_message(report), staged, kept, report,
                       [a.to_dict() for a in report.all_adjustments()],
                       [(o.override.source, o.applied, o.said) for o in graded.outcomes], extra=dict(extra))
     if grading.render:
-        outcome.files = outputs.learner_files(report, outputs.LearnerFacts.of(staged, report, extra), grading)
+        outcome.files = outputs.learner_files(report, outputs.LearnerFacts.of(staged, report, extra), grading, chapters)
     _settle_heap()
     return outcome
 

@@ -254,7 +254,7 @@ class JUnit:
     def add(self, learner: str, report: Report, extra: dict | None = None) -> None:
         """One learner's <testsuite>; `extra` is {"seconds": ..., "output": what their code printed}."""
         suite, counts, seconds = _suite(learner, report, extra or {})
-        self.stream.write(ElementTree.tostring(suite, encoding="unicode"))
+        self.stream.write(suite)
         self.count += 1
         self.totals["tests"] += counts["tests"]
         self.totals["failures"] += counts["failure"]
@@ -282,8 +282,9 @@ class JUnit:
         target.write(tail)
 
 
-def _suite(learner: str, report: Report, extra: dict) -> tuple[ElementTree.Element, dict[str, int], float]:
-    """One learner's <testsuite>, its counts (tests, failure, error, skipped) and its seconds."""
+def _suite(learner: str, report: Report, extra: dict) -> tuple[str, dict[str, int], float]:
+    """One learner's <testsuite> as XML text (as ElementTree writes it: _element), its counts (tests, failure,
+    error, skipped) and its seconds."""
     name = for_xml(learner)
     cases = []
     for chapter in report.chapters:
@@ -292,28 +293,57 @@ def _suite(learner: str, report: Report, extra: dict) -> tuple[ElementTree.Eleme
             tag = "error" if chapter_status(chapter) == "error" else "failure"
             cases.append((classname, f"{chapter.chapter}:chapter", tag, "\n".join(chapter.problems), "chapter"))
         for check in chapter.checks:
-            tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
-                   Status.RECORDED: "skipped"}.get(check.status)
-            cases.append((classname, f"{check.kind}:{check.id}", tag, check_message(check, chapter),
+            tag = _CASE_TAGS.get(check.status)
+            cases.append((classname, f"{check.kind}:{check.id}", tag, check_message(check, chapter) if tag else "",
                           check.status.value))
     counts = {tag: sum(c[2] == tag for c in cases) for tag in ("failure", "error", "skipped")}
     seconds = float(extra.get("seconds") or 0.0)
-    suite = ElementTree.Element("testsuite", name=name, tests=str(len(cases)), failures=str(counts["failure"]),
-                                errors=str(counts["error"]), skipped=str(counts["skipped"]), time=_time(seconds))
-    properties = ElementTree.SubElement(suite, "properties")
-    for key, value in report.provenance().items():
-        ElementTree.SubElement(properties, "property", name=key, value=for_xml("" if value is None else str(value)))
+    parts = [_element("testsuite", (("name", name), ("tests", str(len(cases))), ("failures", str(counts["failure"])),
+                                    ("errors", str(counts["error"])), ("skipped", str(counts["skipped"])),
+                                    ("time", _time(seconds))), open_=True),
+             "<properties>"]
+    parts.extend(_element("property", (("name", key), ("value", for_xml("" if value is None else str(value)))))
+                 for key, value in report.provenance().items())
+    parts.append("</properties>")
     for classname, case_name, tag, text, kind in cases:
-        case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
-        if tag:
-            first = text.splitlines()[0][:200] if text else ""
-            element = ElementTree.SubElement(case, tag, message=for_xml(first), type=kind)
-            if tag != "skipped" or text:
-                element.text = for_xml(text)
+        attributes = (("classname", classname), ("name", for_xml(case_name)))
+        if not tag:
+            parts.append(_element("testcase", attributes))
+            continue
+        first = text.splitlines()[0][:200] if text else ""
+        inner = _element(tag, (("message", for_xml(first)), ("type", kind)),
+                         for_xml(text) if tag != "skipped" or text else "")
+        parts.append(f"{_element('testcase', attributes, open_=True)}{inner}</testcase>")
     output = extra.get("output") or ""
     if output:
-        ElementTree.SubElement(suite, "system-out").text = for_xml(output)
-    return suite, {**counts, "tests": len(cases)}, seconds
+        parts.append(_element("system-out", (), for_xml(output)))
+    parts.append("</testsuite>")
+    return "".join(parts), {**counts, "tests": len(cases)}, seconds
+
+
+_CASE_TAGS = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped", Status.RECORDED: "skipped"}
+_ATTRIBUTE_ESCAPES = (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot;"), ("\r", "&#13;"),
+                      ("\n", "&#10;"), ("\t", "&#09;"))
+_TEXT_ESCAPES = _ATTRIBUTE_ESCAPES[:3]
+
+
+def _escaped(text: str, escapes: tuple[tuple[str, str], ...]) -> str:
+    for character, entity in escapes:
+        if character in text:
+            text = text.replace(character, entity)
+    return text
+
+
+def _element(tag: str, attributes: tuple[tuple[str, str], ...], text: str = "", open_: bool = False) -> str:
+    """An element as ElementTree.tostring(encoding="unicode") writes it: its attributes in order, escaped as it
+    escapes them (xml.etree.ElementTree._escape_attrib, _escape_cdata), `text` inside, or no text and no content
+    as `<tag ... />`; with `open_`, only its start tag (the caller writes what it holds and its end)."""
+    start = f"<{tag}" + "".join(f' {key}="{_escaped(value, _ATTRIBUTE_ESCAPES)}"' for key, value in attributes)
+    if open_:
+        return start + ">"
+    if not text:
+        return start + " />"
+    return f"{start}>{_escaped(text, _TEXT_ESCAPES)}</{tag}>"
 
 
 # ------------------------------------------------------------------------------------ gradebooks

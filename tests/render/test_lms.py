@@ -219,3 +219,55 @@ def test_the_class_summary_says_a_first_run_is_a_first_run():
     assert moved_line(Summary(None, changes=[("kim", None, 198, 198, "first graded")] * 16, first_run=True)) == (
         "the history's first run: 16 learners graded first")
     assert moved_line(Summary(None, changes=[], first_run=False)) == "0 scores moved since the last run"
+
+
+def test_a_learners_testsuite_is_written_as_elementtree_writes_it_whatever_its_text_holds():
+    """junit.xml's suites are written as text: byte for byte what ElementTree writes of the same elements, for text
+    with every character XML escapes in attributes and in text (& < > " CR LF TAB), empty messages and output."""
+    from xml.etree import ElementTree
+
+    from grader.model import ChapterResult, CheckResult, Report, Status
+    from grader.render.lms import _suite, check_message, chapter_status
+    from grader.safe_text import for_xml
+
+    hostile = 'a & b < c > d "e" \'f\'\r\ng\th\x01 zoë'
+    checks = [CheckResult("ok", "f", "", Status.PASS, 1, 1),
+              CheckResult("bad", "f", "", Status.FAIL, 0, 1, message=hostile),
+              CheckResult("empty", "f", "", Status.FAIL, 0, 1, message=""),
+              CheckResult("broke", "f", "", Status.ERROR, 0, 1, message="one\ntwo"),
+              CheckResult("later", "f", "", Status.SKIP, 0, 1),
+              CheckResult("quiz_q", "q", "", Status.RECORDED, 0, 1, kind="quiz", message=hostile)]
+    report = Report("x", [ChapterResult("ch06", "t", checks, problems=[hostile]), ChapterResult("ch05", "t")],
+                    grader=hostile, learner_id="a&b")
+    for learner, extra in ((hostile, {"seconds": 1.23456, "output": hostile}), ("plain", {})):
+        name = for_xml(learner)
+        suite = ElementTree.Element("testsuite", name=name)
+        cases = []
+        for chapter in report.chapters:
+            if chapter.problems:
+                cases.append((f"{name}.{chapter.chapter}", f"{chapter.chapter}:chapter",
+                              "error" if chapter_status(chapter) == "error" else "failure",
+                              "\n".join(chapter.problems), "chapter"))
+            for check in chapter.checks:
+                tag = {Status.FAIL: "failure", Status.ERROR: "error", Status.SKIP: "skipped",
+                       Status.RECORDED: "skipped"}.get(check.status)
+                cases.append((f"{name}.{chapter.chapter}", f"{check.kind}:{check.id}", tag,
+                              check_message(check, chapter), check.status.value))
+        counts = {tag: sum(c[2] == tag for c in cases) for tag in ("failure", "error", "skipped")}
+        suite.attrib.update(tests=str(len(cases)), failures=str(counts["failure"]), errors=str(counts["error"]),
+                            skipped=str(counts["skipped"]), time=f"{extra.get('seconds', 0.0):.3f}")
+        properties = ElementTree.SubElement(suite, "properties")
+        for key, value in report.provenance().items():
+            ElementTree.SubElement(properties, "property", name=key, value=for_xml("" if value is None else str(value)))
+        for classname, case_name, tag, text, kind in cases:
+            case = ElementTree.SubElement(suite, "testcase", classname=classname, name=for_xml(case_name))
+            if tag:
+                element = ElementTree.SubElement(case, tag, message=for_xml(text.splitlines()[0][:200] if text else ""),
+                                                 type=kind)
+                if tag != "skipped" or text:
+                    element.text = for_xml(text)
+        if extra.get("output"):
+            ElementTree.SubElement(suite, "system-out").text = for_xml(extra["output"])
+        written, found, _ = _suite(learner, report, extra)
+        assert written == ElementTree.tostring(suite, encoding="unicode")
+        assert found == {**counts, "tests": len(cases)}
