@@ -33,6 +33,7 @@ import functools
 import json
 import keyword
 import math
+import operator
 import random
 import re
 import subprocess
@@ -357,45 +358,67 @@ def _checked_tree(text: object, symbols: tuple[str, ...], lists: bool) -> ast.Ex
 
 
 def evaluate(node: ast.AST, values: dict[str, float]) -> float:
-    """A checked tree's value as a float at `values` (symbol -> number); Undefined where it has none."""
+    """A checked tree's value as a float at `values` (symbol -> number); Undefined where it has none. The tree is
+    made into nested functions once (_evaluator, kept on the node: check_text's trees are shared), which compute what
+    walking it would, operation by operation in the same order."""
+    function = node.__dict__.get("_evaluator")
+    if function is None:
+        function = node._evaluator = _evaluator(node)
+    return function(values)
+
+
+def _evaluator(node: ast.AST):
+    """A function of `values` giving `node`'s value as evaluate() defines it: a constant's or a name's as it is, an
+    operation's a finite real float, or Undefined (division by zero, too large, outside a function's domain, not a
+    finite real number, or a node that has no value: the whitelist lets none through)."""
     if isinstance(node, ast.Expression):
-        return evaluate(node.body, values)
+        return _evaluator(node.body)
     if isinstance(node, ast.Constant):
-        return float(node.value)
+        constant = node.value
+        try:
+            value = float(constant)
+        except (OverflowError, ValueError, TypeError):  # raised where it is evaluated, as float() raises it
+            return lambda values: float(constant)
+        return lambda values: value
     if isinstance(node, ast.Name):
-        if node.id in values:
-            return values[node.id]
-        return CONSTANTS[node.id]
-    try:
-        if isinstance(node, ast.UnaryOp):
-            operand = evaluate(node.operand, values)
-            result = -operand if isinstance(node.op, ast.USub) else operand
-        elif isinstance(node, ast.BinOp):
-            left, right = evaluate(node.left, values), evaluate(node.right, values)
-            if isinstance(node.op, ast.Add):
-                result = left + right
-            elif isinstance(node.op, ast.Sub):
-                result = left - right
-            elif isinstance(node.op, ast.Mult):
-                result = left * right
-            elif isinstance(node.op, ast.Div):
-                result = left / right
-            else:
-                result = left ** right
-        elif isinstance(node, ast.Call):
-            function = FUNCTIONS[node.func.id][0]
-            result = function(*[evaluate(arg, values) for arg in node.args])
-        else:
-            raise AnswerError(f"{type(node).__name__} has no value")
-    except ZeroDivisionError:
-        raise Undefined("division by zero") from None
-    except OverflowError:
-        raise Undefined("too large") from None
-    except ValueError:
-        raise Undefined("outside a function's domain, e.g. sqrt or log of a negative number") from None
-    if isinstance(result, complex) or not math.isfinite(result):
-        raise Undefined("not a finite real number")
-    return float(result)
+        name = node.id
+        return lambda values: values[name] if name in values else CONSTANTS[name]
+    if isinstance(node, ast.UnaryOp):
+        operand = _evaluator(node.operand)
+        compute = (lambda values: -operand(values)) if isinstance(node.op, ast.USub) else operand
+    elif isinstance(node, ast.BinOp):
+        left, right = _evaluator(node.left), _evaluator(node.right)
+        operation = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+                     ast.Div: operator.truediv}.get(type(node.op), operator.pow)
+
+        def compute(values: dict[str, float]) -> object:
+            return operation(left(values), right(values))
+    elif isinstance(node, ast.Call):
+        function = FUNCTIONS[node.func.id][0]
+        arguments = [_evaluator(arg) for arg in node.args]
+
+        def compute(values: dict[str, float]) -> object:
+            return function(*[argument(values) for argument in arguments])
+    else:
+        kind = type(node).__name__
+
+        def compute(values: dict[str, float]) -> object:
+            raise AnswerError(f"{kind} has no value")
+
+    def checked(values: dict[str, float]) -> float:
+        try:
+            result = compute(values)
+        except ZeroDivisionError:
+            raise Undefined("division by zero") from None
+        except OverflowError:
+            raise Undefined("too large") from None
+        except ValueError:
+            raise Undefined("outside a function's domain, e.g. sqrt or log of a negative number") from None
+        if isinstance(result, complex) or not math.isfinite(result):
+            raise Undefined("not a finite real number")
+        return float(result)
+
+    return checked
 
 
 def number(text: object) -> float:

@@ -17,6 +17,7 @@ import re
 from typing import TYPE_CHECKING
 
 import numpy as np
+from markupsafe import Markup, escape
 
 from grader.model import CheckResult, Report, not_written
 from grader.numbers import fmt
@@ -107,14 +108,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 {% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} point{{ '' if ch.recorded_score_of(kind) == 1 else 's' }} recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
 {% set folded = not_written(checks) if kind == "code" else {} %}
 {% for c in checks %}{% if c.function in folded %}{% if c is sameas folded[c.function][0] %}<div class="check fail"><span class="status"><span aria-hidden="true">{{ marks["fail"] }} </span>fail</span>{{ c.function }}: not implemented yet ({{ folded[c.function] | length }} check{{ "s" if folded[c.function] | length != 1 }})
-<span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
-<span class="points">{% if c.practice %}practice, not counted{% else %}{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span>{% endif %}</span>
-<span class="note"> &middot; {{ ch.chapter }}/{{ c.id }}</span>
-{% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
-{% if c.status.value != "pass" and c.help %}<p class="help"><strong>Hint:</strong> {{ c.help }}</p>{% endif %}
-{% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
-{% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
-</div>{% endif %}{% endfor %}{% endif %}{% endfor %}
+<span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}{{ check_html(c, ch.chapter) }}{% endif %}{% endfor %}{% endif %}{% endfor %}
 </section>{% endfor %}
 </{{ root }}>"""
 
@@ -158,10 +152,27 @@ def _matrix_html(values, wrong: set, caption: str, zero_below: float = 0.0, digi
 WRONG_MARK = '<span aria-hidden="true"> \u2717</span><span class="sr-only"> (differs)</span>'
 
 
+def _check_html(check: CheckResult, chapter: str) -> str:
+    """One check's block: its verdict, description, points and id; where it did not pass, its message and hint; a
+    quiz answer as written; a failed code check's values as tables (_values). Every text escaped: a Python function
+    rather than the template's loop, the page's longest part, which it writes as the template would."""
+    status = check.status.value
+    wrong = status != "pass"
+    points = ("practice, not counted" if check.practice else
+              f'{escape(_num(check.points))} / {escape(_num(check.max_points))}<span class="sr-only"> points</span>')
+    message = f"<pre>{escape(check.message)}</pre>" if wrong and check.message else ""
+    hint = f'<p class="help"><strong>Hint:</strong> {escape(check.help)}</p>' if wrong and check.help else ""
+    answer = (f'<p class="note">your answer: {escape(check.got)}</p>' if check.kind == "quiz" and check.got is not None
+              else "")
+    values = escape(_values(check)) if status == "fail" and check.kind == "code" else ""
+    return Markup(f'<div class="check {escape(status)}"><span class="status"><span aria-hidden="true">'
+                  f'{escape(MARKS[status])} </span>{escape(status)}</span>{escape(check.description)}\n'
+                  f'<span class="points">{points}</span>\n<span class="note"> &middot; {escape(chapter)}/'
+                  f'{escape(check.id)}</span>\n{message}\n{hint}\n{answer}\n{values}\n</div>')
+
+
 def _values(check: CheckResult) -> str:
     """Expected vs got as small tables, the wrong entries marked."""
-    from markupsafe import Markup
-
     try:
         if check.expected is None or check.got is None:
             return Markup("")
@@ -201,8 +212,6 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int, kept: 
             draw_here: bool = False, meanwhile: Callable[[], None] | None = None, learner_sees: bool = False) -> str:
     import dataclasses
 
-    from markupsafe import Markup
-
     from grader import provenance, safe_text
     from grader.render import drawer
     from grader.render.text import verdict_line
@@ -233,7 +242,7 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int, kept: 
         figures[chapter.chapter] = its_figures
         if kept is not None:
             kept.store(chapter.chapter, chapter.plots, [vars(figure) for figure in its_figures])
-    return template.render(report=report, figures=figures, num=_num, values=_values, not_written=not_written,
+    return template.render(report=report, figures=figures, num=_num, check_html=_check_html, not_written=not_written,
                            plural=plural,
                            verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
                            kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report, learner_sees),

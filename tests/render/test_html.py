@@ -243,3 +243,38 @@ def test_a_shipped_template_module_that_does_not_load_is_compiled_here_instead(m
     assert html._template("page").filename == "<template>"
     assert "got &lt;script&gt;" in html.render(_small_report())
     html._template.cache_clear()
+
+
+CHECK_BLOCK = """<div class="check {{ c.status.value }}"><span class="status"><span aria-hidden="true">{{ marks[c.status.value] }} </span>{{ c.status.value }}</span>{{ c.description }}
+<span class="points">{% if c.practice %}practice, not counted{% else %}{{ num(c.points) }} / {{ num(c.max_points) }}<span class="sr-only"> points</span>{% endif %}</span>
+<span class="note"> &middot; {{ chapter }}/{{ c.id }}</span>
+{% if c.status.value != "pass" and c.message %}<pre>{{ c.message }}</pre>{% endif %}
+{% if c.status.value != "pass" and c.help %}<p class="help"><strong>Hint:</strong> {{ c.help }}</p>{% endif %}
+{% if c.kind == "quiz" and c.got is not none %}<p class="note">your answer: {{ c.got }}</p>{% endif %}
+{% if c.status.value == "fail" and c.kind == "code" %}{{ values(c) }}{% endif %}
+</div>"""
+
+
+def test_a_checks_block_is_what_the_template_wrote_of_it_for_every_kind_of_check():
+    """A check's block is written in Python (the page's longest part); it is byte for byte what the template's own
+    loop wrote, for each status, practice questions, hints, quiz answers of any type, failed code checks with their
+    tables, and learner text holding every character HTML escapes."""
+    import itertools
+
+    from grader.model import CheckResult, Status
+    from grader.render import html, precompiled
+
+    block = precompiled.environment().from_string(CHECK_BLOCK)
+    hostile = '<script>alert("x")</script> & \'quoted\'\n\u2028'
+    checked = 0
+    for status, kind, practice, message, hint, got in itertools.product(
+            Status, ("code", "quiz"), (False, True), ("", hostile), ("", hostile),
+            (None, hostile, 0.5, [[1.0, 2.0], [3.0, 4.5]])):
+        check = CheckResult(f"id_{checked}<", "f&", hostile, status, 0.25, 1.5, message=message, help=hint,
+                            kind=kind, practice=practice, got=got,
+                            expected=[[1.0, 2.0], [3.0, 4.0]] if isinstance(got, list) else None,
+                            details={"wrong": [[1, 1]]})
+        expected = block.render(c=check, chapter="ch06", marks=html.MARKS, num=html._num, values=html._values)
+        assert html._check_html(check, "ch06") == expected
+        checked += 1
+    assert checked == 5 * 2 * 2 * 2 * 2 * 4

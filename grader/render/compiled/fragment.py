@@ -1,7 +1,7 @@
 # The report's fragment template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "9deee1d1efe20bc2ba23e644610772dcd86ebc8b93d2c932f2c23dddaa5bf526"
+DIGEST = "d6219033a3c796145392411cd1ba55667659ed09da78e599dc1e5c163b835b07"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'fragment'
 
@@ -48,16 +48,10 @@ def root(context, missing=missing):
         def t_4(*unused):
             raise TemplateRuntimeError("No filter named 'sum' found.")
     try:
-        t_5 = environment.tests['none']
+        t_5 = environment.tests['sameas']
     except KeyError:
         @internalcode
         def t_5(*unused):
-            raise TemplateRuntimeError("No test named 'none' found.")
-    try:
-        t_6 = environment.tests['sameas']
-    except KeyError:
-        @internalcode
-        def t_6(*unused):
             raise TemplateRuntimeError("No test named 'sameas' found.")
     pass
     yield '<style>'
@@ -267,12 +261,12 @@ def root(context, missing=missing):
                 yield '\n'
                 for l_3_c in (undefined(name='checks') if l_2_checks is missing else l_2_checks):
                     l_3_marks = resolve('marks')
-                    l_3_values = resolve('values')
+                    l_3_check_html = resolve('check_html')
                     _loop_vars = {}
                     pass
                     if (environment.getattr(l_3_c, 'function') in (undefined(name='folded') if l_2_folded is missing else l_2_folded)):
                         pass
-                        if t_6(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
+                        if t_5(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
                             pass
                             yield '<div class="check fail"><span class="status"><span aria-hidden="true">'
                             yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), 'fail'))
@@ -287,52 +281,8 @@ def root(context, missing=missing):
                             yield '<span class="sr-only"> points</span></span></div>'
                     else:
                         pass
-                        yield '<div class="check '
-                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
-                        yield '"><span class="status"><span aria-hidden="true">'
-                        yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), environment.getattr(environment.getattr(l_3_c, 'status'), 'value')))
-                        yield ' </span>'
-                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
-                        yield '</span>'
-                        yield escape(environment.getattr(l_3_c, 'description'))
-                        yield '\n<span class="points">'
-                        if environment.getattr(l_3_c, 'practice'):
-                            pass
-                            yield 'practice, not counted'
-                        else:
-                            pass
-                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'points'), _loop_vars=_loop_vars))
-                            yield ' / '
-                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'max_points'), _loop_vars=_loop_vars))
-                            yield '<span class="sr-only"> points</span>'
-                        yield '</span>\n<span class="note"> &middot; '
-                        yield escape(environment.getattr(l_1_ch, 'chapter'))
-                        yield '/'
-                        yield escape(environment.getattr(l_3_c, 'id'))
-                        yield '</span>\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'message')):
-                            pass
-                            yield '<pre>'
-                            yield escape(environment.getattr(l_3_c, 'message'))
-                            yield '</pre>'
-                        yield '\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'help')):
-                            pass
-                            yield '<p class="help"><strong>Hint:</strong> '
-                            yield escape(environment.getattr(l_3_c, 'help'))
-                            yield '</p>'
-                        yield '\n'
-                        if ((environment.getattr(l_3_c, 'kind') == 'quiz') and (not t_5(environment.getattr(l_3_c, 'got')))):
-                            pass
-                            yield '<p class="note">your answer: '
-                            yield escape(environment.getattr(l_3_c, 'got'))
-                            yield '</p>'
-                        yield '\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') == 'fail') and (environment.getattr(l_3_c, 'kind') == 'code')):
-                            pass
-                            yield escape(context.call((undefined(name='values') if l_3_values is missing else l_3_values), l_3_c, _loop_vars=_loop_vars))
-                        yield '\n</div>'
-                l_3_c = l_3_marks = l_3_values = missing
+                        yield escape(context.call((undefined(name='check_html') if l_3_check_html is missing else l_3_check_html), l_3_c, environment.getattr(l_1_ch, 'chapter'), _loop_vars=_loop_vars))
+                l_3_c = l_3_marks = l_3_check_html = missing
         l_2_kind = l_2_label = l_2_checks = l_2_not_written = l_2_folded = missing
         yield '\n</section>'
     l_1_ch = l_1_plural = l_1_figures = missing
@@ -341,4 +291,4 @@ def root(context, missing=missing):
     yield '>'
 
 blocks = {}
-debug_info = '1=60&2=62&3=68&4=74&5=82&6=86&9=96&10=107&11=113&12=119&13=127&14=133&15=149&17=153&18=159&19=175&20=181&21=189&22=197&23=207&24=223&25=232&26=241&27=261&28=264&29=282&30=295&31=305&32=309&33=315&34=321&35=327&38=336'
+debug_info = '1=54&2=56&3=62&4=68&5=76&6=80&9=90&10=101&11=107&12=113&13=121&14=127&15=143&17=147&18=153&19=169&20=175&21=183&22=191&23=201&24=217&25=226&26=235&27=255&28=258&29=276&31=286'

@@ -1,7 +1,7 @@
 # The report's page template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "c2b714d74709a3388a61e0e8b5c24ff2c976887f78b7fb220ca69e9f29c7a0b6"
+DIGEST = "79b590936d7babf11981ed7150be79a75952d8f97b24b6007e519ea14b0d6734"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'page'
 
@@ -48,16 +48,10 @@ def root(context, missing=missing):
         def t_4(*unused):
             raise TemplateRuntimeError("No filter named 'sum' found.")
     try:
-        t_5 = environment.tests['none']
+        t_5 = environment.tests['sameas']
     except KeyError:
         @internalcode
         def t_5(*unused):
-            raise TemplateRuntimeError("No test named 'none' found.")
-    try:
-        t_6 = environment.tests['sameas']
-    except KeyError:
-        @internalcode
-        def t_6(*unused):
             raise TemplateRuntimeError("No test named 'sameas' found.")
     pass
     yield '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">\n<meta name="viewport" content="width=device-width, initial-scale=1">\n<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; img-src data:; style-src \'unsafe-inline\'">\n<title>Jacobians &amp; Linearization: grading report</title>\n<style>body{margin:0;background:#f8fafc}'
@@ -267,12 +261,12 @@ def root(context, missing=missing):
                 yield '\n'
                 for l_3_c in (undefined(name='checks') if l_2_checks is missing else l_2_checks):
                     l_3_marks = resolve('marks')
-                    l_3_values = resolve('values')
+                    l_3_check_html = resolve('check_html')
                     _loop_vars = {}
                     pass
                     if (environment.getattr(l_3_c, 'function') in (undefined(name='folded') if l_2_folded is missing else l_2_folded)):
                         pass
-                        if t_6(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
+                        if t_5(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
                             pass
                             yield '<div class="check fail"><span class="status"><span aria-hidden="true">'
                             yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), 'fail'))
@@ -287,52 +281,8 @@ def root(context, missing=missing):
                             yield '<span class="sr-only"> points</span></span></div>'
                     else:
                         pass
-                        yield '<div class="check '
-                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
-                        yield '"><span class="status"><span aria-hidden="true">'
-                        yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), environment.getattr(environment.getattr(l_3_c, 'status'), 'value')))
-                        yield ' </span>'
-                        yield escape(environment.getattr(environment.getattr(l_3_c, 'status'), 'value'))
-                        yield '</span>'
-                        yield escape(environment.getattr(l_3_c, 'description'))
-                        yield '\n<span class="points">'
-                        if environment.getattr(l_3_c, 'practice'):
-                            pass
-                            yield 'practice, not counted'
-                        else:
-                            pass
-                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'points'), _loop_vars=_loop_vars))
-                            yield ' / '
-                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), environment.getattr(l_3_c, 'max_points'), _loop_vars=_loop_vars))
-                            yield '<span class="sr-only"> points</span>'
-                        yield '</span>\n<span class="note"> &middot; '
-                        yield escape(environment.getattr(l_1_ch, 'chapter'))
-                        yield '/'
-                        yield escape(environment.getattr(l_3_c, 'id'))
-                        yield '</span>\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'message')):
-                            pass
-                            yield '<pre>'
-                            yield escape(environment.getattr(l_3_c, 'message'))
-                            yield '</pre>'
-                        yield '\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') != 'pass') and environment.getattr(l_3_c, 'help')):
-                            pass
-                            yield '<p class="help"><strong>Hint:</strong> '
-                            yield escape(environment.getattr(l_3_c, 'help'))
-                            yield '</p>'
-                        yield '\n'
-                        if ((environment.getattr(l_3_c, 'kind') == 'quiz') and (not t_5(environment.getattr(l_3_c, 'got')))):
-                            pass
-                            yield '<p class="note">your answer: '
-                            yield escape(environment.getattr(l_3_c, 'got'))
-                            yield '</p>'
-                        yield '\n'
-                        if ((environment.getattr(environment.getattr(l_3_c, 'status'), 'value') == 'fail') and (environment.getattr(l_3_c, 'kind') == 'code')):
-                            pass
-                            yield escape(context.call((undefined(name='values') if l_3_values is missing else l_3_values), l_3_c, _loop_vars=_loop_vars))
-                        yield '\n</div>'
-                l_3_c = l_3_marks = l_3_values = missing
+                        yield escape(context.call((undefined(name='check_html') if l_3_check_html is missing else l_3_check_html), l_3_c, environment.getattr(l_1_ch, 'chapter'), _loop_vars=_loop_vars))
+                l_3_c = l_3_marks = l_3_check_html = missing
         l_2_kind = l_2_label = l_2_checks = l_2_not_written = l_2_folded = missing
         yield '\n</section>'
     l_1_ch = l_1_plural = l_1_figures = missing
@@ -341,4 +291,4 @@ def root(context, missing=missing):
     yield '>\n</body></html>'
 
 blocks = {}
-debug_info = '6=60&8=62&9=68&10=74&11=82&12=86&15=96&16=107&17=113&18=119&19=127&20=133&21=149&23=153&24=159&25=175&26=181&27=189&28=197&29=207&30=223&31=232&32=241&33=261&34=264&35=282&36=295&37=305&38=309&39=315&40=321&41=327&44=336'
+debug_info = '6=54&8=56&9=62&10=68&11=76&12=80&15=90&16=101&17=107&18=113&19=121&20=127&21=143&23=147&24=153&25=169&26=175&27=183&28=191&29=201&30=217&31=226&32=235&33=255&34=258&35=276&37=286'
