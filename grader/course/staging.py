@@ -297,21 +297,21 @@ def stage_files(entry: Entry, staging: Path) -> tuple[Path, dict[str, bytes]]:
     return root, files
 
 
-def put(files: dict[str, bytes], package: Path) -> None:
+def put(files: dict[str, bytes], package: Path, held: dict[str, bytes] | None = None) -> None:
     """Make `package` hold exactly `files` (posix path in it -> bytes): a file already there with the same bytes is
-    left as it is (no new file where a folder is reused), one not in `files` is removed."""
+    left as it is (no new file where a folder is reused), one not in `files` is removed. `held`: what the package
+    holds, where its only writer keeps it (nothing is read back then); made to hold `files` too."""
     (package / "answers").mkdir(parents=True, exist_ok=True)
-    for path in package.rglob("*"):
-        if path.is_file() and path.relative_to(package).as_posix() not in files:
-            path.unlink()
+    if held is None:
+        held = {path.relative_to(package).as_posix(): path.read_bytes()
+                for path in package.rglob("*") if path.is_file()}
+    for name in [name for name in held if name not in files]:
+        (package / name).unlink(missing_ok=True)
+        del held[name]
     for target, data in files.items():
-        path = package / target
-        try:
-            if path.read_bytes() == data:
-                continue
-        except OSError:
-            pass
-        path.write_bytes(data)
+        if held.get(target) != data:
+            (package / target).write_bytes(data)
+            held[target] = data
 
 
 # ------------------------------------------------------------------------------------ the record a batch keeps

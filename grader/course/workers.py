@@ -152,9 +152,10 @@ def content_hash(root: Path, learner: str, grading: Grading, files: Mapping[str,
     return digest.hexdigest()
 
 
-def scratch() -> Path:
-    """This process's folder for the files of the learner it stages or grades (the same for each, one at a time:
-    a file put there again with the same name is rewritten, not made anew), removed as the process ends."""
+def scratch(files: dict[str, bytes]) -> Path:
+    """This process's folder for the files of the learner it stages or grades, put there (the same folder for each,
+    one at a time: a file put there again with the same name is rewritten, not made anew; only this process writes
+    it, so what it holds is known without reading it back), removed as the process ends."""
     pid, folder = _worker_state.get("scratch", (None, None))
     if pid != os.getpid():  # a worker forked from a process that had one makes its own
         import shutil
@@ -164,6 +165,8 @@ def scratch() -> Path:
         folder = Path(tempfile.mkdtemp(prefix="grade-staged-"))
         Finalize(None, shutil.rmtree, args=(folder, True), exitpriority=10)  # a pool's worker runs no atexit
         _worker_state["scratch"] = (os.getpid(), folder)
+        _worker_state["scratch_files"] = {}
+    put(files, folder / "exercises", _worker_state["scratch_files"])
     return folder
 
 
@@ -190,8 +193,7 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
     except StagingError as exc:
         return Outcome(learner, "unreadable", f"{entry.source.name}: {exc}")
     kept = keep(out / STAGING, learner, files)
-    root = scratch()
-    put(files, root / "exercises")
+    root = scratch(files)
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
@@ -373,8 +375,7 @@ def _grade_one(entry: Entry | Staged, out: str, grading: Grading, overrides: tup
     """Stage (an Entry; a Staged learner is staged already) and grade one submission in a worker process of the
     local pool."""
     if isinstance(entry, Staged):  # staged by the coordinator (grade regrade): its kept files put here
-        put(entry.files(), scratch() / "exercises")
-        return grade_staged(entry, grading, root=scratch())
+        return grade_staged(entry, grading, root=scratch(entry.files()))
     staged = stage_one(entry, Path(out), grading, overrides, previous, force)
     return staged if isinstance(staged, Outcome) else grade_staged(staged, grading)
 

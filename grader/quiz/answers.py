@@ -168,6 +168,23 @@ def read(path: Path, shown: str) -> AnswerFile:
         out.problems.append(f"{shown} is {size} bytes; answer files are read up to {MAX_BYTES} bytes")
         return out
     data = path.read_bytes()
+    kept = _READ.get((shown, data))
+    if kept is None:
+        kept = _READ[(shown, data)] = _parsed(data, shown, out)
+        if len(_READ) > _READ_MAX:
+            try:
+                _READ.pop(next(iter(_READ)))  # the oldest
+            except (StopIteration, RuntimeError, KeyError):  # emptied or changed meanwhile by another thread
+                pass
+    return AnswerFile(dict(kept.answers), list(kept.problems), dict(kept.unreadable), list(kept.notes))
+
+
+_READ: dict[tuple[str, bytes], AnswerFile] = {}  # (how the file is named, its bytes) -> what reading them gave
+_READ_MAX = 256  # a worker's learners' files repeat (the quiz is read again for other ids: grader.quiz.other_ids)
+
+
+def _parsed(data: bytes, shown: str, out: AnswerFile) -> AnswerFile:
+    """The answers in an answer file's bytes, into `out` (read)."""
     text, encoding = decode_saved_text(data)
     if encoding:
         out.notes.append(encoding_note(shown, encoding))
