@@ -11,6 +11,7 @@ import csv
 import io
 import itertools
 import json
+import re
 import shutil
 from collections.abc import Collection, Iterable, Iterator
 from pathlib import Path
@@ -327,7 +328,12 @@ _ATTRIBUTE_ESCAPES = (("&", "&amp;"), ("<", "&lt;"), (">", "&gt;"), ('"', "&quot
 _TEXT_ESCAPES = _ATTRIBUTE_ESCAPES[:3]
 
 
+_ESCAPED_IN_ATTRIBUTES = re.compile('[&<>"\r\n\t]').search
+
+
 def _escaped(text: str, escapes: tuple[tuple[str, str], ...]) -> str:
+    if escapes is _ATTRIBUTE_ESCAPES and _ESCAPED_IN_ATTRIBUTES(text) is None:  # almost every value: nothing to do
+        return text
     for character, entity in escapes:
         if character in text:
             text = text.replace(character, entity)
