@@ -359,12 +359,19 @@ def _checked_tree(text: object, symbols: tuple[str, ...], lists: bool) -> ast.Ex
 
 def evaluate(node: ast.AST, values: dict[str, float]) -> float:
     """A checked tree's value as a float at `values` (symbol -> number); Undefined where it has none. The tree is
-    made into nested functions once (_evaluator, kept on the node: check_text's trees are shared), which compute what
-    walking it would, operation by operation in the same order."""
-    function = node.__dict__.get("_evaluator")
-    if function is None:
-        function = node._evaluator = _evaluator(node)
-    return function(values)
+    made into nested functions (_evaluator), which compute what walking it would, operation by operation in the same
+    order; those of the trees evaluated last are kept (an equivalence check evaluates its two at many points)."""
+    kept = _EVALUATORS.get(id(node))
+    if kept is None or kept[0] is not node:
+        kept = (node, _evaluator(node))
+        if len(_EVALUATORS) >= _EVALUATORS_MAX:
+            _EVALUATORS.clear()  # a class's trees are many and each is used at once: memory stays flat
+        _EVALUATORS[id(node)] = kept
+    return kept[1](values)
+
+
+_EVALUATORS: dict[int, tuple[ast.AST, object]] = {}  # id of a tree -> (the tree, kept alive: its id stays its, evaluator)
+_EVALUATORS_MAX = 256
 
 
 def _evaluator(node: ast.AST):

@@ -94,3 +94,20 @@ def test_a_batch_keeps_each_learners_files_as_one_record_that_gives_them_back_ex
     keep(staging, "ann", {**files, "answers/ch05.yaml": b"x: 1\n"})
     assert kept_files(staging, "ann")["answers/ch05.yaml"] == b"x: 1\n"
     assert kept_files(staging, "bo") is None
+
+
+def test_a_reused_folder_holds_exactly_each_learners_files_in_turn_whether_it_is_read_back_or_known(tmp_path):
+    """put() makes a folder hold exactly one learner's files after another's, files of the same name rewritten and
+    others removed, both reading what it holds back and trusting what its only writer kept of it."""
+    from grader.course.staging import put, staged_files
+
+    turns = [{"__init__.py": b"", "ch06_measurement.py": b"a", "answers/ch06.yaml": b"x: 1\n"},
+             {"__init__.py": b"", "ch06_measurement.py": b"b", "ch05_finite_differences.py": b"c"},
+             {"__init__.py": b"", "ch06_measurement.py": b"b", "answers/learner.yaml": b"learner: bo\n"},
+             {"__init__.py": b""}]
+    held: dict[str, bytes] = {}
+    for files in turns:
+        put(files, tmp_path / "known" / "exercises", held)
+        put(files, tmp_path / "read" / "exercises")
+        assert staged_files(tmp_path / "known" / "exercises") == files == held
+        assert staged_files(tmp_path / "read" / "exercises") == files

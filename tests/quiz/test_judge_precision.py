@@ -93,3 +93,69 @@ def test_every_mismatch_message_prints_its_tolerance(tmp_path, chapter, question
     assert result.status.value == "fail" and result.mistake == ""
     assert result.message.startswith("not within the tolerance of the right value")
     assert tolerance_text(key.rtol, key.atol) in result.message
+
+
+def test_an_expression_is_worth_the_same_as_its_tree_walked_node_by_node_and_few_evaluators_are_kept():
+    """evaluate() runs a tree made into nested functions: at every point, the value (or the reason it has none) is
+    what walking the tree node by node gives, operation by operation; and however many trees a class's answers make,
+    only the last few trees' functions are kept (a worker's memory stays flat)."""
+    import ast
+    import math
+    import operator
+    import random
+
+    from grader.quiz import symbolic
+
+    def walked(node, values):  # the definition: each operation's result a finite real float, else Undefined
+        if isinstance(node, ast.Expression):
+            return walked(node.body, values)
+        if isinstance(node, ast.Constant):
+            return float(node.value)
+        if isinstance(node, ast.Name):
+            return values[node.id] if node.id in values else symbolic.CONSTANTS[node.id]
+        try:
+            if isinstance(node, ast.UnaryOp):
+                result = -walked(node.operand, values) if isinstance(node.op, ast.USub) else walked(node.operand, values)
+            elif isinstance(node, ast.BinOp):
+                operation = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+                             ast.Div: operator.truediv}.get(type(node.op), operator.pow)
+                result = operation(walked(node.left, values), walked(node.right, values))
+            else:
+                result = symbolic.FUNCTIONS[node.func.id][0](*[walked(arg, values) for arg in node.args])
+        except ZeroDivisionError:
+            raise symbolic.Undefined("division by zero") from None
+        except OverflowError:
+            raise symbolic.Undefined("too large") from None
+        except ValueError:
+            raise symbolic.Undefined("outside a function's domain, e.g. sqrt or log of a negative number") from None
+        if isinstance(result, complex) or not math.isfinite(result):
+            raise symbolic.Undefined("not a finite real number")
+        return float(result)
+
+    def outcome(function, tree, point):
+        try:
+            return function(tree, point)
+        except symbolic.Undefined as exc:
+            return str(exc)
+
+    draw = random.Random(7)
+
+    def expression(depth):
+        if depth == 0 or draw.random() < 0.25:
+            return draw.choice(["x", "y", "pi", "e", "0", "2.5", "1e308", "1e-300", "(-1)"])
+        if draw.random() < 0.6:
+            return f"({expression(depth - 1)} {draw.choice('+-*/')}{'*' * draw.randint(0, 1)} {expression(depth - 1)})"
+        name = draw.choice(["sqrt", "sin", "cos", "tan", "atan", "exp", "log", "abs"])
+        return f"{name}({expression(depth - 1)})"
+
+    compared = 0
+    for _ in range(3000):
+        try:
+            tree = symbolic.check_text(expression(4), ("x", "y"))
+        except symbolic.AnswerError:
+            continue
+        for _ in range(3):
+            point = {"x": draw.uniform(-5, 5), "y": draw.choice([0.0, draw.uniform(-5, 5)])}
+            assert outcome(symbolic.evaluate, tree, point) == outcome(walked, tree, point)
+            compared += 1
+    assert compared > 3000 and len(symbolic._EVALUATORS) <= symbolic._EVALUATORS_MAX
