@@ -42,6 +42,7 @@ from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 
 from grader.course import workers
+from grader.course.staging import StagingError
 
 VERSION_KEY = ["jacobians-grader", "coordinator-version"]  # scheduler metadata: the running coordinator's grader
 TRIES = 3  # workers a learner is tried on, where learner code cannot run on one
@@ -461,7 +462,13 @@ class ClusterPool:
                         entry, out, grading, tuple(overrides.get(entry.learner, ())), previous.get(entry.learner), force)
                     if isinstance(staged, workers.Outcome):
                         yield staged
-                    elif not send(staged, staged.files(), 1, ()):
+                        continue
+                    try:
+                        files = staged.files()
+                    except StagingError as exc:  # its record gone meanwhile: this learner alone is not graded
+                        yield workers.Outcome(staged.learner, "error", f"{exc}; the next run grades it again", staged)
+                        continue
+                    if not send(staged, files, 1, ()):
                         yield unsent(staged, 0, no_worker)
                 if not flying:
                     return

@@ -310,7 +310,10 @@ def put(files: dict[str, bytes], package: Path, held: dict[str, bytes] | None = 
         del held[name]
     for target, data in files.items():
         if held.get(target) != data:
-            (package / target).write_bytes(data)
+            held.pop(target, None)  # a write that fails midway leaves a file that is no longer known
+            path = package / target
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
             held[target] = data
 
 
@@ -370,9 +373,9 @@ def read_kept(place: Path) -> dict[str, bytes] | None:
         return staged_files(place)
     try:
         with zipfile.ZipFile(place) as archive:
-            return {info.filename[len("exercises/"):]: archive.read(info) for info in archive.infolist()
-                    if info.filename.startswith("exercises/") and not info.is_dir()
-                    and ".." not in info.filename.split("/")}
+            return {name: archive.read(info) for info in archive.infolist()
+                    if (name := info.filename.removeprefix("exercises/")) != info.filename
+                    and (name == "__init__.py" or _wanted(name) == name)}  # only what staging writes
     except (OSError, zipfile.BadZipFile):
         return None
 

@@ -5,7 +5,8 @@ the same on a Dask cluster).
 
 A worker returns plain data (Outcome): the learner's status, the report as judged (kept as the history keeps it),
 its adjustments, what each override did and the texts of its files. Only the coordinator (grader.course.batch)
-writes into OUT and records the history.
+writes the learners' files into OUT and records the history; a worker writes only the record of the files it stages
+(OUT/.staging/.records, grader.course.staging.keep).
 """
 
 from __future__ import annotations
@@ -84,9 +85,11 @@ class Grading:
 @dataclass
 class Staged:
     """A learner staged and due for grading (plain data): the folder its files were put in to be read here (`root`:
-    a process's own, reused for the next learner), its content hash, what was found while staging (warnings, the
-    submission time and where it came from, its manifest), its overrides, the seconds staging took, and where the
-    batch keeps its files (`kept`: grader.course.staging.kept_place)."""
+    a process's own, reused for the next learner; for a learner staged again from what the batch kept, staged_again,
+    that place: a worker puts the files into its own folder and grades them there, _grade_one), its content hash,
+    what was found while staging (warnings, the submission time and where it came from, its manifest), its
+    overrides, the seconds staging took, and where the batch keeps its files (`kept`:
+    grader.course.staging.kept_place)."""
 
     learner: str
     root: str
@@ -424,14 +427,17 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
         return None
     course = grading.course
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
-    with tempfile.TemporaryDirectory(prefix="grade-staged-") as folder:
-        root = Path(folder)
-        put(files, root / "exercises")
-        manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
-        roster_time = result.submitted if result.time_from == "roster" else ""
-        submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest, course,
-                                            root / "exercises")
-        warnings = learner_yaml_warnings(root, learner) + manifest_flags + timing
+    try:
+        with tempfile.TemporaryDirectory(prefix="grade-staged-") as folder:
+            root = Path(folder)
+            put(files, root / "exercises")
+            manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
+            roster_time = result.submitted if result.time_from == "roster" else ""
+            submitted, timing = submission_time(Entry(learner, root, "the history", roster_time or ""), manifest,
+                                                course, root / "exercises")
+            warnings = learner_yaml_warnings(root, learner) + manifest_flags + timing
+    except OSError:  # its files cannot be put where they are read (a full disk): not graded again, said as gone
+        return None
     return Staged(learner, str(place), content_hash(root, learner, grading, files), warnings, submitted,
                   result.time_from if submitted else None, _manifest_summary(manifest),
                   (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),

@@ -111,3 +111,20 @@ def test_a_reused_folder_holds_exactly_each_learners_files_in_turn_whether_it_is
         put(files, tmp_path / "read" / "exercises")
         assert staged_files(tmp_path / "known" / "exercises") == files == held
         assert staged_files(tmp_path / "read" / "exercises") == files
+
+
+def test_a_record_gives_back_only_the_names_staging_writes(tmp_path):
+    """A record written by someone else (an OUT copied from elsewhere) never names a file outside the package: an
+    absolute path, '..' or a file staging would not stage is left out when it is read."""
+    import zipfile
+
+    from grader.course.staging import kept_files, record_path
+
+    path = record_path(tmp_path, "ann")
+    path.parent.mkdir(parents=True)
+    with zipfile.ZipFile(path, "w") as archive:
+        for name in ("exercises//etc/ch06_measurement.py", "exercises/../ch05_finite_differences.py",
+                     "exercises/answers/../../x.yaml", "exercises/run.sh", "ch04_chain_rule.py",
+                     "exercises/__init__.py", "exercises/ch06_measurement.py", "exercises/answers/ch06.yaml"):
+            archive.writestr(name, b"x")
+    assert sorted(kept_files(tmp_path, "ann")) == ["__init__.py", "answers/ch06.yaml", "ch06_measurement.py"]
