@@ -369,8 +369,9 @@ def kept_place(staging: Path, learner: str) -> Path | None:
 def read_kept(place: Path) -> dict[str, bytes] | None:
     """The files kept at `place` (kept_place: a record, or an older grader's staged package), by their posix path in
     exercises/, with their bytes; None where they cannot be read."""
-    if place.is_dir():
-        return staged_files(place)
+    if place.is_dir():  # a link placed there since is not followed
+        return {path.relative_to(place).as_posix(): path.read_bytes() for path in place.rglob("*")
+                if path.is_file() and not path.is_symlink()}
     try:
         with zipfile.ZipFile(place) as archive:
             return {name: archive.read(info) for info in archive.infolist()
