@@ -168,9 +168,10 @@ def read(path: Path, shown: str) -> AnswerFile:
         out.problems.append(f"{shown} is {size} bytes; answer files are read up to {MAX_BYTES} bytes")
         return out
     data = path.read_bytes()
-    kept = _READ.get((shown, data))
+    key = (shown, data, FAST_LOADER)  # what is read depends on the bytes, how the file is named and who composes it
+    kept = _READ.get(key)
     if kept is None:
-        kept = _READ[(shown, data)] = _parsed(data, shown, out)
+        kept = _READ[key] = _parsed(data, shown, out)
         if len(_READ) > _READ_MAX:
             try:
                 _READ.pop(next(iter(_READ)))  # the oldest
@@ -179,7 +180,7 @@ def read(path: Path, shown: str) -> AnswerFile:
     return AnswerFile(dict(kept.answers), list(kept.problems), dict(kept.unreadable), list(kept.notes))
 
 
-_READ: dict[tuple[str, bytes], AnswerFile] = {}  # (how the file is named, its bytes) -> what reading them gave
+_READ: dict[tuple, AnswerFile] = {}  # (how the file is named, its bytes, the loader) -> what reading them gave
 _READ_MAX = 256  # a worker's learners' files repeat (the quiz is read again for other ids: grader.quiz.other_ids)
 
 
