@@ -230,8 +230,10 @@ def stage(entry: Entry, staging: Path) -> Path:
 
 
 def staged_files(package: Path) -> dict[str, bytes]:
-    """Every file of a staged package, by its posix path in it, with its bytes: what stage_files returns, read back."""
-    return {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*") if path.is_file()}
+    """Every file of a staged package, by its posix path in it, with its bytes: what stage_files returns, read back
+    (staging makes no link: one placed there since is not followed)."""
+    return {path.relative_to(package).as_posix(): path.read_bytes() for path in package.rglob("*")
+            if path.is_file() and not path.is_symlink()}
 
 
 def submitted_files(entry: Entry) -> dict[str, bytes]:
@@ -303,8 +305,7 @@ def put(files: dict[str, bytes], package: Path, held: dict[str, bytes] | None = 
     holds, where its only writer keeps it (nothing is read back then); made to hold `files` too."""
     (package / "answers").mkdir(parents=True, exist_ok=True)
     if held is None:
-        held = {path.relative_to(package).as_posix(): path.read_bytes()
-                for path in package.rglob("*") if path.is_file()}
+        held = staged_files(package)
     for name in [name for name in held if name not in files]:
         (package / name).unlink(missing_ok=True)
         del held[name]
@@ -369,9 +370,8 @@ def kept_place(staging: Path, learner: str) -> Path | None:
 def read_kept(place: Path) -> dict[str, bytes] | None:
     """The files kept at `place` (kept_place: a record, or an older grader's staged package), by their posix path in
     exercises/, with their bytes; None where they cannot be read."""
-    if place.is_dir():  # a link placed there since is not followed
-        return {path.relative_to(place).as_posix(): path.read_bytes() for path in place.rglob("*")
-                if path.is_file() and not path.is_symlink()}
+    if place.is_dir():
+        return staged_files(place)
     try:
         with zipfile.ZipFile(place) as archive:
             return {name: archive.read(info) for info in archive.infolist()

@@ -38,7 +38,6 @@ from grader.course.staging import (
     kept_place,
     put,
     read_kept,
-    staged_files,
     submitted_files,
 )
 from grader.quiz import learner_id
@@ -108,7 +107,7 @@ class Staged:
     def files(self) -> dict[str, bytes]:
         """The staged files (relative path -> bytes), as the batch keeps them: what a worker grades (put into a
         folder of its own), wherever it is."""
-        files = read_kept(Path(self.kept)) if self.kept else staged_files(Path(self.root) / "exercises")
+        files = read_kept(Path(self.kept)) if self.kept else None
         if files is None:
             raise StagingError(f"the files kept of {self.learner} ({self.kept}) cannot be read")
         return dict(sorted(files.items()))
@@ -143,13 +142,10 @@ class Outcome:
 
 # ------------------------------------------------------------------------------------ staging
 
-def content_hash(root: Path, learner: str, grading: Grading, files: Mapping[str, bytes] | None = None) -> str:
-    """What a learner's report as judged depends on: the staged files and Grading.judging; from `files` (posix path
-    in exercises/ -> bytes: what staging wrote) where given, else read from disk. In the order of their paths'
-    parts, as sorted Paths are."""
+def content_hash(learner: str, grading: Grading, files: Mapping[str, bytes]) -> str:
+    """What a learner's report as judged depends on: the staged files (posix path in exercises/ -> bytes: what
+    staging wrote) and Grading.judging. In the order of their paths' parts, as sorted Paths are."""
     digest = hashlib.sha256(grading.judging(learner).encode("utf-8", "surrogatepass"))
-    if files is None:
-        files = staged_files(root / "exercises")
     for name in sorted(files, key=lambda n: n.split("/")):
         digest.update(f"exercises/{name}".encode("utf-8", "surrogatepass") + b"\0" + files[name] + b"\0")
     return digest.hexdigest()
@@ -201,7 +197,7 @@ def stage_one(entry: Entry, out: Path, grading: Grading, overrides: tuple = (), 
     course_id, handout = (course.id, course.current_handout) if course else (None, None)
     manifest, manifest_flags = submit.check(root / "exercises", learner, course_id, handout)
     submitted, timing = submission_time(entry, manifest, course, root / "exercises")
-    staged = Staged(learner, str(root), content_hash(root, learner, grading, files),
+    staged = Staged(learner, str(root), content_hash(learner, grading, files),
                     learner_yaml_warnings(root, learner, entry.origin) + manifest_flags + timing, submitted,
                     _time_source(entry, submitted), _manifest_summary(manifest),
                     (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),
@@ -438,7 +434,7 @@ def staged_again(out: Path, learner: str, result, grading: Grading, overrides: t
             warnings = learner_yaml_warnings(root, learner) + manifest_flags + timing
     except OSError:  # its files cannot be put where they are read (a full disk): not graded again, said as gone
         return None
-    return Staged(learner, str(place), content_hash(root, learner, grading, files), warnings, submitted,
+    return Staged(learner, str(place), content_hash(learner, grading, files), warnings, submitted,
                   result.time_from if submitted else None, _manifest_summary(manifest),
                   (str(manifest.get("learner")),) if manifest else (), submit.files_hash(root / "exercises", files),
                   tuple(overrides), result.seconds or 0.0, "the history in gradebook.db", str(place))

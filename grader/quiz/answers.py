@@ -171,12 +171,9 @@ def read(path: Path, shown: str) -> AnswerFile:
     key = (shown, data, FAST_LOADER)  # what is read depends on the bytes, how the file is named and who composes it
     kept = _READ.get(key)
     if kept is None:
-        kept = _READ[key] = _parsed(data, shown, out)
-        if len(_READ) > _READ_MAX:
-            try:
-                _READ.pop(next(iter(_READ)))  # the oldest
-            except (StopIteration, RuntimeError, KeyError):  # emptied or changed meanwhile by another thread
-                pass
+        if len(_READ) >= _READ_MAX:
+            _READ.clear()  # as grader.quiz.judge keeps its verdicts: memory stays flat
+        kept = _READ[key] = _parsed(data, shown)
     return AnswerFile(dict(kept.answers), list(kept.problems), dict(kept.unreadable), list(kept.notes))
 
 
@@ -184,8 +181,9 @@ _READ: dict[tuple, AnswerFile] = {}  # (how the file is named, its bytes, the lo
 _READ_MAX = 256  # a worker's learners' files repeat (the quiz is read again for other ids: grader.quiz.other_ids)
 
 
-def _parsed(data: bytes, shown: str, out: AnswerFile) -> AnswerFile:
-    """The answers in an answer file's bytes, into `out` (read)."""
+def _parsed(data: bytes, shown: str) -> AnswerFile:
+    """The answers in an answer file's bytes (read)."""
+    out = AnswerFile({}, [])
     text, encoding = decode_saved_text(data)
     if encoding:
         out.notes.append(encoding_note(shown, encoding))

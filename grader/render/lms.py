@@ -332,19 +332,22 @@ _ESCAPED_IN_ATTRIBUTES = re.compile('[&<>"\r\n\t]').search
 
 
 def _escaped(text: str, escapes: tuple[tuple[str, str], ...]) -> str:
-    if escapes is _ATTRIBUTE_ESCAPES and _ESCAPED_IN_ATTRIBUTES(text) is None:  # almost every value: nothing to do
-        return text
     for character, entity in escapes:
         if character in text:
             text = text.replace(character, entity)
     return text
 
 
+def _attribute(text: str) -> str:
+    """An attribute value escaped as ElementTree escapes it (almost every value has nothing to escape)."""
+    return text if _ESCAPED_IN_ATTRIBUTES(text) is None else _escaped(text, _ATTRIBUTE_ESCAPES)
+
+
 def _element(tag: str, attributes: tuple[tuple[str, str], ...], text: str = "", open_: bool = False) -> str:
     """An element as ElementTree.tostring(encoding="unicode") writes it: its attributes in order, escaped as it
     escapes them (xml.etree.ElementTree._escape_attrib, _escape_cdata), `text` inside, or no text and no content
     as `<tag ... />`; with `open_`, only its start tag (the caller writes what it holds and its end)."""
-    start = f"<{tag}" + "".join(f' {key}="{_escaped(value, _ATTRIBUTE_ESCAPES)}"' for key, value in attributes)
+    start = f"<{tag}" + "".join(f' {key}="{_attribute(value)}"' for key, value in attributes)
     if open_:
         return start + ">"
     if not text:

@@ -206,3 +206,21 @@ def test_libyaml_and_the_pure_python_loader_read_an_answer_file_alike(tmp_path, 
     assert sum(map(deep.count, answers.NESTING)) >= answers.C_DEPTH_BOUND  # not for libyaml
     path.write_text(deep, encoding="utf-8")
     assert "q1" in answers.read(path, "ch06.yaml").unreadable
+
+
+def test_an_answer_file_read_again_gives_what_reading_it_gave_and_a_callers_changes_stay_its_own(tmp_path):
+    """The same bytes read again are not parsed again, but each reader gets its own lists and dicts: one reader's
+    change never reaches the next; other bytes under the same name are read afresh."""
+    from grader.quiz import answers
+
+    path = tmp_path / "ch06.yaml"
+    path.write_text("q1: 3/5\nq2: [1, 2]\nq3 oops\n", encoding="utf-8")
+    first = answers.read(path, "ch06.yaml")
+    first.answers.pop("q1")
+    first.problems.append("a reader's own")
+    first.unreadable.clear()
+    again = answers.read(path, "ch06.yaml")
+    assert sorted(again.answers) == ["q1", "q2"] and "q3" in again.unreadable
+    assert "a reader's own" not in again.problems
+    path.write_text("q1: 4/5\n", encoding="utf-8")
+    assert answers.read(path, "ch06.yaml").answers["q1"].text == "4/5"
