@@ -37,7 +37,7 @@ from grader.course import outputs
 from grader.course.overrides import OverridesError, by_learner, in_force
 from grader.course.settings import RunSettings, Source, differences
 from grader.course.staging import RosterError, Skipped, Unmatched, survey
-from grader.course.workers import Grading, InfrastructureError, LocalPool, Outcome
+from grader.course.workers import Grading, InfrastructureError, LocalPool, Outcome, collecting_as_a_batch
 from grader.model import LearnerResult, Report
 
 if TYPE_CHECKING:
@@ -133,7 +133,7 @@ def run_batch(submissions: Path, out: Path, *, chapters: list[str] | None = None
     out.mkdir(parents=True, exist_ok=True)
     started = time.monotonic()
     grading = Grading(tuple(chapters), seed, html, plots, limits, sandbox, frozenset(hidden), course)
-    with histories.History(out / histories.FILE_NAME) as history:
+    with collecting_as_a_batch(), histories.History(out / histories.FILE_NAME) as history:
         last = history.last_finished()
         before = history.settings(last) if last is not None else None
         notes = ([f"this run differs from run {last}: {difference}" for difference in differences(before, settings)]

@@ -320,6 +320,14 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         moved = sorted(histories.changes(history, run, collected.results),
                        key=lambda change: (position.get(change[0], len(position)), change[0]))
         first_run = history.previous(run) is None
+        # the item statistics first: their figures draw (in the drawing process the batch started) while the
+        # gradebooks and junit.xml are written
+        found_statistics = statistics.compute(collected.items)
+        figures = None
+        if found_statistics is not None and not found_statistics["rough"]:
+            from grader.render import item_plots
+
+            figures = item_plots.figures_due(found_statistics)
         found = _keep_hand_edits(out, history, run)
         deadline = has_deadline(settings)
         if deadline and collected.untimed:
@@ -351,10 +359,10 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         view = summary.Summary(collected.tally, collected.not_graded, isolation,
                                [(s.name, s.reason) for s in skipped], collected.flagged, moved, list(notes) + found,
                                similar=similar, untimed=list(collected.untimed) if deadline else [],
-                               statistics=statistics.compute(collected.items), first_run=first_run,
-                               roster=roster or {})
-        write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
+                               statistics=found_statistics, first_run=first_run, roster=roster or {},
+                               figures=figures)
         write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
+        write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
     finally:
         if own:
             collected.close()

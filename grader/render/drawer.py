@@ -8,13 +8,14 @@ chapters it is sent. Without it (not started, or it failed) two processes are fo
 due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing
 process with nothing to draw (every figure reused, see grader.render.figure_cache, or the command ended early)
 is stopped; one that sent its figures is waited for when the command ends (`end`). `grade batch` starts one
-too: it draws the class summary's figures at the batch's end (`drawn_by_started`). This module imports nothing
+too: it draws the class summary's figures at the batch's end (`due_by_started`). This module imports nothing
 heavy until `start`."""
 
 from __future__ import annotations
 
 import os
 import signal
+from collections.abc import Callable
 
 from grader.system import forkable_now, keep_only
 
@@ -134,12 +135,13 @@ def _chapters_job(chapters: list) -> tuple:
             sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS))
 
 
-def drawn_by_started(draw: tuple[str, str], items: list) -> list | None:
-    """`draw` (a module and the name of its function) of each of `items`, in their order, by the started drawing
-    process (matplotlib imported there while this process worked, its two drawing processes waiting): None where
-    none was started or it failed, for the caller to draw them itself."""
+def due_by_started(draw: tuple[str, str], items: list) -> Callable[[], list | None] | None:
+    """Start drawing `draw` (a module and the name of its function) of each of `items` in the started drawing
+    process (matplotlib imported there while this process worked, its two drawing processes waiting); returns the
+    function that waits for them, in their order (None there where it failed, for the caller to draw them itself),
+    or None where no drawing process was started."""
     sent = _send((draw, items, list(range(len(items)))))
-    return None if sent is None else _received(sent)
+    return None if sent is None else lambda: _received(sent)
 
 
 def _send(job: tuple):
