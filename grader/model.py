@@ -73,7 +73,17 @@ class CheckResult:
         apart from a wrong one."""
         return self.kind == "quiz" and self.status == Status.FAIL and self.message == NOT_ANSWERED
 
+    def __getstate__(self) -> dict:
+        """Its fields (pickled, copied): never the kept verdict it was made from (made_once), which stays here."""
+        state = self.__dict__
+        return {k: v for k, v in state.items() if k != _MADE_FROM} if _MADE_FROM in state else state
+
     def to_dict(self, chapter: str = "") -> dict:
+        """The check as report.json and the history have it: the same dict, not to be changed, for a check made
+        unchanged from a kept verdict (made_once)."""
+        return made_once(self, ("dict", chapter), self._to_dict, chapter)
+
+    def _to_dict(self, chapter: str) -> dict:
         return {
             "id": self.id,
             "stable_id": f"{chapter}/{self.id}" if chapter else self.id,
@@ -213,9 +223,10 @@ class ChapterResult:
         }
 
     @classmethod
-    def from_dict(cls, ch: dict) -> ChapterResult:
+    def from_dict(cls, ch: dict, kept: bool = False) -> ChapterResult:
         """The chapter a to_dict() or to_kept() made; each check's `details` and the plot data where the dict has
-        them (to_kept's, not to_dict's)."""
+        them (to_kept's, not to_dict's). `kept`: `ch` is a verdict a memo keeps, and goes on keeping as it is, for
+        other learners too: what the renderers make of each check is made once while it stays as made (made_once)."""
         checks = [CheckResult(id=c["id"], function=c["function"], description=c["description"],
                               status=Status(c["status"]), points=c["points"], max_points=c["max_points"],
                               message=c.get("message", ""), expected=c.get("expected"), got=c.get("got"),
@@ -223,6 +234,9 @@ class ChapterResult:
                               practice=bool(c.get("practice")), upstream=list(c.get("upstream") or []),
                               answer=dict(c.get("answer") or {}), details=dict(c.get("details") or {}))
                   for c in ch.get("checks", [])]
+        if kept:
+            for check, c in zip(checks, ch.get("checks", [])):
+                _made_from(check, c)
         return cls(ch["chapter"], ch.get("title", ""), checks, list(ch.get("problems", [])),
                    plots=dict(ch.get("plots") or {}), hidden_checks=int(ch.get("hidden_checks", 0)),
                    hidden_points=float(ch.get("hidden_points", 0.0)), source=ch.get("source") or "",
@@ -236,8 +250,8 @@ class ChapterResult:
         if self.unread:
             data["unread"] = True
         if any(check.details for check in self.checks):
-            data["checks"] = [dict(kept, details=jsonable(check.details)) if check.details else kept
-                              for check, kept in zip(self.checks, data["checks"])]
+            data["checks"] = [made_once(check, ("kept", self.chapter), _with_details, check, kept) if check.details
+                              else kept for check, kept in zip(self.checks, data["checks"])]
         if self.plots:
             data["plots"] = plain(self.plots)
         return data
@@ -389,6 +403,66 @@ class LearnerResult:
         return cls(learner, status, message, grader=report.grader, seed=report.seed, raw_score=report.raw_score,
                    score=report.score, max_score=report.max_score, chapters=chapters,
                    adjustments=[a.to_dict() for a in report.all_adjustments()], **extra)
+
+
+def _with_details(check: CheckResult, made: dict) -> dict:
+    """A check's to_dict() `made` with its details: as to_kept keeps it."""
+    return dict(made, details=jsonable(check.details))
+
+
+# ------------------------------------------------------------------------ checks made again from a kept verdict
+# A batch's worker makes most learners' code checks again from the verdicts its memo keeps (grader.core.grading):
+# the same dict, learner after learner. What a renderer makes of such a check (its dict, its HTML block, ...) is
+# made once per kept dict and renderer, and given again while the check is as it was made from it.
+
+_MADE_FROM = "_made_from"  # a check's own attribute, not a field: (the kept dict, its values as made from it)
+_MADE_ONCE: dict[int, tuple[dict, tuple, dict]] = {}  # id(kept dict) -> (it, its checks' values, {what: made})
+MADE_ONCE_LIMIT = 4096  # kept dicts remembered; past it, forgotten all at once
+
+
+def _made_from(check: CheckResult, kept: dict) -> None:
+    """Note that `check` was made just now by ChapterResult.from_dict from `kept`, a verdict's dict that is kept."""
+    check.__dict__[_MADE_FROM] = (kept, tuple(check.__dict__.values()))
+
+
+def _as_made(check: CheckResult) -> tuple[dict, tuple] | None:
+    """(the kept dict `check` was made from, its fields' values as made), where every field is still as made from
+    it; else None."""
+    state = check.__dict__
+    mark = state.get(_MADE_FROM)
+    if mark is None:
+        return None
+    kept, values = mark
+    if tuple(state.values())[:-1] != values or next(reversed(state)) != _MADE_FROM:
+        return None  # a field set again since (point_upstream's message), or another attribute added
+    # the lists and dicts it was given as copies: changed in place?
+    if check.upstream != (kept.get("upstream") or []) or check.details != (kept.get("details") or {}) or \
+            check.answer != (kept.get("answer") or {}):
+        return None
+    return mark
+
+
+def made_once(check: CheckResult, what: tuple, make, *args):
+    """`make(*args)`, a renderer's `what` of `check` (which it alone decides): made once for a check made unchanged
+    from a kept verdict (ChapterResult.from_dict(..., kept=True)), and the same object given again for every check
+    made unchanged from that verdict with the same values; made each time for any other check. What is given again
+    is not to be changed."""
+    mark = _as_made(check)
+    if mark is None:
+        return make(*args)
+    kept, values = mark
+    entry = _MADE_ONCE.get(id(kept))
+    if entry is None or entry[0] is not kept or entry[1] != values:  # (a kept dict changed since: made afresh)
+        if len(_MADE_ONCE) >= MADE_ONCE_LIMIT:
+            _MADE_ONCE.clear()
+        entry = _MADE_ONCE[id(kept)] = (kept, values, {})
+    made = entry[2].get(what, _NOTHING)
+    if made is _NOTHING:
+        made = entry[2][what] = make(*args)
+    return made
+
+
+_NOTHING = object()
 
 
 POINTS_DECIMALS = 4  # points are rounded once, here, to this many decimals; every output prints that value

@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import dataclasses
 import re
+from collections.abc import Callable, Mapping
 from enum import Enum
-from typing import Callable
 
 _SURROGATES = re.compile("[\ud800-\udfff]")
 # Characters XML 1.0 does not allow (besides the surrogates)
@@ -163,13 +163,16 @@ def _how_to_walk(kind: type) -> str | tuple[str, ...]:
     return how
 
 
-def clean_value(value: object, clean: Callable[[str], str]) -> object:
+def clean_value(value: object, clean: Callable[[str], str],
+                known_clean: Mapping[type, Callable[[object], bool]] | None = None) -> object:
     """`value` with `clean` applied to every string inside it: dict keys and values, list and tuple
     items and the fields of dataclasses. What changes is copied, never changed in place; what needs no
     cleaning (almost everything) is the same object, shared: the renderers that call this only read it.
-    Enums, numbers and arrays are left as they are."""
+    Enums, numbers and arrays are left as they are. `known_clean`: for a dataclass, a function that may know that
+    one of its instances needs no cleaning (True: it is left as it is, unwalked)."""
     keeps_plain_ascii = clean in _KEEP_PLAIN_ASCII
     unsafe = _ASCII_CONTROL.search
+    known = known_clean or {}
 
     def walk(value: object) -> object:
         kind = type(value)
@@ -196,6 +199,8 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
                     pairs = list(value.items())
                     return dict(pairs[:i] + [(walk(k), walk(v)) for k, v in pairs[i:]])
             return value
+        if kind in known and known[kind](value):
+            return value
         changes = {}
         for name in how:
             item = getattr(value, name)
@@ -213,10 +218,11 @@ def clean_value(value: object, clean: Callable[[str], str]) -> object:
 _KEEP_PLAIN_ASCII = frozenset({unicode_clean, for_html, for_xml, for_terminal})
 
 
-def clean_report(report, clean: Callable[[str], str]):
+def clean_report(report, clean: Callable[[str], str],
+                 known_clean: Mapping[type, Callable[[object], bool]] | None = None):
     """A copy of a grader.model.Report with `clean` applied to every string in it (messages, problems,
-    what learner code printed, quiz answers as written, the learner's id ...)."""
-    return clean_value(report, clean)
+    what learner code printed, quiz answers as written, the learner's id ...); `known_clean` as clean_value's."""
+    return clean_value(report, clean, known_clean)
 
 
 def decode_saved_text(data: bytes) -> tuple[str, str]:

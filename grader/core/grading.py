@@ -265,7 +265,7 @@ def _judge_chapters(session: Session, chapter_ids: list[str], seed: int, with_pl
         key = key_of(plan_keys[cid], module_file, repr(session.limits), _answered(run)) if memo is not None else None
         kept = memo.verdict(cid, key, files) if memo is not None else None
         try:
-            chapter = ChapterResult.from_dict(kept["chapter"]) if kept is not None else None
+            chapter = ChapterResult.from_dict(kept["chapter"], kept=True) if kept is not None else None
             uses = {str(f): tuple(map(str, h)) for f, h in dict(kept["builds_on"]).items()} if kept else {}
             entered = {str(c): list(map(str, h)) for c, h in dict(kept.get("reached") or {}).items()} if kept else {}
         except (KeyError, TypeError, ValueError):

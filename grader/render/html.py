@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from markupsafe import Markup, escape
 
-from grader.model import CheckResult, Report, not_written
+from grader.model import CheckResult, Report, made_once, not_written
 from grader.numbers import fmt
 from grader.render import plural
 from grader.render.figures import Figure
@@ -155,7 +155,12 @@ WRONG_MARK = '<span aria-hidden="true"> \u2717</span><span class="sr-only"> (dif
 def _check_html(check: CheckResult, chapter: str) -> str:
     """One check's block: its verdict, description, points and id; where it did not pass, its message and hint; a
     quiz answer as written; a failed code check's values as tables (_values). Every text escaped: a Python function
-    rather than the template's loop, the page's longest part, which it writes as the template would."""
+    rather than the template's loop, the page's longest part, which it writes as the template would (made once
+    for a check made unchanged from a kept verdict, grader.model.made_once)."""
+    return made_once(check, ("html", chapter), _check_block, check, chapter)
+
+
+def _check_block(check: CheckResult, chapter: str) -> str:
     status = check.status.value
     wrong = status != "pass"
     points = ("practice, not counted" if check.practice else
@@ -169,6 +174,16 @@ def _check_html(check: CheckResult, chapter: str) -> str:
                   f'{escape(MARKS[status])} </span>{escape(status)}</span>{escape(check.description)}\n'
                   f'<span class="points">{points}</span>\n<span class="note"> &middot; {escape(chapter)}/'
                   f'{escape(check.id)}</span>\n{message}\n{hint}\n{answer}\n{values}\n</div>')
+
+
+def _needs_no_cleaning(check: CheckResult) -> bool:
+    from grader import safe_text
+
+    return safe_text.clean_value(check, safe_text.for_html) is check
+
+
+# a check made unchanged from a kept verdict is walked for the page's cleaning once per verdict (made_once)
+_KNOWN_CLEAN = {CheckResult: lambda check: made_once(check, ("clean for html",), _needs_no_cleaning, check)}
 
 
 def _values(check: CheckResult) -> str:
@@ -227,7 +242,7 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int, kept: 
                 figures[chapter.chapter] = [Figure(**figure) for figure in found]
         plotted = [c for c in plotted if not figures[c.chapter]]
     drawn = drawer.figures_due(plotted, here=draw_here)
-    report = safe_text.clean_report(report, safe_text.for_html)
+    report = safe_text.clean_report(report, safe_text.for_html, _KNOWN_CLEAN)
     style = Markup(STYLE.replace("#S", f"#{pid}report"))
 
     def landmark(section: str) -> Markup:
