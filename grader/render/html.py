@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from markupsafe import Markup, escape
 
-from grader.model import CheckResult, Report, made_once, not_written
+from grader.model import ChapterResult, CheckResult, Report, made_once, not_written
 from grader.numbers import fmt
 from grader.render import plural
 from grader.render.figures import Figure
@@ -104,11 +104,7 @@ BODY = r"""<{{ root }} class="jl-report {{ kind }}" id="{{ pid }}report" lang="e
 {% if ch.hidden_checks %}<p class="note">{{ plural(ch.hidden_checks, "hidden check") }} ({{ plural(ch.hidden_points, "point") }}) run{{ "s" if ch.hidden_checks == 1 }} when you submit.</p>{% endif %}
 {% for fig in figures[ch.chapter] %}<figure>{% if fig.uri %}<img src="{{ fig.uri }}" alt="{{ fig.alt }}" width="{{ fig.width }}" height="{{ fig.height }}">{% endif %}
 <figcaption>{{ fig.caption }}{% if fig.gave %}<span class="gave">{{ fig.gave }}</span>{% endif %}</figcaption></figure>{% endfor %}
-{% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
-{% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} point{{ '' if ch.recorded_score_of(kind) == 1 else 's' }} recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
-{% set folded = not_written(checks) if kind == "code" else {} %}
-{% for c in checks %}{% if c.function in folded %}{% if c is sameas folded[c.function][0] %}<div class="check fail"><span class="status"><span aria-hidden="true">{{ marks["fail"] }} </span>fail</span>{{ c.function }}: not implemented yet ({{ folded[c.function] | length }} check{{ "s" if folded[c.function] | length != 1 }})
-<span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}{{ check_html(c, ch.chapter) }}{% endif %}{% endfor %}{% endif %}{% endfor %}
+{{ checks_html(ch, h) }}
 </section>{% endfor %}
 </{{ root }}>"""
 
@@ -150,6 +146,35 @@ def _matrix_html(values, wrong: set, caption: str, zero_below: float = 0.0, digi
 
 
 WRONG_MARK = '<span aria-hidden="true"> \u2717</span><span class="sr-only"> (differs)</span>'
+
+
+def _checks_html(chapter: ChapterResult, h: int) -> str:
+    """A chapter's checks, code then quiz, each kind under a heading with its points (and those recorded, graded on
+    submission); a function none of whose checks is written yet as one line. Written in Python as the template's
+    loop wrote it (its per-check calls and filters were most of the page's time)."""
+    parts = []
+    for kind, label in (("code", "Code"), ("quiz", "Quiz")):
+        parts.append("\n")
+        checks = [c for c in chapter.checks if c.kind == kind]
+        if not checks:
+            continue
+        recorded = chapter.recorded_score_of(kind)
+        pending = (f" (+{escape(_num(recorded))} point{'' if recorded == 1 else 's'} recorded, graded when you submit)"
+                   if recorded else "")
+        parts.append(f'<h{h + 2} class="kind-title">{label}: {escape(_num(chapter.score_of(kind)))} / '
+                     f'{escape(_num(chapter.max_score_of(kind)))}{pending}</h{h + 2}>\n\n')
+        folded = not_written(checks) if kind == "code" else {}
+        for check in checks:
+            group = folded.get(check.function)
+            if group is None:
+                parts.append(_check_html(check, chapter.chapter))
+            elif check is group[0]:
+                parts.append(f'<div class="check fail"><span class="status"><span aria-hidden="true">'
+                             f'{escape(MARKS["fail"])} </span>fail</span>{escape(check.function)}: not implemented yet '
+                             f'({len(group)} check{"s" if len(group) != 1 else ""})\n<span class="points">0 / '
+                             f'{escape(_num(sum(c.max_points for c in group)))}<span class="sr-only"> points</span>'
+                             '</span></div>')
+    return Markup("".join(parts))
 
 
 def _check_html(check: CheckResult, chapter: str) -> str:
@@ -257,9 +282,8 @@ def _render(report: Report, pid: str, root: str, kind: str, heading: int, kept: 
         figures[chapter.chapter] = its_figures
         if kept is not None:
             kept.store(chapter.chapter, chapter.plots, [vars(figure) for figure in its_figures])
-    return template.render(report=report, figures=figures, num=_num, check_html=_check_html, not_written=not_written,
-                           plural=plural,
-                           verdict=_verdict(report, verdict_line), marks=MARKS, style=style, pid=pid, root=root,
+    return template.render(report=report, figures=figures, num=_num, checks_html=_checks_html, plural=plural,
+                           verdict=_verdict(report, verdict_line), style=style, pid=pid, root=root,
                            kind=kind, h=heading, landmark=landmark, footer=provenance.footer(report, learner_sees),
                            seed=provenance.shown_seed(report, learner_sees), adjustments=report.all_adjustments())
 

@@ -278,3 +278,43 @@ def test_a_checks_block_is_what_the_template_wrote_of_it_for_every_kind_of_check
         assert html._check_html(check, "ch06") == expected
         checked += 1
     assert checked == 5 * 2 * 2 * 2 * 2 * 4
+
+
+KINDS_BLOCK = """{% for kind, label in (("code", "Code"), ("quiz", "Quiz")) %}{% set checks = ch.checks | selectattr("kind", "equalto", kind) | list %}
+{% if checks %}<h{{ h + 2 }} class="kind-title">{{ label }}: {{ num(ch.score_of(kind)) }} / {{ num(ch.max_score_of(kind)) }}{% if ch.recorded_score_of(kind) %} (+{{ num(ch.recorded_score_of(kind)) }} point{{ '' if ch.recorded_score_of(kind) == 1 else 's' }} recorded, graded when you submit){% endif %}</h{{ h + 2 }}>
+{% set folded = not_written(checks) if kind == "code" else {} %}
+{% for c in checks %}{% if c.function in folded %}{% if c is sameas folded[c.function][0] %}<div class="check fail"><span class="status"><span aria-hidden="true">{{ marks["fail"] }} </span>fail</span>{{ c.function }}: not implemented yet ({{ folded[c.function] | length }} check{{ "s" if folded[c.function] | length != 1 }})
+<span class="points">0 / {{ num(folded[c.function] | sum(attribute="max_points")) }}<span class="sr-only"> points</span></span></div>{% endif %}{% else %}{{ check_html(c, ch.chapter) }}{% endif %}{% endfor %}{% endif %}{% endfor %}"""
+
+
+def test_a_chapters_checks_are_what_the_template_wrote_of_them():
+    """A chapter's checks under their kinds' headings are written in Python; byte for byte what the template's loop
+    wrote: code and quiz, either missing, points recorded (one and several), functions not written yet (one check,
+    several, and one whose other check ran) folded into a line, hostile names."""
+    import itertools
+
+    from grader.model import ChapterResult, CheckResult, Status
+    from grader.render import html, precompiled
+
+    block = precompiled.environment().from_string(KINDS_BLOCK)
+    hostile = '<b>"f"</b> & \'g\''
+    not_written = {"not_implemented": True}
+    code = [CheckResult("a", "f", "f at 0", Status.PASS, 1, 1),
+            CheckResult("b", hostile, "unwritten", Status.FAIL, 0, 1.5, message="NotImplementedError", details=not_written),
+            CheckResult("c", hostile, "unwritten too", Status.FAIL, 0, 2, details=not_written),
+            CheckResult("d", "g", "g once", Status.FAIL, 0, 1, details=not_written),
+            CheckResult("e", "k", "k half", Status.FAIL, 0, 1, details=not_written),
+            CheckResult("f", "k", "k other", Status.ERROR, 0, 1, message=hostile)]
+    quiz = [CheckResult("quiz_a", "a", "a?", Status.RECORDED, 0, 1, kind="quiz", got="b"),
+            CheckResult("quiz_b", "b", hostile, Status.FAIL, 0, 1.5, kind="quiz", got=hostile),
+            CheckResult("quiz_c", "c", "c?", Status.RECORDED, 0, 1.5, kind="quiz", got="1"),
+            CheckResult("quiz_d", "d", "d?", Status.PASS, 1, 1, kind="quiz", got="a", practice=True)]
+    written = 0
+    for code_part, quiz_part, h in itertools.product((code, code[:1], code[1:2], code[3:4], []),
+                                                      (quiz, quiz[:1], quiz[1:2], []), (1, 2, 3)):
+        chapter = ChapterResult("ch06", "H", list(code_part) + list(quiz_part))
+        expected = block.render(ch=chapter, h=h, num=html._num, marks=html.MARKS, not_written=html.not_written,
+                                check_html=html._check_html)
+        assert html._checks_html(chapter, h) == expected
+        written += 1
+    assert written == 5 * 4 * 3

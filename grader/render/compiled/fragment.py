@@ -1,7 +1,7 @@
 # The report's fragment template (grader.render.html) as jinja2 3.1.6 compiles it: written by
 # `python -m grader.render.html`, never by hand (grader.render.precompiled).
 JINJA2 = "3.1.6"
-DIGEST = "d6219033a3c796145392411cd1ba55667659ed09da78e599dc1e5c163b835b07"
+DIGEST = "e261c355f48de10a6c4bca6273cd0576f5a02d370663ed11f1b590b364c1f44a"
 from jinja2.runtime import LoopContext, Macro, Markup, Namespace, TemplateNotFound, TemplateReference, TemplateRuntimeError, Undefined, escape, identity, internalcode, markup_join, missing, str_join
 name = 'fragment'
 
@@ -23,36 +23,6 @@ def root(context, missing=missing):
     l_0_num = resolve('num')
     l_0_adjustments = resolve('adjustments')
     l_0_verdict = resolve('verdict')
-    try:
-        t_1 = environment.filters['length']
-    except KeyError:
-        @internalcode
-        def t_1(*unused):
-            raise TemplateRuntimeError("No filter named 'length' found.")
-    try:
-        t_2 = environment.filters['list']
-    except KeyError:
-        @internalcode
-        def t_2(*unused):
-            raise TemplateRuntimeError("No filter named 'list' found.")
-    try:
-        t_3 = environment.filters['selectattr']
-    except KeyError:
-        @internalcode
-        def t_3(*unused):
-            raise TemplateRuntimeError("No filter named 'selectattr' found.")
-    try:
-        t_4 = environment.filters['sum']
-    except KeyError:
-        @internalcode
-        def t_4(*unused):
-            raise TemplateRuntimeError("No filter named 'sum' found.")
-    try:
-        t_5 = environment.tests['sameas']
-    except KeyError:
-        @internalcode
-        def t_5(*unused):
-            raise TemplateRuntimeError("No test named 'sameas' found.")
     pass
     yield '<style>'
     yield escape((undefined(name='style') if l_0_style is missing else l_0_style))
@@ -151,6 +121,7 @@ def root(context, missing=missing):
     for l_1_ch in environment.getattr((undefined(name='report') if l_0_report is missing else l_0_report), 'chapters'):
         l_1_plural = resolve('plural')
         l_1_figures = resolve('figures')
+        l_1_checks_html = resolve('checks_html')
         _loop_vars = {}
         pass
         yield '\n<section class="chapter" id="'
@@ -227,68 +198,12 @@ def root(context, missing=missing):
             yield '</figcaption></figure>'
         l_2_fig = missing
         yield '\n'
-        for (l_2_kind, l_2_label) in (('code', 'Code'), ('quiz', 'Quiz')):
-            l_2_not_written = resolve('not_written')
-            l_2_folded = resolve('folded')
-            l_2_checks = missing
-            _loop_vars = {}
-            pass
-            l_2_checks = t_2(context.eval_ctx, t_3(context, environment.getattr(l_1_ch, 'checks'), 'kind', 'equalto', l_2_kind))
-            _loop_vars['checks'] = l_2_checks
-            yield '\n'
-            if (undefined(name='checks') if l_2_checks is missing else l_2_checks):
-                pass
-                yield '<h'
-                yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
-                yield ' class="kind-title">'
-                yield escape(l_2_label)
-                yield ': '
-                yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
-                yield ' / '
-                yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'max_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
-                if context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars):
-                    pass
-                    yield ' (+'
-                    yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars), _loop_vars=_loop_vars))
-                    yield ' point'
-                    yield escape(('' if (context.call(environment.getattr(l_1_ch, 'recorded_score_of'), l_2_kind, _loop_vars=_loop_vars) == 1) else 's'))
-                    yield ' recorded, graded when you submit)'
-                yield '</h'
-                yield escape(((undefined(name='h') if l_0_h is missing else l_0_h) + 2))
-                yield '>\n'
-                l_2_folded = (context.call((undefined(name='not_written') if l_2_not_written is missing else l_2_not_written), (undefined(name='checks') if l_2_checks is missing else l_2_checks), _loop_vars=_loop_vars) if (l_2_kind == 'code') else {})
-                _loop_vars['folded'] = l_2_folded
-                yield '\n'
-                for l_3_c in (undefined(name='checks') if l_2_checks is missing else l_2_checks):
-                    l_3_marks = resolve('marks')
-                    l_3_check_html = resolve('check_html')
-                    _loop_vars = {}
-                    pass
-                    if (environment.getattr(l_3_c, 'function') in (undefined(name='folded') if l_2_folded is missing else l_2_folded)):
-                        pass
-                        if t_5(l_3_c, environment.getitem(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), 0)):
-                            pass
-                            yield '<div class="check fail"><span class="status"><span aria-hidden="true">'
-                            yield escape(environment.getitem((undefined(name='marks') if l_3_marks is missing else l_3_marks), 'fail'))
-                            yield ' </span>fail</span>'
-                            yield escape(environment.getattr(l_3_c, 'function'))
-                            yield ': not implemented yet ('
-                            yield escape(t_1(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function'))))
-                            yield ' check'
-                            yield escape(('s' if (t_1(environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function'))) != 1) else cond_expr_undefined("the inline if-expression on line 28 in 'fragment' evaluated to false and no else section was defined.")))
-                            yield ')\n<span class="points">0 / '
-                            yield escape(context.call((undefined(name='num') if l_0_num is missing else l_0_num), t_4(environment, environment.getitem((undefined(name='folded') if l_2_folded is missing else l_2_folded), environment.getattr(l_3_c, 'function')), attribute='max_points'), _loop_vars=_loop_vars))
-                            yield '<span class="sr-only"> points</span></span></div>'
-                    else:
-                        pass
-                        yield escape(context.call((undefined(name='check_html') if l_3_check_html is missing else l_3_check_html), l_3_c, environment.getattr(l_1_ch, 'chapter'), _loop_vars=_loop_vars))
-                l_3_c = l_3_marks = l_3_check_html = missing
-        l_2_kind = l_2_label = l_2_checks = l_2_not_written = l_2_folded = missing
+        yield escape(context.call((undefined(name='checks_html') if l_1_checks_html is missing else l_1_checks_html), l_1_ch, (undefined(name='h') if l_0_h is missing else l_0_h), _loop_vars=_loop_vars))
         yield '\n</section>'
-    l_1_ch = l_1_plural = l_1_figures = missing
+    l_1_ch = l_1_plural = l_1_figures = l_1_checks_html = missing
     yield '\n</'
     yield escape((undefined(name='root') if l_0_root is missing else l_0_root))
     yield '>'
 
 blocks = {}
-debug_info = '1=54&2=56&3=62&4=68&5=76&6=80&9=90&10=101&11=107&12=113&13=121&14=127&15=143&17=147&18=153&19=169&20=175&21=183&22=191&23=201&24=217&25=226&26=235&27=255&28=258&29=276&31=286'
+debug_info = '1=24&2=26&3=32&4=38&5=46&6=50&9=60&10=71&11=77&12=83&13=91&14=97&15=113&17=117&18=124&19=140&20=146&21=154&22=162&23=172&24=188&25=197&27=201'
