@@ -447,22 +447,48 @@ def made_once(check: CheckResult, what: tuple, make, *args):
     from a kept verdict (ChapterResult.from_dict(..., kept=True)), and the same object given again for every check
     made unchanged from that verdict with the same values; made each time for any other check. What is given again
     is not to be changed."""
+    made = _entry(check)
+    if made is None:
+        return make(*args)
+    found = made.get(what, _NOTHING)
+    if found is _NOTHING:
+        found = made[what] = make(*args)
+    return found
+
+
+def _entry(check: CheckResult) -> dict | None:
+    """What the renderers made of the kept verdict `check` was made unchanged from (a dict, by what), or None."""
     mark = _as_made(check)
     if mark is None:
-        return make(*args)
+        return None
     kept, values = mark
     entry = _MADE_ONCE.get(id(kept))
     if entry is None or entry[0] is not kept or entry[1] != values:  # (a kept dict changed since: made afresh)
         if len(_MADE_ONCE) >= MADE_ONCE_LIMIT:
             _MADE_ONCE.clear()
         entry = _MADE_ONCE[id(kept)] = (kept, values, {})
-    made = entry[2].get(what, _NOTHING)
-    if made is _NOTHING:
-        made = entry[2][what] = make(*args)
-    return made
+    return entry[2]
 
 
 _NOTHING = object()
+
+
+def check_texts(chapters: list[ChapterResult], made: list[dict], what: str, dumps) -> dict[int, str]:
+    """The text `dumps` (`what` names it and what it writes: a report.json's, a kept report's) gives each check's
+    dict among `made` (the chapters' to_dict() or to_kept() data, in their order) where the check was made unchanged
+    from a kept verdict, by the dict's id: made once per verdict (for grader.safe_text.report_json_spliced, which
+    writes the other checks' dicts as ever)."""
+    texts = {}
+    for chapter, data in zip(chapters, made):
+        key = (what, chapter.chapter)
+        for check, value in zip(chapter.checks, data.get("checks") or ()):
+            entry = _entry(check)
+            if entry is not None:
+                text = entry.get(key)
+                if text is None:
+                    text = entry[key] = dumps(value)
+                texts[id(value)] = text
+    return texts
 
 
 POINTS_DECIMALS = 4  # points are rounded once, here, to this many decimals; every output prints that value

@@ -101,14 +101,14 @@ def json_text(value: object, indent: int | None = None) -> str:
     import json
 
     text = json.dumps(value, ensure_ascii=False, allow_nan=False, indent=indent)
-    if _ascii_as_escaped(text):
+    if ascii_as_escaped(text):
         return text
     if _SURROGATES.search(text):
         value = clean_value(value, unicode_clean)
     return json.dumps(value, allow_nan=False, indent=indent)
 
 
-def _ascii_as_escaped(text: str) -> bool:
+def ascii_as_escaped(text: str) -> bool:
     """JSON text written with ensure_ascii=False that ensure_ascii=True would write the same: ASCII, and no DEL
     (which only ensure_ascii escapes)."""
     return text.isascii() and "\x7f" not in text
@@ -128,12 +128,48 @@ def json_for_terminal(data: object) -> str:
     import json
 
     text = json.dumps(data, ensure_ascii=False, allow_nan=False)
-    if _ascii_as_escaped(text):
+    if ascii_as_escaped(text):
         if not any(unsafe in text for unsafe in _TERMINAL_UNSAFE_ASCII_JSON):
             return text
     elif not _SURROGATES.search(text) and not _TERMINAL_UNSAFE_JSON.search(text):
         return json.dumps(data, allow_nan=False)
     return json.dumps(clean_value(data, for_terminal), allow_nan=False)  # for_terminal leaves no lone surrogate
+
+
+def report_json_spliced(data: dict, texts: Mapping[int, str], dumps: Callable[[object], str]) -> str:
+    """`dumps(data)` (json.dumps with its default separators and no indent) of a report's data, where each check's
+    dict in data["chapters"][i]["checks"] whose id is in `texts` is written as that text, which is what `dumps` gives
+    of it (made once for a check reused learner after learner, grader.model.check_texts). JSON is written part by
+    part: the whole is the same text. Data of any other shape is given to `dumps` whole."""
+
+    def items(value: dict, inner: str, inner_text: Callable[[object], str]) -> str:
+        if not all(type(key) is str for key in value):  # json.dumps writes other keys as strings: left to it
+            return dumps(value)
+        return "{" + ", ".join(f"{dumps(key)}: {inner_text(item) if key == inner else dumps(item)}"
+                               for key, item in value.items()) + "}"
+
+    def check_list(value: object) -> str:
+        if type(value) is not list:
+            return dumps(value)
+        parts, start = [], 0  # the items with no text given are written a run at a time
+        for i, item in enumerate(value):
+            text = texts.get(id(item))
+            if text is not None:
+                if start < i:
+                    parts.append(dumps(value[start:i])[1:-1])
+                parts.append(text)
+                start = i + 1
+        if start < len(value):
+            parts.append(dumps(value[start:])[1:-1])
+        return "[" + ", ".join(parts) + "]"
+
+    def chapter_list(value: object) -> str:
+        if type(value) is not list:
+            return dumps(value)
+        return "[" + ", ".join(items(item, "checks", check_list) if type(item) is dict else dumps(item)
+                               for item in value) + "]"
+
+    return items(data, "chapters", chapter_list) if type(data) is dict else dumps(data)
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})

@@ -10,6 +10,8 @@ import re
 import sys
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from grader import safe_text
 from tests.support import (
@@ -174,3 +176,44 @@ def test_every_cleaner_reaches_every_string_however_the_walk_is_shortened():
         for indent in (None, 2):
             assert safe_text.json_text(data, indent) == json.dumps(safe_text.for_json(data), allow_nan=False,
                                                                     indent=indent), text
+
+
+# ------------------------------------------------------------------------------- a report's JSON written in parts
+
+_LEAF = (st.none() | st.booleans() | st.integers() | st.floats() |
+         st.text(st.characters(blacklist_categories=()) | st.sampled_from("\x1b\"\\\u2028\ud800"), max_size=12))
+_VALUE = st.recursive(_LEAF, lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner,
+                                                                                          max_size=3), max_leaves=8)
+_CHECK = st.dictionaries(st.sampled_from(["id", "message", "got", "expected", "details"]), _VALUE, max_size=4)
+_CHAPTER = st.fixed_dictionaries({"chapter": st.text(max_size=4), "checks": st.lists(_CHECK, max_size=4)},
+                                 optional={"score": _LEAF, "notes": _VALUE})
+_REPORT = st.fixed_dictionaries({"chapters": st.lists(_CHAPTER | _VALUE, max_size=3)},
+                                optional={"seed": _LEAF, "batch": _VALUE, "learner": _LEAF})
+
+
+@settings(max_examples=300, deadline=None)
+@given(report=_REPORT | _VALUE, given_texts=st.lists(st.booleans(), max_size=12), allow_nan=st.booleans(),
+       ensure_ascii=st.booleans())
+def test_a_reports_json_written_in_parts_is_json_dumps_text(report, given_texts, allow_nan, ensure_ascii):
+    """Whatever the data (non-finite numbers, control characters, lone surrogates, another shape than a report's),
+    the text written with some check dicts' texts given is json.dumps's, and what json.dumps refuses is refused."""
+    dumps = json.JSONEncoder(ensure_ascii=ensure_ascii, allow_nan=allow_nan).encode
+    checks = [c for ch in (report.get("chapters") if isinstance(report, dict) else None) or []
+              if isinstance(ch, dict) and isinstance(ch.get("checks"), list) for c in ch["checks"]]
+    try:
+        texts = {id(c): dumps(c) for c, given in zip(checks, given_texts) if given}
+        whole = dumps(report)
+    except ValueError:
+        with pytest.raises(ValueError):
+            safe_text.report_json_spliced(report, {}, dumps)
+        return
+    assert safe_text.report_json_spliced(report, texts, dumps) == whole
+
+
+def test_a_given_text_is_written_for_its_check_dict_only():
+    data = {"chapters": [{"chapter": "ch06", "checks": [{"id": "a"}, {"id": "b"}, {"id": "c"}]}], "seed": 4}
+    first, second, third = data["chapters"][0]["checks"]
+    spliced = safe_text.report_json_spliced(data, {id(second): '{"id": "B"}'}, json.dumps)
+    assert json.loads(spliced)["chapters"][0]["checks"] == [first, {"id": "B"}, third]
+    non_string_keys = {"chapters": [{"checks": [{1: "one"}]}], 2: "two"}
+    assert safe_text.report_json_spliced(non_string_keys, {}, json.dumps) == json.dumps(non_string_keys)

@@ -29,7 +29,8 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from grader.course.settings import RunSettings
-from grader.model import LearnerResult, Report
+from grader.model import LearnerResult, Report, check_texts
+from grader.safe_text import report_json_spliced
 
 FILE_NAME = "gradebook.db"
 SCHEMA = """
@@ -63,8 +64,14 @@ def now() -> str:
 def kept_report(report: Report, chapters: list[dict] | None = None) -> tuple[str, bytes]:
     """(the hash, the compressed data) the history keeps `report` as judged by: Report.to_kept, without adjustments
     (`chapters`: its chapters' to_dict(), made already)."""
-    text = json.dumps(report.to_kept(chapters), ensure_ascii=False, allow_nan=True).encode("utf-8", "surrogatepass")
+    kept = report.to_kept(chapters)
+    texts = check_texts(report.chapters, kept["chapters"], "kept text", _kept_json)
+    text = report_json_spliced(kept, texts, _kept_json).encode("utf-8", "surrogatepass")
     return hashlib.sha256(text).hexdigest(), zlib.compress(text, 1)
+
+
+# JSON text as the history keeps a report (strings as they are, NaN allowed): json.dumps's, its encoder made once
+_kept_json = json.JSONEncoder(ensure_ascii=False, allow_nan=True).encode
 
 
 class History:
