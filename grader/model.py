@@ -473,20 +473,28 @@ def _entry(check: CheckResult) -> dict | None:
 _NOTHING = object()
 
 
+def made_text(check: CheckResult, what: tuple, dumps, value: object) -> str | None:
+    """`dumps(value)`, the text of a renderer's data `value` of `check` (`what` names which, and how it is written),
+    made once per kept verdict for a check made unchanged from one; None for any other check (its data is written
+    with the rest, as ever)."""
+    entry = _entry(check)
+    if entry is None:
+        return None
+    text = entry.get(what)
+    if text is None:
+        text = entry[what] = dumps(value)
+    return text
+
+
 def check_texts(chapters: list[ChapterResult], made: list[dict], what: str, dumps) -> dict[int, str]:
-    """The text `dumps` (`what` names it and what it writes: a report.json's, a kept report's) gives each check's
-    dict among `made` (the chapters' to_dict() or to_kept() data, in their order) where the check was made unchanged
-    from a kept verdict, by the dict's id: made once per verdict (for grader.safe_text.report_json_spliced, which
-    writes the other checks' dicts as ever)."""
+    """made_text of each check's dict among `made` (the chapters' to_dict() or to_kept() data, in their order; `what`
+    names which, and how `dumps` writes them), by the dict's id (for grader.safe_text.json_spliced)."""
     texts = {}
     for chapter, data in zip(chapters, made):
         key = (what, chapter.chapter)
         for check, value in zip(chapter.checks, data.get("checks") or ()):
-            entry = _entry(check)
-            if entry is not None:
-                text = entry.get(key)
-                if text is None:
-                    text = entry[key] = dumps(value)
+            text = made_text(check, key, dumps, value)
+            if text is not None:
                 texts[id(value)] = text
     return texts
 

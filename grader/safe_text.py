@@ -24,6 +24,7 @@ can make a report safe in one place.
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 from collections.abc import Callable, Mapping
 from enum import Enum
@@ -85,8 +86,6 @@ def for_json(value: object) -> object:
     """Plain JSON data (dicts, lists, strings, numbers) whose strings all encode as UTF-8; JSON's
     own escaping takes care of control characters. Data that already does is returned as it is (one
     encoding in C tells, instead of a walk through every string)."""
-    import json
-
     try:
         text = json.dumps(value, ensure_ascii=False)
     except (TypeError, ValueError):  # not JSON data: its strings cleaned all the same
@@ -98,9 +97,8 @@ def json_text(value: object, indent: int | None = None) -> str:
     """`json.dumps(for_json(value), allow_nan=False, indent=indent)`, encoded once where, as almost always, every
     string is ASCII: that text is the same with or without ensure_ascii. NaN and what is not JSON data raise as
     json.dumps does."""
-    import json
-
-    text = json.dumps(value, ensure_ascii=False, allow_nan=False, indent=indent)
+    text = unicode_json(value) if indent is None else json.dumps(value, ensure_ascii=False, allow_nan=False,
+                                                                 indent=indent)
     if ascii_as_escaped(text):
         return text
     if _SURROGATES.search(text):
@@ -122,12 +120,11 @@ _TERMINAL_UNSAFE_JSON = re.compile(r"\\u00|\\[rbf]|[\x7f-\x9f\u200e\u200f\u202a-
 _TERMINAL_UNSAFE_ASCII_JSON = ("\\u00", "\\r", "\\b", "\\f")
 
 
-def json_for_terminal(data: object) -> str:
+def json_for_terminal(data: object, texts: Mapping[int, str] | None = None, path: tuple[str, ...] = ()) -> str:
     """JSON text (ASCII, no NaN) of plain data with every string made safe by for_terminal. Data with
-    nothing to clean, as almost all is (one encoding in C tells), is written as it is: no walk."""
-    import json
-
-    text = json.dumps(data, ensure_ascii=False, allow_nan=False)
+    nothing to clean, as almost all is (one encoding in C tells), is written as it is: no walk. `texts` and
+    `path`: as json_spliced's, the texts of some of its dicts (made by unicode_json)."""
+    text = json_spliced(data, texts, unicode_json, path) if texts else unicode_json(data)
     if ascii_as_escaped(text):
         if not any(unsafe in text for unsafe in _TERMINAL_UNSAFE_ASCII_JSON):
             return text
@@ -136,21 +133,28 @@ def json_for_terminal(data: object) -> str:
     return json.dumps(clean_value(data, for_terminal), allow_nan=False)  # for_terminal leaves no lone surrogate
 
 
-def report_json_spliced(data: dict, texts: Mapping[int, str], dumps: Callable[[object], str]) -> str:
-    """`dumps(data)` (json.dumps with its default separators and no indent) of a report's data, where each check's
-    dict in data["chapters"][i]["checks"] whose id is in `texts` is written as that text, which is what `dumps` gives
-    of it (made once for a check reused learner after learner, grader.model.check_texts). JSON is written part by
-    part: the whole is the same text. Data of any other shape is given to `dumps` whole."""
+# json.dumps(value, ensure_ascii=False, allow_nan=False), its encoder made once: the first try of json_text and of
+# json_for_terminal (strings as they are, no NaN)
+unicode_json = json.JSONEncoder(ensure_ascii=False, allow_nan=False).encode
 
-    def items(value: dict, inner: str, inner_text: Callable[[object], str]) -> str:
-        if not all(type(key) is str for key in value):  # json.dumps writes other keys as strings: left to it
-            return dumps(value)
-        return "{" + ", ".join(f"{dumps(key)}: {inner_text(item) if key == inner else dumps(item)}"
+
+def json_spliced(data: dict, texts: Mapping[int, str], dumps: Callable[[object], str], path: tuple[str, ...]) -> str:
+    """`dumps(data)` (json.dumps with its default separators and no indent), where each dict reached along `path`
+    (("chapters", "checks"): every data["chapters"][i]["checks"][j]) whose id is in `texts` is written as that text,
+    which is what `dumps` gives of it (made once for a check reused learner after learner, grader.model.made_text).
+    JSON is written part by part: the whole is the same text. Data of another shape is given to `dumps` whole."""
+
+    def dict_text(value: object, path: tuple[str, ...]) -> str:
+        if type(value) is not dict or not all(type(key) is str for key in value):  # json.dumps writes other keys
+            return dumps(value)                                                      # as strings: left to it
+        return "{" + ", ".join(f"{dumps(key)}: {list_text(item, path[1:]) if key == path[0] else dumps(item)}"
                                for key, item in value.items()) + "}"
 
-    def check_list(value: object) -> str:
+    def list_text(value: object, rest: tuple[str, ...]) -> str:
         if type(value) is not list:
             return dumps(value)
+        if rest:
+            return "[" + ", ".join(dict_text(item, rest) for item in value) + "]"
         parts, start = [], 0  # the items with no text given are written a run at a time
         for i, item in enumerate(value):
             text = texts.get(id(item))
@@ -163,13 +167,7 @@ def report_json_spliced(data: dict, texts: Mapping[int, str], dumps: Callable[[o
             parts.append(dumps(value[start:])[1:-1])
         return "[" + ", ".join(parts) + "]"
 
-    def chapter_list(value: object) -> str:
-        if type(value) is not list:
-            return dumps(value)
-        return "[" + ", ".join(items(item, "checks", check_list) if type(item) is dict else dumps(item)
-                               for item in value) + "]"
-
-    return items(data, "chapters", chapter_list) if type(data) is dict else dumps(data)
+    return dict_text(data, path)
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})

@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from grader import safe_text
 from grader.model import ChapterResult, CheckResult, Report, Status
-from grader.render import html
+from grader.course.history import kept_report
+from grader.render import html, lms
 
 
 def _kept_chapter(message: str = "H[1][0] differs", description: str = "H at (3, 4)", got: object = None) -> dict:
@@ -30,10 +31,13 @@ def _kept_chapter(message: str = "H[1][0] differs", description: str = "H at (3,
 
 
 def _renders(chapter: ChapterResult) -> list:
-    cleaned = safe_text.clean_report(Report("learner", [chapter]), safe_text.for_html, html._KNOWN_CLEAN).chapters[0]
+    report = Report("learner", [chapter])
+    cleaned = safe_text.clean_report(report, safe_text.for_html, html._KNOWN_CLEAN).chapters[0]
     return [[check.to_dict("ch06") for check in chapter.checks], chapter.to_kept(),
             [str(html._check_html(check, "ch06")) for check in cleaned.checks],
-            [(check.message, check.description, check.got) for check in cleaned.checks]]
+            [(check.message, check.description, check.got) for check in cleaned.checks],
+            str(html._checks_html(chapter, 2)), lms.gradescope(report, hidden={"ch06/H_shape"}),
+            kept_report(report), report.to_kept()]
 
 
 def test_a_check_made_from_a_kept_verdict_renders_as_the_same_check_made_afresh_and_once():

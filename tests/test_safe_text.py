@@ -205,15 +205,29 @@ def test_a_reports_json_written_in_parts_is_json_dumps_text(report, given_texts,
         whole = dumps(report)
     except ValueError:
         with pytest.raises(ValueError):
-            safe_text.report_json_spliced(report, {}, dumps)
+            safe_text.json_spliced(report, {}, dumps, ("chapters", "checks"))
         return
-    assert safe_text.report_json_spliced(report, texts, dumps) == whole
+    assert safe_text.json_spliced(report, texts, dumps, ("chapters", "checks")) == whole
 
 
 def test_a_given_text_is_written_for_its_check_dict_only():
     data = {"chapters": [{"chapter": "ch06", "checks": [{"id": "a"}, {"id": "b"}, {"id": "c"}]}], "seed": 4}
     first, second, third = data["chapters"][0]["checks"]
-    spliced = safe_text.report_json_spliced(data, {id(second): '{"id": "B"}'}, json.dumps)
+    spliced = safe_text.json_spliced(data, {id(second): '{"id": "B"}'}, json.dumps, ("chapters", "checks"))
     assert json.loads(spliced)["chapters"][0]["checks"] == [first, {"id": "B"}, third]
     non_string_keys = {"chapters": [{"checks": [{1: "one"}]}], 2: "two"}
-    assert safe_text.report_json_spliced(non_string_keys, {}, json.dumps) == json.dumps(non_string_keys)
+    assert safe_text.json_spliced(non_string_keys, {}, json.dumps, ("chapters", "checks")) == json.dumps(non_string_keys)
+
+
+@settings(max_examples=200, deadline=None)
+@given(tests=st.lists(_CHECK, max_size=6), given_texts=st.lists(st.booleans(), max_size=6), output=_LEAF)
+def test_results_json_for_the_terminal_is_the_same_with_its_tests_texts_given(tests, given_texts, output):
+    """results.json's text (grader.render.lms.for_display): its tests' texts given or not, the same text, learner
+    text cleaned for the terminal alike."""
+    data = {"score": 1, "output": output, "tests": tests}
+    try:
+        texts = {id(t): safe_text.unicode_json(t) for t, given in zip(tests, given_texts) if given}
+        whole = safe_text.json_for_terminal(data)
+    except ValueError:
+        return
+    assert safe_text.json_for_terminal(data, texts, ("tests",)) == whole

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from grader.course.settings import RunSettings
 from grader.model import LearnerResult, Report, check_texts
-from grader.safe_text import report_json_spliced
+from grader.safe_text import json_spliced
 
 FILE_NAME = "gradebook.db"
 SCHEMA = """
@@ -66,7 +66,7 @@ def kept_report(report: Report, chapters: list[dict] | None = None) -> tuple[str
     (`chapters`: its chapters' to_dict(), made already)."""
     kept = report.to_kept(chapters)
     texts = check_texts(report.chapters, kept["chapters"], "kept text", _kept_json)
-    text = report_json_spliced(kept, texts, _kept_json).encode("utf-8", "surrogatepass")
+    text = json_spliced(kept, texts, _kept_json, ("chapters", "checks")).encode("utf-8", "surrogatepass")
     return hashlib.sha256(text).hexdigest(), zlib.compress(text, 1)
 
 

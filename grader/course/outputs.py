@@ -11,7 +11,6 @@ A learner's files are a function of their report (as judged, with its adjustment
 from __future__ import annotations
 
 import hashlib
-import json
 import marshal
 import os
 import tempfile
@@ -30,7 +29,7 @@ from grader.files import write_atomically, write_atomically_from
 from grader.model import LearnerResult, Report, check_texts
 from grader.quiz import class_questions
 from grader.render import lms, plural, summary
-from grader.safe_text import ascii_as_escaped, json_text, report_json_spliced
+from grader.safe_text import ascii_as_escaped, json_spliced, json_text, unicode_json
 
 if TYPE_CHECKING:
     from grader.course.history import History
@@ -101,13 +100,9 @@ def report_json(report: Report, facts: LearnerFacts, chapters: list[dict] | None
     if not report.infrastructure and facts.digest:
         data["batch"]["hash"] = facts.digest
     data["batch"].update(facts.extra)
-    texts = check_texts(report.chapters, data["chapters"], "report.json text", _unicode_json)
-    text = report_json_spliced(data, texts, _unicode_json)
+    texts = check_texts(report.chapters, data["chapters"], "report.json text", unicode_json)
+    text = json_spliced(data, texts, unicode_json, ("chapters", "checks"))
     return (text if ascii_as_escaped(text) else json_text(data)) + "\n"  # json_text's text, its check dicts made once
-
-
-# json_text's first try (no NaN, strings as they are): json.dumps's, its encoder made once
-_unicode_json = json.JSONEncoder(ensure_ascii=False, allow_nan=False).encode
 
 
 def learner_files(report: Report, facts: LearnerFacts, grading: Grading,

@@ -20,9 +20,9 @@ from xml.etree import ElementTree
 from grader import provenance
 from grader.chapters import BY_ID
 from grader.model import LearnerResult
-from grader.model import ChapterResult, CheckResult, Report, Status, points_text
+from grader.model import ChapterResult, CheckResult, Report, Status, made_once, made_text, points_text
 from grader.render import plural
-from grader.safe_text import for_csv, for_xml, json_for_terminal
+from grader.safe_text import for_csv, for_xml, json_for_terminal, unicode_json
 
 SCHEMA_DIR = Path(__file__).resolve().parent.parent / "schemas"
 SCHEMAS = ("report", "batch-report", "gradescope-results", "classroom", "summary")
@@ -96,7 +96,7 @@ def summary_lines(report: Report) -> list[str]:
 
 def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_time: float | None = None,
                     heading: Iterable[str] = (), notes: Iterable[str] = (), isolation: str = "",
-                    submission: str | None = None) -> dict:
+                    submission: str | None = None, texts: dict[int, str] | None = None) -> dict:
     """Gradescope's results.json as data (its autograder specification): score, execution_time, output and
     output_format, stdout_visibility, and one test per check with name, number, score, max_score, status
     ("passed"/"failed"; an error or skipped check is "failed", told apart by its output, its tags and
@@ -105,7 +105,9 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     messages (a file that does not import) are tests of 0 points. `heading` and `notes` go before and after
     the score lines of the top-level output. No seed is in it (a course seed is the instructor's secret): its
     `extra_data.submission` is the Gradescope submission whose id, with the course seed and the learner, the seed
-    was drawn from (grader.course.gradescope.submission_seed), so a regrade draws it again."""
+    was drawn from (grader.course.gradescope.submission_seed), so a regrade draws it again. A check made unchanged
+    from a kept verdict has its test made once (grader.model.made_once: the same dict, not to be changed), and with
+    `texts`, its JSON text (safe_text.unicode_json's) put there by the test's id."""
     tests = []
     for chapter_index, chapter in enumerate(report.chapters):
         number = int(chapter.chapter[2:]) if chapter.chapter[2:].isdigit() else chapter_index
@@ -115,18 +117,16 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
                           "tags": [chapter.chapter, "chapter", chapter_status(chapter)], "visibility": "visible",
                           "extra_data": {"id": f"{chapter.chapter}/chapter", "status": chapter_status(chapter)}})
         for index, check in enumerate(chapter.checks, 1):
-            test = {
-                "name": f"{chapter.chapter} {check.kind}: {check.description}",
-                "number": f"{number}.{index}",
-                "score": check.points, "max_score": check.max_points if check.status.counted else 0,
-                "output": _explained(check, chapter), "output_format": "text",
-                "tags": [chapter.chapter, check.kind, check.function, check.status.value],
-                "visibility": "after_published" if check_key(chapter.chapter, check) in hidden or counted_quiz(check)
-                else "visible",
-                "extra_data": {"id": check_key(chapter.chapter, check), "status": check.status.value},
-            }
-            if check.status != Status.RECORDED:
-                test["status"] = "passed" if check.status == Status.PASS else "failed"
+            visibility = ("after_published" if check_key(chapter.chapter, check) in hidden or counted_quiz(check)
+                          else "visible")
+            if check.status == Status.ERROR and chapter.problems:  # its output holds the chapter's messages
+                test = _test(check, chapter, f"{number}.{index}", visibility)
+            else:
+                what = ("gradescope test", chapter.chapter, number, index, visibility)
+                test = made_once(check, what, _test, check, chapter, f"{number}.{index}", visibility)
+                text = made_text(check, (*what, "text"), unicode_json, test) if texts is not None else None
+                if text is not None:
+                    texts[id(test)] = text
             tests.append(test)
     output = [*heading, *summary_lines(report), *notes]
     if isolation:
@@ -143,16 +143,33 @@ def gradescope_data(report: Report, *, hidden: Collection[str] = (), execution_t
     return data
 
 
-def for_display(data: dict) -> str:
+def _test(check: CheckResult, chapter: ChapterResult, number: str, visibility: str) -> dict:
+    """One check's test in results.json."""
+    test = {
+        "name": f"{chapter.chapter} {check.kind}: {check.description}",
+        "number": number,
+        "score": check.points, "max_score": check.max_points if check.status.counted else 0,
+        "output": _explained(check, chapter), "output_format": "text",
+        "tags": [chapter.chapter, check.kind, check.function, check.status.value],
+        "visibility": visibility,
+        "extra_data": {"id": check_key(chapter.chapter, check), "status": check.status.value},
+    }
+    if check.status != Status.RECORDED:
+        test["status"] = "passed" if check.status == Status.PASS else "failed"
+    return test
+
+
+def for_display(data: dict, texts: dict[int, str] | None = None) -> str:
     """JSON text whose strings show as they read: no terminal escape sequence or control character (but
     line breaks and tabs) from learner text survives into what Gradescope's page or GitHub's log shows
-    (the log renders colours), and valid UTF-8."""
-    return json_for_terminal(data) + "\n"
+    (the log renders colours), and valid UTF-8. `texts`: the tests' texts made already (gradescope_data's)."""
+    return json_for_terminal(data, texts, ("tests",)) + "\n"
 
 
 def gradescope(report: Report, **options) -> str:
     """gradescope_data as the text of results.json."""
-    return for_display(gradescope_data(report, **options))
+    texts: dict[int, str] = {}
+    return for_display(gradescope_data(report, texts=texts, **options), texts)
 
 
 def gradescope_not_graded(message: str, *, execution_time: float | None = None, heading: Iterable[str] = (),
