@@ -81,6 +81,24 @@ def temp_dir() -> str:
     return tempfile.gettempdir()
 
 
+MEMORY_FOLDER = "/dev/shm"  # Linux's folder in memory (a tmpfs)
+MEMORY_FOLDER_FREE = 256 << 20  # bytes it must have free to be used: a container's may be small (Docker's: 64 MiB)
+
+
+def memory_temp_dir() -> str:
+    """The folder for small temporary files rewritten often (a batch worker's learner after learner): in memory
+    where the system has one with MEMORY_FOLDER_FREE bytes free (rewriting a file there costs a tenth of what it
+    costs on a journalled disk), else temp_dir()."""
+    if hasattr(os, "statvfs") and os.path.isdir(MEMORY_FOLDER) and os.access(MEMORY_FOLDER, os.W_OK | os.X_OK):
+        try:
+            found = os.statvfs(MEMORY_FOLDER)
+        except OSError:
+            return temp_dir()
+        if found.f_bavail * found.f_frsize >= MEMORY_FOLDER_FREE:
+            return MEMORY_FOLDER
+    return temp_dir()
+
+
 # ------------------------------------------------------------------------------ the grader's own processes
 
 _KEPT: set[int] = set()  # pids of processes started by the grader itself and not yet ended

@@ -155,14 +155,17 @@ def content_hash(learner: str, grading: Grading, files: Mapping[str, bytes]) -> 
 def scratch(files: dict[str, bytes]) -> Path:
     """This process's folder for the files of the learner it stages or grades, put there (the same folder for each,
     one at a time: a file put there again with the same name is rewritten, not made anew; only this process writes
-    it, so what it holds is known without reading it back), removed as the process ends."""
+    it, so what it holds is known without reading it back), in memory where the system has room for it
+    (grader.system.memory_temp_dir), removed as the process ends."""
     pid, folder = _worker_state.get("scratch", (None, None))
     if pid != os.getpid():  # a worker forked from a process that had one makes its own
         import shutil
         import tempfile
         from multiprocessing.util import Finalize
 
-        folder = Path(tempfile.mkdtemp(prefix="grade-staged-"))
+        from grader.system import memory_temp_dir
+
+        folder = Path(tempfile.mkdtemp(prefix="grade-staged-", dir=memory_temp_dir()))
         Finalize(None, shutil.rmtree, args=(folder, True), exitpriority=10)  # a pool's worker runs no atexit
         _worker_state["scratch"] = (os.getpid(), folder)
         _worker_state["scratch_files"] = {}
