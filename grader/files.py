@@ -9,8 +9,14 @@ from typing import TextIO
 
 
 def write_atomically(path: Path | str, text: str) -> None:
-    """Write `text` (UTF-8) to `path` through a temporary file beside it."""
-    write_atomically_from(Path(path), lambda handle: handle.write(text))
+    """Write `text` (UTF-8, its line ends the system's as a text file writes them) to `path` through a temporary
+    file beside it: encoded at once and written as bytes (a batch writes three such files per learner)."""
+    path = Path(path)
+    data = (text if os.linesep == "\n" else text.replace("\n", os.linesep)).encode("utf-8")
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(temporary, "wb") as handle:
+        handle.write(data)
+    os.replace(temporary, path)
 
 
 def write_atomically_from(path: Path, write: Callable[[TextIO], object], replace: bool = True) -> Path:
