@@ -415,31 +415,39 @@ def _with_details(check: CheckResult, made: dict) -> dict:
 # the same dict, learner after learner. What a renderer makes of such a check (its dict, its HTML block, ...) is
 # made once per kept dict and renderer, and given again while the check is as it was made from it.
 
-_MADE_FROM = "_made_from"  # a check's own attribute, not a field: (the kept dict, its values as made from it)
+_MADE_FROM = "_made_from"  # a check's own attribute, not a field: (the kept dict, its values as made, what is made)
 _MADE_ONCE: dict[int, tuple[dict, tuple, dict]] = {}  # id(kept dict) -> (it, its checks' values, {what: made})
 MADE_ONCE_LIMIT = 4096  # kept dicts remembered; past it, forgotten all at once
 
 
 def _made_from(check: CheckResult, kept: dict) -> None:
-    """Note that `check` was made just now by ChapterResult.from_dict from `kept`, a verdict's dict that is kept."""
-    check.__dict__[_MADE_FROM] = (kept, tuple(check.__dict__.values()))
+    """Note that `check` was made just now by ChapterResult.from_dict from `kept`, a verdict's dict that is kept, with
+    what the renderers made of the checks made from it before (the same values: a kept dict changed since starts
+    afresh)."""
+    values = tuple(check.__dict__.values())
+    entry = _MADE_ONCE.get(id(kept))
+    if entry is None or entry[0] is not kept or entry[1] != values:
+        if len(_MADE_ONCE) >= MADE_ONCE_LIMIT:
+            _MADE_ONCE.clear()
+        entry = _MADE_ONCE[id(kept)] = (kept, values, {})
+    check.__dict__[_MADE_FROM] = (kept, values, entry[2])
 
 
-def _as_made(check: CheckResult) -> tuple[dict, tuple] | None:
-    """(the kept dict `check` was made from, its fields' values as made), where every field is still as made from
-    it; else None."""
+def _entry(check: CheckResult) -> dict | None:
+    """What the renderers made of the kept verdict `check` was made from (a dict, by what), where every field of the
+    check is still as made from it; else None."""
     state = check.__dict__
     mark = state.get(_MADE_FROM)
     if mark is None:
         return None
-    kept, values = mark
+    kept, values, made = mark
     if tuple(state.values())[:-1] != values or next(reversed(state)) != _MADE_FROM:
         return None  # a field set again since (point_upstream's message), or another attribute added
     # the lists and dicts it was given as copies: changed in place?
     if check.upstream != (kept.get("upstream") or []) or check.details != (kept.get("details") or {}) or \
             check.answer != (kept.get("answer") or {}):
         return None
-    return mark
+    return made
 
 
 def made_once(check: CheckResult, what: tuple, make, *args):
@@ -454,20 +462,6 @@ def made_once(check: CheckResult, what: tuple, make, *args):
     if found is _NOTHING:
         found = made[what] = make(*args)
     return found
-
-
-def _entry(check: CheckResult) -> dict | None:
-    """What the renderers made of the kept verdict `check` was made unchanged from (a dict, by what), or None."""
-    mark = _as_made(check)
-    if mark is None:
-        return None
-    kept, values = mark
-    entry = _MADE_ONCE.get(id(kept))
-    if entry is None or entry[0] is not kept or entry[1] != values:  # (a kept dict changed since: made afresh)
-        if len(_MADE_ONCE) >= MADE_ONCE_LIMIT:
-            _MADE_ONCE.clear()
-        entry = _MADE_ONCE[id(kept)] = (kept, values, {})
-    return entry[2]
 
 
 _NOTHING = object()
