@@ -417,7 +417,7 @@ def _with_details(check: CheckResult, made: dict) -> dict:
 
 _MADE_FROM = "_made_from"  # a check's own attribute, not a field: (the kept dict, its values as made, what is made)
 _MADE_ONCE: dict[int, tuple[dict, tuple, dict]] = {}  # id(kept dict) -> (it, its checks' values, {what: made})
-MADE_ONCE_LIMIT = 4096  # kept dicts remembered; past it, forgotten all at once
+MADE_ONCE_LIMIT = 1024  # kept dicts remembered (a few KB made of each); past it, forgotten all at once
 
 
 def _made_from(check: CheckResult, kept: dict) -> None:
