@@ -167,7 +167,7 @@ def json_spliced(data: dict, texts: Mapping[int, str], dumps: Callable[[object],
             parts.append(dumps(value[start:])[1:-1])
         return "[" + ", ".join(parts) + "]"
 
-    return dict_text(data, path)
+    return dict_text(data, path) if path else dumps(data)
 
 
 _PLAIN = frozenset({int, float, bool, type(None)})
