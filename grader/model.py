@@ -416,7 +416,7 @@ def _with_details(check: CheckResult, made: dict) -> dict:
 # made once per kept dict and renderer, and given again while the check is as it was made from it.
 
 _MADE_FROM = "_made_from"  # a check's own attribute, not a field: (the kept dict, its values as made, what is made)
-_MADE_ONCE: dict[int, tuple[dict, tuple, dict]] = {}  # id(kept dict) -> (it, its checks' values, {what: made})
+_MADE_ONCE: dict[int, tuple[dict, tuple, dict]] = {}  # id(kept dict) -> (it, a check's values as made, {what: made})
 MADE_ONCE_LIMIT = 1024  # kept dicts remembered (a few KB made of each); past it, forgotten all at once
 
 

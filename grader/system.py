@@ -86,10 +86,13 @@ MEMORY_FOLDER_FREE = 256 << 20  # bytes it must have free to be used: a containe
 
 
 def memory_temp_dir() -> str:
-    """The folder for small temporary files rewritten often (a batch worker's learner after learner): in memory
-    where the system has one with MEMORY_FOLDER_FREE bytes free (rewriting a file there costs a tenth of what it
-    costs on a journalled disk), else temp_dir()."""
-    if hasattr(os, "statvfs") and os.path.isdir(MEMORY_FOLDER) and os.access(MEMORY_FOLDER, os.W_OK | os.X_OK):
+    """The folder for small temporary files rewritten often (a batch worker's learner after learner): temp_dir() where
+    TMPDIR, TEMP or TMP names one (the machine's owner chose it), else in memory where the system has a folder there
+    with MEMORY_FOLDER_FREE bytes free (rewriting a file there costs a tenth of what it costs on a journalled disk;
+    a batch's workers put at most staging.MAX_TOTAL_BYTES there each), else temp_dir()."""
+    chosen = any(os.path.isdir(os.environ.get(name, "")) for name in ("TMPDIR", "TEMP", "TMP"))
+    if not chosen and hasattr(os, "statvfs") and os.path.isdir(MEMORY_FOLDER) and \
+            os.access(MEMORY_FOLDER, os.W_OK | os.X_OK):
         try:
             found = os.statvfs(MEMORY_FOLDER)
         except OSError:

@@ -322,14 +322,6 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         moved = sorted(histories.changes(history, run, collected.results),
                        key=lambda change: (position.get(change[0], len(position)), change[0]))
         first_run = history.previous(run) is None
-        # the item statistics first: their figures draw (in the drawing process the batch started) while the
-        # gradebooks and junit.xml are written
-        found_statistics = statistics.compute(collected.items)
-        figures = None
-        if found_statistics is not None and not found_statistics["rough"]:
-            from grader.render import item_plots
-
-            figures = item_plots.figures_due(found_statistics)
         found = _keep_hand_edits(out, history, run)
         deadline = has_deadline(settings)
         if deadline and collected.untimed:
@@ -349,6 +341,14 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
             write = lms.canvas_gradebook if layout == "canvas" else lms.moodle_gradebook
             write_atomically(out / LMS_FILES[layout], write(list(results), chapters))
         write_atomically_from(out / "junit.xml", collected.junit.write)  # the suites copied from the scratch file
+        # the item statistics: their figures draw (in the drawing process the batch started) while the similarity is
+        # ranked and summary.json written
+        found_statistics = statistics.compute(collected.items)
+        figures = None
+        if found_statistics is not None and not found_statistics["rough"]:
+            from grader.render import item_plots
+
+            figures = item_plots.figures_due(found_statistics)
         similar = []
         if similarity:
             from grader.course import similarity as similarities

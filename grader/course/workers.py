@@ -156,9 +156,10 @@ def scratch(files: dict[str, bytes]) -> Path:
     """This process's folder for the files of the learner it stages or grades, put there (the same folder for each,
     one at a time: a file put there again with the same name is rewritten, not made anew; only this process writes
     it, so what it holds is known without reading it back), in memory where the system has room for it
-    (grader.system.memory_temp_dir), removed as the process ends."""
-    pid, folder = _worker_state.get("scratch", (None, None))
-    if pid != os.getpid():  # a worker forked from a process that had one makes its own
+    (grader.system.memory_temp_dir), removed as the process ends. A folder removed meanwhile by anyone else (a
+    temporary-file cleaner, the end of a login session, which empties /dev/shm) is made anew, nothing of it trusted."""
+    pid, folder, made = _worker_state.get("scratch", (None, None, None))
+    if pid != os.getpid() or not _scratch_intact():  # a worker forked from a process that had one makes its own
         import shutil
         import tempfile
         from multiprocessing.util import Finalize
@@ -167,15 +168,32 @@ def scratch(files: dict[str, bytes]) -> Path:
 
         folder = Path(tempfile.mkdtemp(prefix="grade-staged-", dir=memory_temp_dir()))
         Finalize(None, shutil.rmtree, args=(folder, True), exitpriority=10)  # a pool's worker runs no atexit
-        _worker_state["scratch"] = (os.getpid(), folder)
+        found = folder.stat()
+        _worker_state["scratch"] = (os.getpid(), folder, (found.st_dev, found.st_ino))
         _worker_state["scratch_files"] = {}
     put(files, folder / "exercises", _worker_state["scratch_files"])
     return folder
 
 
+def _scratch_intact() -> bool:
+    """Whether this process's scratch folder is still the one it made (not removed, nor removed and made again)."""
+    pid, folder, made = _worker_state.get("scratch", (None, None, None))
+    if pid != os.getpid():
+        return False
+    try:
+        found = folder.stat()
+    except OSError:
+        return False
+    return (found.st_dev, found.st_ino) == made
+
+
+SCRATCH_GONE = ("its files were removed from the grader's scratch folder while it was graded (by a temporary-file "
+                "cleaner, or the end of the login session that started the batch); the next run grades it again")
+
+
 def drop_scratch() -> None:
     """Remove this process's scratch folder now (a command that leaves by os._exit runs no exit handler)."""
-    pid, folder = _worker_state.pop("scratch", (None, None))
+    pid, folder, _ = _worker_state.pop("scratch", (None, None, None))
     if pid == os.getpid():
         import shutil
 
@@ -301,13 +319,19 @@ def collecting_as_a_batch() -> Iterator[None]:
 
 def _settle_heap() -> None:
     """After a worker's first graded learner, what it imported and cached lives as long as the worker: frozen
-    (gc.freeze), the garbage collector's full passes no longer walk it (they took about half its time); and the
-    collector runs as a batch's does (BATCH_COLLECTION)."""
+    (gc.freeze), the garbage collector's full passes no longer walk it (they took about half its time)."""
     if not _worker_state.get("settled"):
         _worker_state["settled"] = True
         gc.collect()
         gc.freeze()
-        gc.set_threshold(*BATCH_COLLECTION)  # for the worker's life
+
+
+def _collect_as_a_batch() -> None:
+    """A local pool's worker, a process of the batch's own, collects as the batch does (BATCH_COLLECTION) for the rest
+    of its life; a cluster's worker (a process shared with others) is left as it is."""
+    if not _worker_state.get("collecting"):
+        _worker_state["collecting"] = True
+        gc.set_threshold(*BATCH_COLLECTION)
 
 
 def door(sandbox: str, secrets: tuple[str, ...] = ()):
@@ -397,10 +421,20 @@ def _grade_one(entry: Entry | Staged, out: str, grading: Grading, overrides: tup
                force: bool) -> Outcome:
     """Stage (an Entry; a Staged learner is staged already) and grade one submission in a worker process of the
     local pool."""
+    _collect_as_a_batch()
     if isinstance(entry, Staged):  # staged by the coordinator (grade regrade): its kept files put here
-        return grade_staged(entry, grading, root=scratch(entry.files()))
-    staged = stage_one(entry, Path(out), grading, overrides, previous, force)
-    return staged if isinstance(staged, Outcome) else grade_staged(staged, grading)
+        staged, outcome = entry, grade_staged(entry, grading, root=scratch(entry.files()))
+    else:
+        staged = stage_one(entry, Path(out), grading, overrides, previous, force)
+        if isinstance(staged, Outcome):
+            return staged
+        outcome = grade_staged(staged, grading)
+    if outcome.report is not None and not _scratch_intact():  # what was read of it may be missing: not a grade
+        outcome.report.infrastructure = SCRATCH_GONE
+        return Outcome(staged.learner, "error", f"not graded: {SCRATCH_GONE}", staged,
+                       files=outputs.not_graded_files(outcome.report, staged, outcome.extra),
+                       infrastructure=SCRATCH_GONE, extra=dict(outcome.extra))
+    return outcome
 
 
 class LocalPool:

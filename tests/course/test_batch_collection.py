@@ -38,9 +38,19 @@ def test_the_collector_is_put_back_when_the_batch_raises():
     assert gc.get_threshold() == before
 
 
-def test_a_worker_settles_with_the_batch_collection():
-    """After its first learner a worker freezes what it imported and collects as a batch for the rest of its life."""
-    code = ("import gc\nfrom grader.course import workers\nworkers._settle_heap()\n"
-            "print(gc.get_threshold(), gc.get_freeze_count() > 0)")
-    shown = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert shown.strip() == f"{BATCH_COLLECTION} True"
+def test_a_local_workers_collector_is_the_batchs_and_a_cluster_workers_its_own(tmp_path):
+    """A local pool's worker collects as the batch does from its first learner on; grading a staged learner as a
+    cluster's worker does (grade_staged) leaves that process's collector as it was."""
+    build_submission(tmp_path / "alice")
+    code = ("import gc, sys\nfrom pathlib import Path\nfrom grader.course import workers\n"
+            "from grader.course.staging import discover\nfrom grader.course_config import current\n"
+            "gc.set_threshold(700, 10, 10)\n"
+            "grading = workers.Grading(('ch03',), 4, False, False, {}, 'required', frozenset(), current(None))\n"
+            "entry = discover(Path(sys.argv[1]))[0]\n"
+            "staged = workers.stage_one(entry, Path(sys.argv[2]), grading)\n"
+            "workers.grade_staged(staged, grading)\nprint(gc.get_threshold())\n"
+            "workers._grade_one(entry, sys.argv[2], grading, (), None, True)\nprint(gc.get_threshold())\n")
+    (tmp_path / "out").mkdir()
+    shown = subprocess.run([sys.executable, "-c", code, str(tmp_path), str(tmp_path / "out")], capture_output=True,
+                           text=True, check=True).stdout.split("\n")
+    assert shown[:2] == [str((700, 10, 10)), str(BATCH_COLLECTION)]
