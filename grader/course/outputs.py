@@ -341,14 +341,6 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
             write = lms.canvas_gradebook if layout == "canvas" else lms.moodle_gradebook
             write_atomically(out / LMS_FILES[layout], write(list(results), chapters))
         write_atomically_from(out / "junit.xml", collected.junit.write)  # the suites copied from the scratch file
-        # the item statistics: their figures draw (in the drawing process the batch started) while the similarity is
-        # ranked and summary.json written
-        found_statistics = statistics.compute(collected.items)
-        figures = None
-        if found_statistics is not None and not found_statistics["rough"]:
-            from grader.render import item_plots
-
-            figures = item_plots.figures_due(found_statistics)
         similar = []
         if similarity:
             from grader.course import similarity as similarities
@@ -361,10 +353,10 @@ def rebuild(out: Path, history: History, run: int, settings: RunSettings, collec
         view = summary.Summary(collected.tally, collected.not_graded, isolation,
                                [(s.name, s.reason) for s in skipped], collected.flagged, moved, list(notes) + found,
                                similar=similar, untimed=list(collected.untimed) if deadline else [],
-                               statistics=found_statistics, first_run=first_run, roster=roster or {},
-                               figures=figures)
-        write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
+                               statistics=statistics.compute(collected.items), first_run=first_run,
+                               roster=roster or {})
         write_atomically_from(out / "summary.html", lambda handle: handle.writelines(summary.html_parts(view)))
+        write_atomically_from(out / "summary.json", lambda handle: summary.write_json(view, handle))
     finally:
         if own:
             collected.close()

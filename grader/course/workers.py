@@ -158,8 +158,8 @@ def scratch(files: dict[str, bytes]) -> Path:
     it, so what it holds is known without reading it back), in memory where the system has room for it
     (grader.system.memory_temp_dir), removed as the process ends. A folder removed meanwhile by anyone else (a
     temporary-file cleaner, the end of a login session, which empties /dev/shm) is made anew, nothing of it trusted."""
-    pid, folder, made = _worker_state.get("scratch", (None, None, None))
-    if pid != os.getpid() or not _scratch_intact():  # a worker forked from a process that had one makes its own
+    pid, folder, _ = _worker_state.get("scratch", (None, None, None))
+    if pid != os.getpid() or not _scratch_intact():  # (a worker forked from a process that had one makes its own)
         import shutil
         import tempfile
         from multiprocessing.util import Finalize

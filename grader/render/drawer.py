@@ -7,22 +7,19 @@ core while the grader grades (at a lower priority: the grading is what the figur
 chapters it is sent. Without it (not started, or it failed) two processes are forked when the figures are
 due; where forking is not safe (Windows, macOS) the figures are drawn in the grader's own process. A drawing
 process with nothing to draw (every figure reused, see grader.render.figure_cache, or the command ended early)
-is stopped; one that sent its figures is waited for when the command ends (`end`), and one whose figures nobody
-took (the command failed after sending them) is stopped then. `grade batch` starts one
-too: it draws the class summary's figures at the batch's end (`due_by_started`). This module imports nothing
+is stopped; one that sent its figures is waited for when the command ends (`end`). `grade batch` starts one
+too: it draws the class summary's figures at the batch's end (`drawn_by_started`). This module imports nothing
 heavy until `start`."""
 
 from __future__ import annotations
 
 import os
 import signal
-from collections.abc import Callable
 
 from grader.system import forkable_now, keep_only
 
 _STARTED: list = []  # the drawing process and our end of its pipe, until they are used
 _ENDING: list = []  # drawing processes that sent their figures and are ending on their own (waited for by `end`)
-_SENT: list = []  # a drawing process sent a job whose figures were not taken (yet), and our end of its pipe
 
 
 def start() -> bool:
@@ -59,17 +56,11 @@ def start() -> bool:
 def end() -> None:
     """End the drawing process: stopped if nothing was sent to it, rather than let it import matplotlib for
     nobody (at once while it imports, else as soon as its drawing processes have ended, see _draw_what_comes);
-    waited for if it sent its figures (it ends on its own once its drawing processes have); killed if its figures
-    were not taken (the command failed after sending them)."""
+    waited for if it sent its figures (it ends on its own once its drawing processes have)."""
     while _STARTED:
         process, ours = _STARTED.pop()
         ours.close()
         process.terminate()
-        _ended(process)
-    while _SENT:  # figures nobody took (the command failed meanwhile): not waited for
-        process, ours = _SENT.pop()
-        ours.close()
-        process.kill()
         _ended(process)
     while _ENDING:
         _ended(_ENDING.pop())
@@ -143,13 +134,12 @@ def _chapters_job(chapters: list) -> tuple:
             sorted(range(len(chapters)), key=lambda i: chapters[i].chapter not in TWO_PANELS))
 
 
-def due_by_started(draw: tuple[str, str], items: list) -> Callable[[], list | None] | None:
-    """Start drawing `draw` (a module and the name of its function) of each of `items` in the started drawing
-    process (matplotlib imported there while this process worked, its two drawing processes waiting); returns the
-    function that waits for them, in their order (None there where it failed, for the caller to draw them itself),
-    or None where no drawing process was started."""
+def drawn_by_started(draw: tuple[str, str], items: list) -> list | None:
+    """`draw` (a module and the name of its function) of each of `items`, in their order, by the started drawing
+    process (matplotlib imported there while this process worked, its two drawing processes waiting): None where
+    none was started or it failed, for the caller to draw them itself."""
     sent = _send((draw, items, list(range(len(items)))))
-    return None if sent is None else lambda: _received(sent)
+    return None if sent is None else _received(sent)
 
 
 def _send(job: tuple):
@@ -164,7 +154,6 @@ def _send(job: tuple):
         _STARTED.append((process, ours))
         end()
         return None
-    _SENT.append((process, ours))
     return process, ours
 
 
@@ -172,8 +161,6 @@ def _received(sent: tuple) -> list | None:
     """What the drawing process `sent` a job to drew; None where it died first. It ends once its drawing processes
     have (10 to 30 ms): waited for by `end` when the command ends, not before its output is written."""
     process, ours = sent
-    if sent in _SENT:
-        _SENT.remove(sent)
     try:
         drawn = ours.recv()
     except (EOFError, OSError):

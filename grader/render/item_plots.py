@@ -6,39 +6,27 @@ numbers). It reads only the numbers grader.course.statistics computed."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import NamedTuple
 
 from grader.render.figures import GUIDE, LEARNER, REFERENCE, Figure, preload, svg_uri
 
 
 def figures(statistics: dict) -> dict[str, Figure]:
-    """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so)."""
-    return figures_due(statistics)()
-
-
-def figures_due(statistics: dict) -> Callable[[], dict[str, Figure]]:
-    """Start drawing `figures(statistics)` in the drawing process the batch started (grader.render.drawer.start),
-    where there is one, and return the function that waits for them: the caller works meanwhile. Without it (or
-    where it failed), they are drawn when waited for: by two processes forked then where forking is safe and nothing
-    else runs in this process (a batch's end: its workers are done), else here."""
-    from grader.render.drawer import due_by_started
-
+    """Per chapter, its facility-discrimination figure (a figure that cannot be drawn is a caption saying so);
+    drawn by the drawing process the batch started (grader.render.drawer.start), else by two processes forked now
+    where forking is safe and nothing else runs in this process (a batch's end: its workers are done), else here."""
     jobs = [(chapter["chapter"], [item for item in statistics["items"] if item["chapter"] == chapter["chapter"]],
              statistics["rules"], statistics["learners"]) for chapter in statistics["chapters"]]
-    due = due_by_started((__name__, _one.__name__), jobs) if jobs else None
-
-    def drawn() -> dict[str, Figure]:
-        found = due() if due is not None else None
-        return dict(zip((job[0] for job in jobs), found if found is not None else _drawn_here(jobs)))
-
-    return drawn
+    return dict(zip((job[0] for job in jobs), _drawn(jobs)))
 
 
-def _drawn_here(jobs: list[tuple]) -> list[Figure]:
-    from grader.render.drawer import two_processes
+def _drawn(jobs: list[tuple]) -> list[Figure]:
+    from grader.render.drawer import drawn_by_started, two_processes
     from grader.system import forkable_now
 
+    drawn = drawn_by_started((__name__, _one.__name__), jobs) if jobs else None  # the one a batch started
+    if drawn is not None:
+        return drawn
     preload()  # imported once, here, before any fork
     if len(jobs) > 1 and forkable_now():
         try:

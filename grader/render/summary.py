@@ -21,7 +21,7 @@ import json
 import sqlite3
 import statistics
 from collections import Counter, defaultdict
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from html import escape as _escape
 
@@ -64,9 +64,6 @@ class Summary:
     statistics: dict | None = None  # grader.course.statistics.compute's numbers (None: fewer than 5 learners)
     first_run: bool = False  # the history's first finished run: no score moved, each was graded first
     roster: dict = field(default_factory=dict)  # the roster's disagreements with the folder: file, unmatched, said
-    # the item figures, drawing since the statistics were computed (grader.render.item_plots.figures_due; None: drawn
-    # when the page is written)
-    figures: Callable[[], dict] | None = None
 
     @functools.cached_property
     def counts(self) -> dict:
@@ -262,7 +259,7 @@ def _values(low: float, high: float) -> str:
     return f"{low:g}" if low == high else f"{low:g} to {high:g}"
 
 
-def _statistics_parts(found: dict | None, figures: Callable[[], dict] | None = None) -> Iterator[str]:
+def _statistics_parts(found: dict | None) -> Iterator[str]:
     """The item statistics section: how they are computed and flagged, the flagged items, then per chapter its
     alpha, its figure (a class of RELIABLE_LEARNERS or more) and every item; the options of the choice questions;
     the facility by parameter of the parametrised ones."""
@@ -300,7 +297,7 @@ def _statistics_parts(found: dict | None, figures: Callable[[], dict] | None = N
     if not found["rough"]:
         from grader.render import item_plots
 
-        drawn = figures() if figures is not None else item_plots.figures(found)
+        drawn = item_plots.figures(found)
     for chapter in found["chapters"]:
         name = chapter["chapter"]
         alpha = "n/a" if chapter["alpha"] is None else f"{chapter['alpha']:.2f}"
@@ -414,7 +411,7 @@ def html_parts(view: Summary) -> Iterator[str]:
                      ["learners", "check", "named mistake", "message"],
                      [[str(m["count"]), escape(m["check"]), escape(m["mistake"] or "none named"),
                        escape(m["message"])] for m in counts["messages"]], {0})
-        yield from _statistics_parts(view.statistics, view.figures)
+        yield from _statistics_parts(view.statistics)
     if view.similar:
         rows = []
         for pair in view.similar:
