@@ -13,7 +13,7 @@ def write_atomically(path: Path | str, text: str) -> None:
     file beside it: encoded at once and written as bytes (a batch writes three such files per learner)."""
     path = Path(path)
     data = (text if os.linesep == "\n" else text.replace("\n", os.linesep)).encode("utf-8")
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    temporary = _beside(path)
     with open(temporary, "wb") as handle:
         handle.write(data)
     os.replace(temporary, path)
@@ -23,9 +23,14 @@ def write_atomically_from(path: Path, write: Callable[[TextIO], object], replace
     """As write_atomically, `write` writing the text into the file it is given (piece by piece: a large class's
     outputs are never whole in memory); with replace=False the written file is left beside `path` (returned) for
     the caller to os.replace."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    temporary = _beside(path)
     with temporary.open("w", encoding="utf-8") as handle:
         write(handle)
     if replace:
         os.replace(temporary, path)
     return temporary
+
+
+def _beside(path: Path) -> Path:
+    """The temporary file `path` is written through: hidden, beside it, this process's own."""
+    return path.with_name(f".{path.name}.{os.getpid()}.tmp")

@@ -34,6 +34,8 @@ def test_the_folder_in_memory_is_used_where_it_has_room_and_no_other_is_chosen(m
 
 
 def test_a_system_without_one_uses_the_temporary_folder(monkeypatch, tmp_path):
+    for name in ("TMPDIR", "TEMP", "TMP"):  # none chosen: the folder in memory would be taken where there is one
+        monkeypatch.delenv(name, raising=False)
     monkeypatch.setattr(system, "MEMORY_FOLDER", str(tmp_path / "no such folder"))
     assert system.memory_temp_dir() == system.temp_dir()
     monkeypatch.delattr(os, "statvfs", raising=False)  # Windows

@@ -326,7 +326,7 @@ def _settle_heap() -> None:
         gc.freeze()
 
 
-def _collect_as_a_batch() -> None:
+def _worker_collects_as_a_batch() -> None:
     """A local pool's worker, a process of the batch's own, collects as the batch does (BATCH_COLLECTION) for the rest
     of its life; a cluster's worker (a process shared with others) is left as it is."""
     if not _worker_state.get("collecting"):
@@ -401,10 +401,8 @@ def grade_staged(staged: Staged, grading: Grading, root: Path | None = None, ext
     report = graded.report
     staged.seconds += time.monotonic() - started
     if report.infrastructure:
-        message = (f"not graded, twice, for a reason outside the learner's code: {report.infrastructure}; the next "
-                   "run grades it again")
-        return Outcome(learner, "error", message, staged, files=outputs.not_graded_files(report, staged, extra),
-                       infrastructure=report.infrastructure, extra=dict(extra))
+        return _not_graded(staged, report, f"not graded, twice, for a reason outside the learner's code: "
+                                           f"{report.infrastructure}; the next run grades it again", extra)
     report.learner_output = report.learner_output[:outputs.LEARNER_OUTPUT]
     chapters = [chapter.to_dict() for chapter in report.chapters]  # made once: the kept report's and report.json's
     kept = kept_report(report, chapters)
@@ -421,7 +419,7 @@ def _grade_one(entry: Entry | Staged, out: str, grading: Grading, overrides: tup
                force: bool) -> Outcome:
     """Stage (an Entry; a Staged learner is staged already) and grade one submission in a worker process of the
     local pool."""
-    _collect_as_a_batch()
+    _worker_collects_as_a_batch()
     if isinstance(entry, Staged):  # staged by the coordinator (grade regrade): its kept files put here
         staged, outcome = entry, grade_staged(entry, grading, root=scratch(entry.files()))
     else:
@@ -431,10 +429,15 @@ def _grade_one(entry: Entry | Staged, out: str, grading: Grading, overrides: tup
         outcome = grade_staged(staged, grading)
     if outcome.report is not None and not _scratch_intact():  # what was read of it may be missing: not a grade
         outcome.report.infrastructure = SCRATCH_GONE
-        return Outcome(staged.learner, "error", f"not graded: {SCRATCH_GONE}", staged,
-                       files=outputs.not_graded_files(outcome.report, staged, outcome.extra),
-                       infrastructure=SCRATCH_GONE, extra=dict(outcome.extra))
+        return _not_graded(staged, outcome.report, f"not graded: {SCRATCH_GONE}", outcome.extra)
     return outcome
+
+
+def _not_graded(staged: Staged, report: Report, message: str, extra: Mapping) -> Outcome:
+    """A learner not graded for a reason outside their code (report.infrastructure says which): an error the next run
+    grades again, its results.json and report.html removed, so that nothing looks like a grade."""
+    return Outcome(staged.learner, "error", message, staged, files=outputs.not_graded_files(report, staged, extra),
+                   infrastructure=report.infrastructure, extra=dict(extra))
 
 
 class LocalPool:
